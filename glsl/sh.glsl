@@ -1,0 +1,46 @@
+// Colour from spherical harmonics of degree 0..3 (SPEC section 3), in the INRIA term order.
+// `sh` holds the Gaussian's coefficients coefficient-major: sh.v[base + 3 * k + channel].
+#ifndef RARA_SH_GLSL
+#define RARA_SH_GLSL
+
+const float SH_C0 = 0.28209479177387814;
+const float SH_C1 = 0.4886025119029199;
+const float SH_C2[5] = float[5](1.0925484305920792, -1.0925484305920792, 0.31539156525252005,
+                                -1.0925484305920792, 0.5462742152960396);
+const float SH_C3[7] = float[7](-0.5900435899266435, 2.890611442640554, -0.4570457994644658,
+                                0.3731763325901154, -0.4570457994644658, 1.445305721320277,
+                                -0.5900435899266435);
+
+vec3 sh_coef(F32s sh, uint base, uint k) {
+    return vec3(sh.v[base + 3u * k], sh.v[base + 3u * k + 1u], sh.v[base + 3u * k + 2u]);
+}
+
+vec3 eval_sh(F32s sh, uint base, uint degree, vec3 dir) {
+    vec3 result = SH_C0 * sh_coef(sh, base, 0u);
+    if (degree > 0u) {
+        float x = dir.x, y = dir.y, z = dir.z;
+        result = result - SH_C1 * y * sh_coef(sh, base, 1u) + SH_C1 * z * sh_coef(sh, base, 2u)
+                 - SH_C1 * x * sh_coef(sh, base, 3u);
+        if (degree > 1u) {
+            float xx = x * x, yy = y * y, zz = z * z;
+            float xy = x * y, yz = y * z, xz = x * z;
+            result = result + SH_C2[0] * xy * sh_coef(sh, base, 4u)
+                     + SH_C2[1] * yz * sh_coef(sh, base, 5u)
+                     + SH_C2[2] * (2.0 * zz - xx - yy) * sh_coef(sh, base, 6u)
+                     + SH_C2[3] * xz * sh_coef(sh, base, 7u)
+                     + SH_C2[4] * (xx - yy) * sh_coef(sh, base, 8u);
+            if (degree > 2u) {
+                result = result + SH_C3[0] * y * (3.0 * xx - yy) * sh_coef(sh, base, 9u)
+                         + SH_C3[1] * xy * z * sh_coef(sh, base, 10u)
+                         + SH_C3[2] * y * (4.0 * zz - xx - yy) * sh_coef(sh, base, 11u)
+                         + SH_C3[3] * z * (2.0 * zz - 3.0 * xx - 3.0 * yy) * sh_coef(sh, base, 12u)
+                         + SH_C3[4] * x * (4.0 * zz - xx - yy) * sh_coef(sh, base, 13u)
+                         + SH_C3[5] * z * (xx - yy) * sh_coef(sh, base, 14u)
+                         + SH_C3[6] * x * (xx - 3.0 * yy) * sh_coef(sh, base, 15u);
+            }
+        }
+    }
+    return max(result + 0.5, vec3(0.0));
+}
+
+#endif

@@ -1,0 +1,23 @@
+// Radix sort, step 0: clamp the key count to the buffers' capacity and derive the indirect
+// dispatch arguments of the passes.
+#version 460
+#include "common.glsl"
+#include "sort_common.glsl"
+
+layout(local_size_x = 1) in;
+
+layout(push_constant) uniform Push {
+    U32s count;         // count.v[0] = keys to sort (may exceed the capacity)
+    SortInfoRef info;   // out
+    uint capacity;
+} pc;
+
+void main() {
+    uint n = min(pc.count.v[0], pc.capacity);
+    uint blocks = div_ceil(n, SORT_BLOCK);
+    pc.info.s.num_keys = n;
+    pc.info.s.num_blocks = blocks;
+    pc.info.s.hist_len = blocks * SORT_RADIX;
+    pc.info.s.block_args = uvec4(blocks, 1u, 1u, 0u);
+    pc.info.s.linear_args = uvec4(div_ceil(n, LINEAR_WORKGROUP), 1u, 1u, 0u);
+}

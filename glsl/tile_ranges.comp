@@ -1,0 +1,28 @@
+// Stage 5, tile ranges: one invocation per sorted pair marks where each tile's list starts and
+// ends (ranges[tile] = [start, end), zero-filled beforehand for empty tiles).
+#version 460
+#include "common.glsl"
+#include "sort_common.glsl"
+
+layout(local_size_x = LINEAR_WORKGROUP) in;
+
+layout(push_constant) uniform Push {
+    UVec2s keys;        // sorted
+    SortInfoRef info;   // num_keys
+    UVec2s ranges;
+} pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    uint n = pc.info.s.num_keys;
+    if (i >= n) {
+        return;
+    }
+    uint tile = pc.keys.v[i].y;
+    if (i == 0u || pc.keys.v[i - 1u].y != tile) {
+        pc.ranges.v[tile].x = i;
+    }
+    if (i + 1u == n || pc.keys.v[i + 1u].y != tile) {
+        pc.ranges.v[tile].y = i + 1u;
+    }
+}

@@ -1,0 +1,178 @@
+//! Pinhole cameras (SPEC section 2) and the INRIA `cameras.json` format.
+
+use std::path::Path;
+
+use glam::{Mat3, Vec3};
+
+use crate::error::{Error, Result};
+
+/// A pinhole camera with its principal point at the image centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Camera centre (world).
+    pub position: Vec3,
+    /// Camera-to-world rotation; its columns are the camera's x (right), y (down) and
+    /// z (forward) axes in world coordinates.
+    pub rotation: Mat3,
+    /// Focal length in pixels, x.
+    pub fx: f32,
+    /// Focal length in pixels, y.
+    pub fy: f32,
+}
+
+#[derive(serde::Deserialize)]
+struct JsonCamera {
+    width: u32,
+    height: u32,
+    position: [f32; 3],
+    rotation: [[f32; 3]; 3],
+    fx: f32,
+    fy: f32,
+}
+
+impl Camera {
+    /// World-to-camera rotation `R_wc = rotation^T`.
+    pub fn world_to_camera(&self) -> Mat3 {
+        self.rotation.transpose()
+    }
+
+    /// Camera-space coordinates of world point `p`: `R_wc (p - position)`.
+    pub fn to_camera(&self, p: Vec3) -> Vec3 {
+        self.world_to_camera() * (p - self.position)
+    }
+
+    /// Principal point `(W/2 - 0.5, H/2 - 0.5)`.
+    pub fn principal_point(&self) -> (f32, f32) {
+        (self.width as f32 / 2.0 - 0.5, self.height as f32 / 2.0 - 0.5)
+    }
+
+    /// The forward (viewing) direction in world coordinates.
+    pub fn forward(&self) -> Vec3 {
+        self.rotation.z_axis
+    }
+
+    /// Unit world-space direction of the ray through pixel `(i, j)`.
+    pub fn ray_direction(&self, i: f32, j: f32) -> Vec3 {
+        let (cx, cy) = self.principal_point();
+        (self.rotation * Vec3::new((i - cx) / self.fx, (j - cy) / self.fy, 1.0)).normalize()
+    }
+
+    /// A camera at `eye` looking at `target`, with `up` pointing up in the image and a vertical
+    /// field of view of `fov_y_deg` degrees (square pixels).
+    pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, fov_y_deg: f32, width: u32, height: u32) -> Result<Camera> {
+        let forward = (target - eye).normalize_or_zero();
+        if forward == Vec3::ZERO {
+            return Err(Error::InvalidInput("--eye and --target must differ".into()));
+        }
+        // Camera axes: x right, y down, z forward (x = y cross z with y = -up).
+        let right = forward.cross(up).normalize_or_zero();
+        if right == Vec3::ZERO {
+            return Err(Error::InvalidInput("--up must not be parallel to the viewing direction".into()));
+        }
+        if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+            return Err(Error::InvalidInput(format!("--fov-y {fov_y_deg} must lie in (0, 180) degrees")));
+        }
+        check_size(width, height)?;
+        let down = forward.cross(right);
+        let fy = height as f32 / (2.0 * (fov_y_deg.to_radians() / 2.0).tan());
+        Ok(Camera {
+            width,
+            height,
+            position: eye,
+            rotation: Mat3::from_cols(right, down, forward),
+            fx: fy,
+            fy,
+        })
+    }
+
+    /// The same camera rendering at `width` pixels: `fx, fy` scale by `width / self.width`;
+    /// the height is `height` or else `round(self.height * width / self.width)`.
+    pub fn resized(&self, width: u32, height: Option<u32>) -> Result<Camera> {
+        let k = width as f32 / self.width as f32;
+        let height = height.unwrap_or_else(|| (self.height as f32 * k).round() as u32);
+        check_size(width, height)?;
+        Ok(Camera { width, height, fx: self.fx * k, fy: self.fy * k, ..*self })
+    }
+
+    /// Reads every camera of an INRIA `cameras.json` file.
+    pub fn load_all(path: impl AsRef<Path>) -> Result<Vec<Camera>> {
+        let path = path.as_ref();
+        let err = |message: String| Error::Cameras { path: path.to_path_buf(), message };
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let cams: Vec<JsonCamera> = serde_json::from_str(&text).map_err(|e| {
+            err(format!("not an INRIA cameras.json (an array of objects with width, height, position, rotation, fx, fy): {e}"))
+        })?;
+        if cams.is_empty() {
+            return Err(err("holds no camera".into()));
+        }
+        cams.iter()
+            .enumerate()
+            .map(|(n, c)| {
+                let finite = c.position.iter().chain(c.rotation.iter().flatten()).all(|v| v.is_finite())
+                    && c.fx.is_finite()
+                    && c.fy.is_finite();
+                if !finite || c.fx <= 0.0 || c.fy <= 0.0 || c.width == 0 || c.height == 0 {
+                    return Err(err(format!(
+                        "camera {n}: needs finite values, positive fx/fy and a non-zero size"
+                    )));
+                }
+                // rotation[r][c]: rows as written; from_cols_array_2d takes columns, so transpose.
+                let rotation = Mat3::from_cols_array_2d(&c.rotation).transpose();
+                Ok(Camera {
+                    width: c.width,
+                    height: c.height,
+                    position: Vec3::from_array(c.position),
+                    rotation,
+                    fx: c.fx,
+                    fy: c.fy,
+                })
+            })
+            .collect()
+    }
+
+    /// Camera `index` of a cameras.json file, with a clear error when it is out of range.
+    pub fn load_one(path: impl AsRef<Path>, index: usize) -> Result<Camera> {
+        let path = path.as_ref();
+        let all = Camera::load_all(path)?;
+        let n = all.len();
+        all.into_iter().nth(index).ok_or_else(|| Error::Cameras {
+            path: path.to_path_buf(),
+            message: format!("camera index {index} is out of range: the file holds {n} camera(s), 0..{}", n - 1),
+        })
+    }
+
+    /// Writes cameras as an INRIA `cameras.json` array.
+    pub fn save_all(cameras: &[Camera], path: impl AsRef<Path>) -> Result<()> {
+        let path = path.as_ref();
+        let list: Vec<serde_json::Value> = cameras
+            .iter()
+            .enumerate()
+            .map(|(id, c)| {
+                let r = c.rotation.transpose().to_cols_array_2d();
+                serde_json::json!({
+                    "id": id, "img_name": format!("view_{id:03}"),
+                    "width": c.width, "height": c.height,
+                    "position": c.position.to_array(), "rotation": r,
+                    "fx": c.fx, "fy": c.fy,
+                })
+            })
+            .collect();
+        let text = serde_json::to_string_pretty(&list).expect("cameras serialise");
+        std::fs::write(path, text).map_err(|source| Error::Io { path: path.to_path_buf(), source })
+    }
+}
+
+/// Rejects image sizes the renderer cannot produce.
+pub fn check_size(width: u32, height: u32) -> Result<()> {
+    const MAX: u32 = 16384;
+    if width == 0 || height == 0 || width > MAX || height > MAX {
+        return Err(Error::InvalidInput(format!(
+            "image size {width}x{height} is out of range (1..={MAX} per side)"
+        )));
+    }
+    Ok(())
+}

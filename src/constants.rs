@@ -1,0 +1,72 @@
+// Integer constants shared by the host and the GLSL kernels.
+//
+// This file is the single source of truth: `build.rs` includes it and passes every entry of
+// [`SHADER_DEFINES`] to the shader compiler as a macro, so the kernels and the host code that
+// sizes their dispatches and buffers cannot drift apart.
+
+/// Side of a square screen tile in pixels (SPEC section 3).
+pub const TILE_SIZE: u32 = 16;
+/// Threads per workgroup of the rasterizer: one per pixel of a tile.
+pub const RASTER_WORKGROUP: u32 = TILE_SIZE * TILE_SIZE;
+/// Most tile-list entries one rasterizer round walks per tile. lavapipe stops an invocation's
+/// loops after 65,535 iterations in total, so longer lists are split over several rounds
+/// (dispatches) that carry the per-pixel state in a buffer.
+pub const RASTER_CHUNK: u32 = 32768;
+/// Threads per workgroup of the one-item-per-thread kernels (project, emit, tile ranges).
+pub const LINEAR_WORKGROUP: u32 = 256;
+
+/// Threads per workgroup of the prefix-sum kernels.
+pub const SCAN_WORKGROUP: u32 = 256;
+/// Elements each prefix-sum thread handles; a scan block is `SCAN_WORKGROUP * SCAN_ITEMS`.
+pub const SCAN_ITEMS: u32 = 4;
+/// Elements one scan workgroup handles.
+pub const SCAN_BLOCK: u32 = SCAN_WORKGROUP * SCAN_ITEMS;
+/// Recursion depth of the prefix sum: it scans up to `SCAN_BLOCK^SCAN_LEVELS` elements.
+pub const SCAN_LEVELS: u32 = 3;
+
+/// Bits per radix-sort digit.
+pub const SORT_RADIX_BITS: u32 = 4;
+/// Buckets per radix-sort digit.
+pub const SORT_RADIX: u32 = 1 << SORT_RADIX_BITS;
+/// Threads per workgroup of the radix-sort count and scatter kernels.
+pub const SORT_WORKGROUP: u32 = 256;
+/// Consecutive keys each sort thread owns within its block (the scatter keeps their order,
+/// which makes the sort stable).
+pub const SORT_ITEMS: u32 = 16;
+/// Keys one sort workgroup handles.
+pub const SORT_BLOCK: u32 = SORT_WORKGROUP * SORT_ITEMS;
+
+/// Slots of the per-frame counters buffer (`uint` indices), written by the kernels and read
+/// back by the host after the frame.
+pub const COUNTER_INTERSECTIONS: u32 = 0;
+/// Counter slot: longest tile list seen by the rasterizer.
+pub const COUNTER_MAX_TILE_LEN: u32 = 1;
+/// Counter slot: Gaussians that survived projection (drawn or cutoff).
+pub const COUNTER_VISIBLE: u32 = 2;
+/// Counter slot: Gaussians classified as cutoff by the clip test.
+pub const COUNTER_CUTOFF: u32 = 3;
+/// Counter slot: entries the sort actually processes (`min(intersections, capacity)`).
+pub const COUNTER_SORT_COUNT: u32 = 4;
+/// Number of counter slots.
+pub const COUNTER_SLOTS: u32 = 8;
+
+/// Every constant above, by the macro name the kernels see.
+pub const SHADER_DEFINES: &[(&str, u32)] = &[
+    ("TILE_SIZE", TILE_SIZE),
+    ("RASTER_WORKGROUP", RASTER_WORKGROUP),
+    ("RASTER_CHUNK", RASTER_CHUNK),
+    ("LINEAR_WORKGROUP", LINEAR_WORKGROUP),
+    ("SCAN_WORKGROUP", SCAN_WORKGROUP),
+    ("SCAN_ITEMS", SCAN_ITEMS),
+    ("SCAN_BLOCK", SCAN_BLOCK),
+    ("SORT_RADIX_BITS", SORT_RADIX_BITS),
+    ("SORT_RADIX", SORT_RADIX),
+    ("SORT_WORKGROUP", SORT_WORKGROUP),
+    ("SORT_ITEMS", SORT_ITEMS),
+    ("SORT_BLOCK", SORT_BLOCK),
+    ("COUNTER_INTERSECTIONS", COUNTER_INTERSECTIONS),
+    ("COUNTER_MAX_TILE_LEN", COUNTER_MAX_TILE_LEN),
+    ("COUNTER_VISIBLE", COUNTER_VISIBLE),
+    ("COUNTER_CUTOFF", COUNTER_CUTOFF),
+    ("COUNTER_SORT_COUNT", COUNTER_SORT_COUNT),
+];

@@ -1,0 +1,84 @@
+//! Host mirrors of the structs in `glsl/common.glsl` and `glsl/sort_common.glsl`.
+//!
+//! `#[repr(C)]` + bytemuck, explicit padding, sizes asserted at compile time; the `layout`
+//! test checks the member offsets against the compiled SPIR-V.
+
+use bytemuck::{Pod, Zeroable};
+
+/// `Gaussian` in common.glsl: one uploaded Gaussian, activated values.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuGaussian {
+    /// Centre xyz and opacity.
+    pub pos_opacity: [f32; 4],
+    /// Normalised quaternion (w, x, y, z).
+    pub rot: [f32; 4],
+    /// Scales xyz, w unused.
+    pub scale: [f32; 4],
+}
+
+/// `ProjectedSplat` in common.glsl: the project stage's output per Gaussian.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuProjectedSplat {
+    /// Image coordinates of the centre.
+    pub uv: [f32; 2],
+    /// View-space depth.
+    pub depth: f32,
+    /// Opacity.
+    pub opacity: f32,
+    /// Conic (A, B, C).
+    pub conic: [f32; 3],
+    /// Cutoff side-record index, or `u32::MAX`.
+    pub cutoff: u32,
+    /// SH colour.
+    pub color: [f32; 3],
+    /// Unused.
+    pub pad: u32,
+    /// Touched tiles (x0, y0, x1, y1), end exclusive.
+    pub rect: [u32; 4],
+}
+
+/// `FrameParams` in common.glsl: camera and frame constants, written each frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuFrameParams {
+    /// Rows of `R_wc`, w unused.
+    pub world_to_cam: [[f32; 4]; 3],
+    /// Camera centre, w unused.
+    pub cam_pos: [f32; 4],
+    /// fx, fy, cx, cy.
+    pub focal: [f32; 4],
+    /// Background rgb, a unused.
+    pub background: [f32; 4],
+    /// W, H, tiles x, tiles y.
+    pub size: [u32; 4],
+    /// Gaussians, SH degree, SH floats per Gaussian, intersection capacity.
+    pub scene: [u32; 4],
+}
+
+/// `SortInfo` in sort_common.glsl: the radix sort's GPU-side sizes and dispatch arguments.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuSortInfo {
+    /// Keys being sorted (clamped to capacity).
+    pub num_keys: u32,
+    /// Blocks of SORT_BLOCK keys.
+    pub num_blocks: u32,
+    /// SORT_RADIX * num_blocks.
+    pub hist_len: u32,
+    /// Unused.
+    pub pad: u32,
+    /// Indirect dispatch arguments: one workgroup per block.
+    pub block_args: [u32; 4],
+    /// Indirect dispatch arguments: one invocation per key.
+    pub linear_args: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<GpuGaussian>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuProjectedSplat>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuFrameParams>() == 128);
+const _: () = assert!(std::mem::size_of::<GpuSortInfo>() == 48);
+
+/// Byte offset of the block histogram in the sort's scratch buffer (after [`GpuSortInfo`]).
+pub const SORT_HIST_OFFSET: u64 = 64;

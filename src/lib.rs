@@ -1,0 +1,42 @@
+//! rara: a 3D Gaussian Splatting renderer on raw Vulkan compute, with RaRa clipping.
+//!
+//! The frame is a pipeline of compute stages, each visible three times under one name: the
+//! kernel `glsl/<stage>.comp`, the host side that records it in [`stages`], and the CPU twin in
+//! [`reference`] that the tests use as the oracle:
+//!
+//! 1. `project`: cull, 2D conic, radius, tiles touched, SH colour per Gaussian;
+//! 2. `prefix_sum`: offsets of each Gaussian's tile pairs;
+//! 3. `emit`: one (tile, depth) key and splat index per touched tile;
+//! 4. `sort`: stable GPU radix sort of the pairs ([`stages::sort::RadixSort`]);
+//! 5. `tile_ranges`: each tile's run of pairs;
+//! 6. `rasterize`: per-pixel front-to-back compositing, one workgroup per 16x16 tile.
+//!
+//! Entry points: [`ply::load_ply`], [`camera::Camera`], [`vk::Context`],
+//! [`renderer::Renderer`], [`reference::render`].
+
+pub mod camera;
+/// Integer constants shared by the host and the GLSL kernels (tile size, workgroup sizes,
+/// counter slots). `build.rs` passes them to the shader compiler as macros.
+pub mod constants;
+pub mod error;
+pub mod gpu_types;
+pub mod metrics;
+pub mod ply;
+pub mod reference;
+pub mod renderer;
+pub mod scene;
+pub mod stages;
+pub mod synth;
+pub mod timing;
+pub mod vk;
+
+/// SPIR-V of every kernel, compiled from `glsl/` by `build.rs`.
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
+}
+
+pub use camera::Camera;
+pub use vk::Context;
+pub use error::{Error, Result};
+pub use renderer::{FrameStats, GpuScene, RenderOptions, Renderer};
+pub use scene::Scene;

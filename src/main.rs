@@ -1,0 +1,315 @@
+//! The `rara` command-line tool: render, inspect and demo 3DGS scenes.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use rara::{Camera, Context, Error, RenderOptions, Renderer, Result, Scene};
+
+/// Renders 3D Gaussian Splatting scenes on Vulkan compute (lavapipe or a GPU).
+#[derive(Parser)]
+#[command(name = "rara", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene from one camera to a PNG.
+    Render(RenderArgs),
+    /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
+    Info {
+        /// The scene (.ply).
+        scene: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Render the built-in demo scene from a few views and write PNGs.
+    Demo {
+        /// Output directory.
+        #[arg(short, long, default_value = "rara-demo")]
+        output: PathBuf,
+    },
+}
+
+/// Where the camera comes from and the image size.
+#[derive(Args, Clone)]
+struct CameraArgs {
+    /// INRIA cameras.json file.
+    #[arg(long, conflicts_with_all = ["eye", "target"])]
+    cameras: Option<PathBuf>,
+    /// Index of the camera in --cameras.
+    #[arg(long, default_value_t = 0, requires = "cameras")]
+    camera: usize,
+    /// Camera centre X,Y,Z (with --target).
+    #[arg(long, value_parser = parse_vec3, requires = "target")]
+    eye: Option<Vec3>,
+    /// Point looked at X,Y,Z (with --eye).
+    #[arg(long, value_parser = parse_vec3, requires = "eye")]
+    target: Option<Vec3>,
+    /// Up direction X,Y,Z (default -Y, the INRIA/COLMAP convention).
+    #[arg(long, value_parser = parse_vec3, default_value = "0,-1,0")]
+    up: Vec3,
+    /// Vertical field of view in degrees (with --eye).
+    #[arg(long, default_value_t = 50.0)]
+    fov_y: f32,
+    /// Image width (default: the camera's, or 640 with --eye).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (default: keeps the camera's aspect ratio, or 480 with --eye).
+    #[arg(long)]
+    height: Option<u32>,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// The scene (.ply).
+    scene: PathBuf,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Background colour R,G,B in [0, 1].
+    #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
+    background: Vec3,
+    /// Output PNG.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Render with the CPU reference renderer instead of the GPU.
+    #[arg(long)]
+    reference: bool,
+    /// Render this many more times after the first and report median timings.
+    #[arg(long, default_value_t = 0)]
+    repeat: usize,
+}
+
+fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("expected X,Y,Z (three comma-separated numbers), got '{s}'"));
+    }
+    let mut v = [0f32; 3];
+    for (slot, p) in v.iter_mut().zip(&parts) {
+        *slot = p.parse().map_err(|_| format!("'{p}' is not a number"))?;
+        if !slot.is_finite() {
+            return Err(format!("'{p}' is not finite"));
+        }
+    }
+    Ok(Vec3::from_array(v))
+}
+
+fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
+    if let Some(path) = &args.cameras {
+        let cam = Camera::load_one(path, args.camera)?;
+        return match args.width {
+            Some(w) => cam.resized(w, args.height),
+            None if args.height.is_some() => cam.resized(cam.width, args.height),
+            None => Ok(cam),
+        };
+    }
+    match (args.eye, args.target) {
+        (Some(eye), Some(target)) => {
+            let width = args.width.unwrap_or(640);
+            let height = args.height.unwrap_or_else(|| (width as f32 * 0.75).round().max(1.0) as u32);
+            Camera::look_at(eye, target, args.up, args.fov_y, width, height)
+        }
+        _ => Err(Error::InvalidInput("give a camera: --cameras FILE [--camera N], or --eye X,Y,Z --target X,Y,Z".into())),
+    }
+}
+
+fn load_scene(path: &Path) -> Result<Scene> {
+    let spinner = ProgressBar::new_spinner().with_message(format!("loading {}", path.display()));
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    let start = std::time::Instant::now();
+    let loaded = rara::ply::load_ply(path);
+    spinner.finish_and_clear();
+    let (scene, report) = loaded?;
+    eprintln!(
+        "loaded {}: {} Gaussians, SH degree {}, {} ({:.0} ms)",
+        path.display(),
+        scene.len(),
+        scene.sh_degree,
+        report.encoding,
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    if report.dropped_non_finite > 0 {
+        eprintln!(
+            "warning: dropped {} of {} Gaussians with non-finite values",
+            report.dropped_non_finite, report.vertices_in_file
+        );
+    }
+    Ok(scene)
+}
+
+fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.to_path_buf(), source })?;
+    }
+    img.save(path).map_err(|source| Error::Image { path: path.to_path_buf(), source })
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) }
+}
+
+fn cmd_render(args: &RenderArgs) -> Result<()> {
+    let camera = resolve_camera(&args.camera)?;
+    let scene = load_scene(&args.scene)?;
+    let options = RenderOptions { background: args.background };
+    if args.reference {
+        let start = std::time::Instant::now();
+        let img = rara::reference::render(&scene, &camera, options.background);
+        save_png(&img, &args.output)?;
+        println!(
+            "wrote {} ({}x{}, CPU reference, {:.0} ms)",
+            args.output.display(),
+            camera.width,
+            camera.height,
+            start.elapsed().as_secs_f64() * 1e3
+        );
+        return Ok(());
+    }
+    let ctx = Context::from_env()?;
+    let mut renderer = Renderer::new(&ctx)?;
+    let gpu_scene = renderer.upload(&scene)?;
+    let (img, stats) = renderer.render(&gpu_scene, &camera, &options)?;
+    save_png(&img, &args.output)?;
+    println!(
+        "wrote {} ({}x{}) on {}: {} visible Gaussians, {} tile intersections",
+        args.output.display(),
+        camera.width,
+        camera.height,
+        ctx.info().name,
+        stats.visible,
+        stats.intersections
+    );
+    if args.repeat > 0 {
+        let bar = ProgressBar::new(args.repeat as u64)
+            .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len}").unwrap())
+            .with_message("timing");
+        let (mut gpu, mut wall) = (Vec::new(), Vec::new());
+        let mut passes: Vec<(&'static str, Vec<f64>)> = Vec::new();
+        for _ in 0..args.repeat {
+            let (_, s) = renderer.render(&gpu_scene, &camera, &options)?;
+            gpu.push(s.gpu_ms);
+            wall.push(s.wall_ms);
+            for (k, (name, ms)) in s.passes.iter().enumerate() {
+                if passes.len() <= k {
+                    passes.push((name, Vec::new()));
+                }
+                passes[k].1.push(*ms);
+            }
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        println!(
+            "median over {} frames: GPU {:.2} ms, wall {:.2} ms (device {}, driver {})",
+            args.repeat,
+            median(&mut gpu),
+            median(&mut wall),
+            ctx.info().name,
+            ctx.info().driver
+        );
+        for (name, mut v) in passes {
+            println!("  {name:<12} {:8.2} ms", median(&mut v));
+        }
+    }
+    Ok(())
+}
+
+fn cmd_info(path: &Path, json: bool) -> Result<()> {
+    let (scene, report) = rara::ply::load_ply(path)?;
+    let n = scene.len();
+    let range = |f: &dyn Fn(usize) -> f32| -> (f32, f32) {
+        (0..n).map(f).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    };
+    let mut props: Vec<(String, (f32, f32))> = Vec::new();
+    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+        props.push((name.to_string(), range(&|i| scene.means[i][axis])));
+    }
+    props.push(("opacity (activated)".into(), range(&|i| scene.opacities[i])));
+    for axis in 0..3 {
+        props.push((format!("scale_{axis} (activated)"), range(&|i| scene.scales[i][axis])));
+    }
+    props.push(("anisotropy (max/min scale)".into(), range(&|i| {
+        let s = scene.scales[i];
+        s.max_element() / s.min_element()
+    })));
+    for c in 0..3 {
+        props.push((format!("f_dc_{c}"), range(&|i| scene.sh_of(i)[c])));
+    }
+    let (lo, hi) = scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    if json {
+        let v = serde_json::json!({
+            "file": path.display().to_string(),
+            "count": n,
+            "vertices_in_file": report.vertices_in_file,
+            "dropped_non_finite": report.dropped_non_finite,
+            "sh_degree": scene.sh_degree,
+            "encoding": report.encoding,
+            "bounds": {"min": lo.to_array(), "max": hi.to_array()},
+            "properties": props.iter().map(|(k, (a, b))| (k.clone(), serde_json::json!({"min": a, "max": b}))).collect::<serde_json::Map<_, _>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&v).unwrap());
+    } else {
+        println!("file:        {}", path.display());
+        println!("Gaussians:   {n} ({} in file, {} dropped as non-finite)", report.vertices_in_file, report.dropped_non_finite);
+        println!("SH degree:   {}", scene.sh_degree);
+        println!("encoding:    {}", report.encoding);
+        println!("bounds:      min {:?} max {:?}", lo.to_array(), hi.to_array());
+        for (k, (a, b)) in props {
+            println!("  {k:<28} {a:>12.5} .. {b:<12.5}");
+        }
+    }
+    Ok(())
+}
+
+fn cmd_demo(dir: &Path) -> Result<()> {
+    let scene = rara::synth::demo_scene();
+    let cameras = rara::synth::orbit_cameras(4, 3.2, 640, 480, 50.0)?;
+    let ctx = Context::from_env()?;
+    let mut renderer = Renderer::new(&ctx)?;
+    let gpu_scene = renderer.upload(&scene)?;
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.to_path_buf(), source })?;
+    let bar = ProgressBar::new(cameras.len() as u64)
+        .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len}").unwrap())
+        .with_message("rendering demo");
+    let mut written = Vec::new();
+    for (k, cam) in cameras.iter().enumerate() {
+        let (img, stats) = renderer.render(&gpu_scene, cam, &RenderOptions { background: Vec3::splat(0.05) })?;
+        let path = dir.join(format!("demo_view{k}.png"));
+        save_png(&img, &path)?;
+        written.push((path, stats));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!("demo: {} Gaussians (built-in scene) rendered on {} ({})", scene.len(), ctx.info().name, ctx.info().driver);
+    for (path, stats) in written {
+        println!("  wrote {} ({} tile intersections, GPU {:.1} ms)", path.display(), stats.intersections, stats.gpu_ms);
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Render(args) => cmd_render(args),
+        Command::Info { scene, json } => cmd_info(scene, *json),
+        Command::Demo { output } => cmd_demo(output),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,21 @@
+//! The CPU reference renderer: the SPEC implemented stage by stage, plainly, in `f32`.
+//!
+//! It mirrors the GPU pipeline's stages and names (`project`, then per-tile lists sorted by
+//! depth, then `rasterize`) and is the oracle of the test suite.
+
+pub mod project;
+pub mod rasterize;
+
+use glam::Vec3;
+
+use crate::camera::Camera;
+use crate::scene::Scene;
+
+/// An 8-bit RGBA image, row-major, row 0 at the top.
+pub type Rgba8Image = image::RgbaImage;
+
+/// Renders `scene` from `camera` over `background`.
+pub fn render(scene: &Scene, camera: &Camera, background: Vec3) -> Rgba8Image {
+    let splats = project::project_all(scene, camera);
+    rasterize::rasterize(&splats, camera, background)
+}

@@ -1,0 +1,145 @@
+//! CPU twin of `glsl/project.comp` (SPEC section 3).
+
+use glam::{Quat, Vec2, Vec3};
+
+use crate::camera::Camera;
+use crate::constants::TILE_SIZE;
+use crate::scene::Scene;
+
+/// SH constant of degree 0.
+pub const SH_C0: f32 = 0.282_094_8;
+const SH_C1: f32 = 0.488_602_5;
+const SH_C2: [f32; 5] = [1.092_548_4, -1.092_548_4, 0.315_391_57, -1.092_548_4, 0.546_274_2];
+const SH_C3: [f32; 7] = [
+    -0.590_043_6, 2.890_611_4, -0.457_045_8, 0.373_176_34, -0.457_045_8, 1.445_305_7, -0.590_043_6,
+];
+
+/// What the project stage produces for one Gaussian that draws something.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjectedSplat {
+    /// Index of the Gaussian in the scene.
+    pub index: u32,
+    /// Image coordinates of the centre.
+    pub uv: Vec2,
+    /// View-space depth.
+    pub depth: f32,
+    /// Opacity.
+    pub opacity: f32,
+    /// Inverse 2D covariance (A, B, C).
+    pub conic: Vec3,
+    /// SH colour.
+    pub color: Vec3,
+    /// Touched tiles `(x0, y0, x1, y1)`, end exclusive.
+    pub rect: [u32; 4],
+}
+
+/// Rows of the rotation matrix of a normalised quaternion.
+fn quat_rows(q: Quat) -> [Vec3; 3] {
+    let (w, x, y, z) = (q.w, q.x, q.y, q.z);
+    [
+        Vec3::new(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)),
+        Vec3::new(2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)),
+        Vec3::new(2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)),
+    ]
+}
+
+/// Colour of SH coefficients `sh` (coefficient major) seen along unit `dir`.
+pub fn eval_sh(sh: &[f32], degree: u32, dir: Vec3) -> Vec3 {
+    let c = |k: usize| Vec3::new(sh[3 * k], sh[3 * k + 1], sh[3 * k + 2]);
+    let mut result = SH_C0 * c(0);
+    if degree > 0 {
+        let (x, y, z) = (dir.x, dir.y, dir.z);
+        result = result - SH_C1 * y * c(1) + SH_C1 * z * c(2) - SH_C1 * x * c(3);
+        if degree > 1 {
+            let (xx, yy, zz) = (x * x, y * y, z * z);
+            let (xy, yz, xz) = (x * y, y * z, x * z);
+            result = result
+                + SH_C2[0] * xy * c(4)
+                + SH_C2[1] * yz * c(5)
+                + SH_C2[2] * (2.0 * zz - xx - yy) * c(6)
+                + SH_C2[3] * xz * c(7)
+                + SH_C2[4] * (xx - yy) * c(8);
+            if degree > 2 {
+                result = result
+                    + SH_C3[0] * y * (3.0 * xx - yy) * c(9)
+                    + SH_C3[1] * xy * z * c(10)
+                    + SH_C3[2] * y * (4.0 * zz - xx - yy) * c(11)
+                    + SH_C3[3] * z * (2.0 * zz - 3.0 * xx - 3.0 * yy) * c(12)
+                    + SH_C3[4] * x * (4.0 * zz - xx - yy) * c(13)
+                    + SH_C3[5] * z * (xx - yy) * c(14)
+                    + SH_C3[6] * x * (xx - 3.0 * yy) * c(15);
+            }
+        }
+    }
+    (result + 0.5).max(Vec3::ZERO)
+}
+
+/// Projects Gaussian `i`, or `None` when it is culled or touches no tile.
+pub fn project_one(scene: &Scene, camera: &Camera, i: usize) -> Option<ProjectedSplat> {
+    let w2c = camera.world_to_camera();
+    // Rows of R_wc.
+    let (r_x, r_y, r_z) = (w2c.row(0), w2c.row(1), w2c.row(2));
+    let mu = scene.means[i];
+    let rel = mu - camera.position;
+    let t = Vec3::new(r_x.dot(rel), r_y.dot(rel), r_z.dot(rel));
+    if t.z <= 0.2 {
+        return None;
+    }
+    let (fx, fy) = (camera.fx, camera.fy);
+    let (w, h) = (camera.width as f32, camera.height as f32);
+    let lim_x = 1.3 * (w / (2.0 * fx));
+    let lim_y = 1.3 * (h / (2.0 * fy));
+    let xc = (t.x / t.z).clamp(-lim_x, lim_x) * t.z;
+    let yc = (t.y / t.z).clamp(-lim_y, lim_y) * t.z;
+    // Rows of J R_wc in world coordinates.
+    let j0 = (fx / t.z) * r_x - (fx * xc / (t.z * t.z)) * r_z;
+    let j1 = (fy / t.z) * r_y - (fy * yc / (t.z * t.z)) * r_z;
+    // Sigma = M M^T, M = R S: v^T Sigma w = (S R^T v) . (S R^T w).
+    let [q0, q1, q2] = quat_rows(scene.rotations[i]);
+    let cols = [Vec3::new(q0.x, q1.x, q2.x), Vec3::new(q0.y, q1.y, q2.y), Vec3::new(q0.z, q1.z, q2.z)];
+    let s = scene.scales[i];
+    let m0 = s * Vec3::new(cols[0].dot(j0), cols[1].dot(j0), cols[2].dot(j0));
+    let m1 = s * Vec3::new(cols[0].dot(j1), cols[1].dot(j1), cols[2].dot(j1));
+    let a = m0.dot(m0) + 0.3;
+    let b = m0.dot(m1);
+    let c = m1.dot(m1) + 0.3;
+    let det = a * c - b * b;
+    if det <= 0.0 {
+        return None;
+    }
+    let conic = Vec3::new(c, -b, a) / det;
+    let mid = 0.5 * (a + c);
+    let lambda = mid + (mid * mid - det).max(0.1).sqrt();
+    let radius = (3.0 * lambda.sqrt()).ceil();
+    let (cx, cy) = camera.principal_point();
+    let uv = Vec2::new(fx * t.x / t.z + cx, fy * t.y / t.z + cy);
+    let tile = TILE_SIZE as f32;
+    let (gx, gy) = tile_grid(camera);
+    let x0 = (((uv.x - radius) / tile) as i32).clamp(0, gx as i32);
+    let x1 = (((uv.x + radius + tile - 1.0) / tile) as i32).clamp(0, gx as i32);
+    let y0 = (((uv.y - radius) / tile) as i32).clamp(0, gy as i32);
+    let y1 = (((uv.y + radius + tile - 1.0) / tile) as i32).clamp(0, gy as i32);
+    if x1 <= x0 || y1 <= y0 {
+        return None;
+    }
+    let color = eval_sh(scene.sh_of(i), scene.sh_degree, rel.normalize());
+    Some(ProjectedSplat {
+        index: i as u32,
+        uv,
+        depth: t.z,
+        opacity: scene.opacities[i],
+        conic,
+        color,
+        rect: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
+    })
+}
+
+/// Projects every Gaussian; the result holds only those that draw something, in index order.
+pub fn project_all(scene: &Scene, camera: &Camera) -> Vec<ProjectedSplat> {
+    (0..scene.len()).filter_map(|i| project_one(scene, camera, i)).collect()
+}
+
+/// Tiles across and down for a camera's image.
+pub fn tile_grid(camera: &Camera) -> (u32, u32) {
+    (camera.width.div_ceil(TILE_SIZE), camera.height.div_ceil(TILE_SIZE))
+}

@@ -1,0 +1,98 @@
+//! CPU twin of the tile lists (emit + sort + tile ranges) and of `glsl/rasterize.comp`
+//! (SPEC section 4).
+
+use glam::{Vec2, Vec3};
+
+use super::project::{tile_grid, ProjectedSplat};
+use super::Rgba8Image;
+use crate::camera::Camera;
+use crate::constants::TILE_SIZE;
+
+/// Per tile, the splats that touch it in compositing order: ascending depth, ties by index.
+pub fn tile_lists(splats: &[ProjectedSplat], camera: &Camera) -> Vec<Vec<u32>> {
+    let (gx, gy) = tile_grid(camera);
+    let mut lists: Vec<Vec<(u32, u32, u32)>> = vec![Vec::new(); (gx * gy) as usize];
+    for (k, s) in splats.iter().enumerate() {
+        for ty in s.rect[1]..s.rect[3] {
+            for tx in s.rect[0]..s.rect[2] {
+                lists[(ty * gx + tx) as usize].push((s.depth.to_bits(), s.index, k as u32));
+            }
+        }
+    }
+    lists
+        .into_iter()
+        .map(|mut l| {
+            l.sort_unstable_by_key(|&(d, i, _)| (d, i));
+            l.into_iter().map(|(_, _, k)| k).collect()
+        })
+        .collect()
+}
+
+/// Composites one pixel front to back; returns the colour over `background`.
+pub fn composite_pixel(splats: &[ProjectedSplat], list: &[u32], pixel: Vec2, background: Vec3) -> Vec3 {
+    let mut color = Vec3::ZERO;
+    let mut t = 1.0f32;
+    for &k in list {
+        let s = &splats[k as usize];
+        let d = s.uv - pixel;
+        let power = -0.5 * (s.conic.x * d.x * d.x + s.conic.z * d.y * d.y) - s.conic.y * d.x * d.y;
+        if power > 0.0 {
+            continue;
+        }
+        let alpha = (s.opacity * power.exp()).min(0.99);
+        if alpha < 1.0 / 255.0 {
+            continue;
+        }
+        let next_t = t * (1.0 - alpha);
+        if next_t < 1e-4 {
+            break;
+        }
+        color += alpha * t * s.color;
+        t = next_t;
+    }
+    color + t * background
+}
+
+/// 8-bit quantisation of SPEC section 4: clamp to [0, 1], round(255 x).
+pub fn to_rgba8(c: Vec3) -> [u8; 4] {
+    let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0 + 0.5).floor() as u8;
+    [q(c.x), q(c.y), q(c.z), 255]
+}
+
+/// Rasterizes projected splats into an 8-bit image, tiles spread over the host's cores.
+pub fn rasterize(splats: &[ProjectedSplat], camera: &Camera, background: Vec3) -> Rgba8Image {
+    let lists = tile_lists(splats, camera);
+    let (gx, _) = tile_grid(camera);
+    let (w, h) = (camera.width, camera.height);
+    let mut pixels = vec![0u8; (w * h * 4) as usize];
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let rows_per_band = TILE_SIZE as usize;
+    let band_bytes = rows_per_band * w as usize * 4;
+    let bands: Vec<(usize, &mut [u8])> = pixels.chunks_mut(band_bytes).enumerate().collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let bands = std::sync::Mutex::new(bands.into_iter().map(Some).collect::<Vec<_>>());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let b = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some((ty, band)) = bands.lock().unwrap().get_mut(b).and_then(Option::take) else {
+                    break;
+                };
+                let ty = ty as u32;
+                for row in 0..rows_per_band as u32 {
+                    let j = ty * TILE_SIZE + row;
+                    if j >= h {
+                        break;
+                    }
+                    for i in 0..w {
+                        let list = &lists[(ty * gx + i / TILE_SIZE) as usize];
+                        let c = composite_pixel(splats, list, Vec2::new(i as f32, j as f32), background);
+                        let o = ((row * w + i) * 4) as usize;
+                        band[o..o + 4].copy_from_slice(&to_rgba8(c));
+                    }
+                }
+            });
+        }
+    });
+    Rgba8Image::from_raw(w, h, pixels).expect("image size")
+}

@@ -1,0 +1,76 @@
+//! A 3D Gaussian Splatting scene in memory, with activated values (SPEC section 1).
+
+use glam::{Quat, Vec3};
+
+/// Gaussians as structure-of-arrays, with the activations already applied: opacity is
+/// `sigmoid(opacity)`, scales are `exp(scale_i)`, rotations are normalised.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scene {
+    /// Centres (world).
+    pub means: Vec<Vec3>,
+    /// Opacities in (0, 1).
+    pub opacities: Vec<f32>,
+    /// Standard deviations along the local axes.
+    pub scales: Vec<Vec3>,
+    /// Normalised rotations (local to world).
+    pub rotations: Vec<Quat>,
+    /// Spherical-harmonics degree, 0..=3.
+    pub sh_degree: u32,
+    /// SH coefficients, [`Scene::sh_coeffs_per_channel`] x 3 floats per Gaussian, coefficient
+    /// major: `sh[g * stride + 3 * k + channel]`. Coefficient 0 is `f_dc`.
+    pub sh: Vec<f32>,
+}
+
+impl Scene {
+    /// Number of Gaussians.
+    pub fn len(&self) -> usize {
+        self.means.len()
+    }
+
+    /// Whether the scene has no Gaussian.
+    pub fn is_empty(&self) -> bool {
+        self.means.is_empty()
+    }
+
+    /// SH coefficients per colour channel: `(degree + 1)^2`.
+    pub fn sh_coeffs_per_channel(&self) -> usize {
+        sh_coeffs(self.sh_degree)
+    }
+
+    /// Floats of SH per Gaussian: `3 (degree + 1)^2`.
+    pub fn sh_stride(&self) -> usize {
+        3 * self.sh_coeffs_per_channel()
+    }
+
+    /// The SH coefficients of Gaussian `i`.
+    pub fn sh_of(&self, i: usize) -> &[f32] {
+        let s = self.sh_stride();
+        &self.sh[i * s..(i + 1) * s]
+    }
+
+    /// Axis-aligned bounds of the centres, `None` for an empty scene.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.means.first()?;
+        Some(self.means.iter().fold((first, first), |(lo, hi), &m| (lo.min(m), hi.max(m))))
+    }
+
+    /// Appends one Gaussian (`sh` holds [`Scene::sh_stride`] floats).
+    pub fn push(&mut self, mean: Vec3, opacity: f32, scale: Vec3, rotation: Quat, sh: &[f32]) {
+        debug_assert_eq!(sh.len(), self.sh_stride());
+        self.means.push(mean);
+        self.opacities.push(opacity);
+        self.scales.push(scale);
+        self.rotations.push(rotation);
+        self.sh.extend_from_slice(sh);
+    }
+}
+
+/// SH coefficients per channel for a degree: `(degree + 1)^2`.
+pub fn sh_coeffs(degree: u32) -> usize {
+    ((degree + 1) * (degree + 1)) as usize
+}
+
+/// The SH DC coefficient that gives colour channel value `c` (inverse of `C0 * dc + 0.5`).
+pub fn rgb_to_sh_dc(c: f32) -> f32 {
+    (c - 0.5) / crate::reference::project::SH_C0
+}

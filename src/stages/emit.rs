@@ -1,0 +1,42 @@
+//! Stage 3: emit one (tile, depth) key and splat index per touched tile (`glsl/emit.comp`).
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use crate::constants::LINEAR_WORKGROUP;
+use crate::error::Result;
+use crate::shaders;
+use crate::vk::{ComputePipeline, Context};
+
+/// Device addresses the emit kernel reads and writes.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct EmitPush {
+    /// `FrameParams`.
+    pub frame: u64,
+    /// `ProjectedSplat[]`.
+    pub splats: u64,
+    /// Exclusive prefix sum of tiles touched.
+    pub offsets: u64,
+    /// Out: keys.
+    pub keys: u64,
+    /// Out: values (splat indices).
+    pub values: u64,
+}
+
+/// The emit kernel.
+pub struct Emit {
+    pipeline: ComputePipeline,
+}
+
+impl Emit {
+    /// Builds the kernel.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(Emit { pipeline: ComputePipeline::new::<EmitPush>(ctx, c"emit", shaders::EMIT)? })
+    }
+
+    /// Records the emission for `count` Gaussians.
+    pub fn record(&self, cmd: vk::CommandBuffer, push: &EmitPush, count: u32) {
+        self.pipeline.dispatch(cmd, push, [count.div_ceil(LINEAR_WORKGROUP), 1, 1]);
+    }
+}

@@ -1,0 +1,62 @@
+//! Stage 6: composite each tile's sorted splats per pixel (`glsl/rasterize.comp`; CPU twin
+//! `reference::rasterize`).
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use crate::error::Result;
+use crate::shaders;
+use crate::vk::{compute_barrier, ComputePipeline, Context};
+
+/// Device addresses and round of the rasterizer.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct RasterizePush {
+    /// `FrameParams`.
+    pub frame: u64,
+    /// `ProjectedSplat[]`.
+    pub splats: u64,
+    /// Sorted splat indices.
+    pub values: u64,
+    /// Tile ranges.
+    pub ranges: u64,
+    /// Per-pixel state between rounds (unused with one round).
+    pub state: u64,
+    /// Out: rgba8 pixels.
+    pub image: u64,
+    /// Frame counters (longest tile list).
+    pub counters: u64,
+    /// Which RASTER_CHUNK of every tile list this dispatch walks.
+    pub round_index: u32,
+    /// ROUND_FIRST | ROUND_LAST.
+    pub flags: u32,
+}
+
+const ROUND_FIRST: u32 = 1;
+const ROUND_LAST: u32 = 2;
+
+/// The rasterize kernel.
+pub struct Rasterize {
+    pipeline: ComputePipeline,
+}
+
+impl Rasterize {
+    /// Builds the kernel.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(Rasterize { pipeline: ComputePipeline::new::<RasterizePush>(ctx, c"rasterize", shaders::RASTERIZE)? })
+    }
+
+    /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
+    /// entries of every tile list.
+    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, push: &RasterizePush, tiles: (u32, u32), rounds: u32) {
+        for round in 0..rounds {
+            let mut p = *push;
+            p.round_index = round;
+            p.flags = if round == 0 { ROUND_FIRST } else { 0 } | if round + 1 == rounds { ROUND_LAST } else { 0 };
+            self.pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]);
+            if round + 1 < rounds {
+                compute_barrier(ctx, cmd);
+            }
+        }
+    }
+}

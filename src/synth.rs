@@ -1,0 +1,109 @@
+//! Procedural scenes the crate generates itself: test fixtures and the demo.
+
+use glam::{Quat, Vec3};
+
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::scene::{rgb_to_sh_dc, sh_coeffs, Scene};
+
+/// A small deterministic random number generator (SplitMix64), so scenes depend only on the
+/// seed.
+#[derive(Clone, Debug)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// Seeds the generator.
+    pub fn new(seed: u64) -> Self {
+        Rng(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f32()
+    }
+
+    /// A uniformly random unit quaternion.
+    pub fn rotation(&mut self) -> Quat {
+        let (u1, u2, u3) = (self.f32(), self.f32() * std::f32::consts::TAU, self.f32() * std::f32::consts::TAU);
+        let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+        Quat::from_xyzw(a * u2.sin(), a * u2.cos(), b * u3.sin(), b * u3.cos()).normalize()
+    }
+}
+
+/// SH coefficients (coefficient major) for base colour `rgb`, with small random view-dependent
+/// terms of the higher degrees.
+fn sh_for(rgb: Vec3, degree: u32, rng: &mut Rng, wobble: f32) -> Vec<f32> {
+    let mut sh = vec![0.0; 3 * sh_coeffs(degree)];
+    sh[0] = rgb_to_sh_dc(rgb.x);
+    sh[1] = rgb_to_sh_dc(rgb.y);
+    sh[2] = rgb_to_sh_dc(rgb.z);
+    for v in &mut sh[3..] {
+        *v = rng.range(-wobble, wobble);
+    }
+    sh
+}
+
+/// A unit sphere of `count` isotropic Gaussians, coloured by direction.
+pub fn shell(count: usize, sh_degree: u32, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed);
+    let mut scene = Scene { sh_degree, ..Default::default() };
+    let spacing = (4.0 * std::f32::consts::PI / count.max(1) as f32).sqrt();
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    for i in 0..count {
+        // Fibonacci sphere with a little jitter.
+        let y = 1.0 - 2.0 * (i as f32 + 0.5) / count as f32;
+        let r = (1.0 - y * y).max(0.0).sqrt();
+        let phi = golden * i as f32 + rng.range(-0.3, 0.3);
+        let p = Vec3::new(r * phi.cos(), y, r * phi.sin());
+        let rgb = 0.5 + 0.45 * p;
+        let s = spacing * rng.range(0.6, 0.9);
+        let sh = sh_for(rgb, sh_degree, &mut rng, 0.15);
+        scene.push(p, rng.range(0.6, 0.95), Vec3::splat(s), Quat::IDENTITY, &sh);
+    }
+    scene
+}
+
+/// `views` cameras on a circle around the origin at `distance`, 15 degrees above the equator
+/// (world up is -Y, the INRIA convention), looking at the origin.
+pub fn orbit_cameras(views: usize, distance: f32, width: u32, height: u32, fov_y_deg: f32) -> Result<Vec<Camera>> {
+    let elevation = 15f32.to_radians();
+    (0..views)
+        .map(|k| {
+            let a = k as f32 / views as f32 * std::f32::consts::TAU;
+            let eye = distance
+                * Vec3::new(elevation.cos() * a.cos(), -elevation.sin(), elevation.cos() * a.sin());
+            Camera::look_at(eye, Vec3::ZERO, Vec3::NEG_Y, fov_y_deg, width, height)
+        })
+        .collect()
+}
+
+/// The built-in scene of `rara demo`: a view-dependent (SH degree 3) shell around a smaller,
+/// denser core of elongated Gaussians.
+pub fn demo_scene() -> Scene {
+    let mut scene = shell(20_000, 3, 7);
+    let mut rng = Rng::new(11);
+    let core_count = 8_000;
+    for _ in 0..core_count {
+        let dir = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)).normalize_or_zero();
+        let p = dir * rng.range(0.2, 0.45);
+        let rgb = Vec3::new(0.95, 0.55 + 0.3 * dir.y, 0.2);
+        let sh = sh_for(rgb, 3, &mut rng, 0.1);
+        let scale = Vec3::new(rng.range(0.02, 0.05), 0.006, 0.006);
+        scene.push(p, rng.range(0.5, 0.9), scale, rng.rotation(), &sh);
+    }
+    scene
+}

@@ -1,0 +1,142 @@
+//! Buffers reached by device address.
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+pub use gpu_allocator::MemoryLocation;
+
+use super::context::Context;
+use crate::error::{Error, Result, VkContext};
+
+/// A named GPU buffer with its memory and device address, freed when dropped.
+///
+/// Every buffer can be used as a storage buffer through its device address and as a transfer
+/// source and destination.
+pub struct Buffer {
+    /// The Vulkan handle.
+    pub raw: vk::Buffer,
+    /// Size in bytes.
+    pub size: u64,
+    /// `vkGetBufferDeviceAddress` of the buffer, what kernels receive in push constants.
+    pub address: u64,
+    allocation: Option<Allocation>,
+    ctx: Context,
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes (at least 4) in `location`, named for leak reports and
+    /// debuggers.
+    pub fn new(ctx: &Context, name: &str, size: u64, location: MemoryLocation) -> Result<Self> {
+        let size = size.max(4).next_multiple_of(4);
+        let device = ctx.device();
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            )
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(Error::Allocation {
+                    what: format!("buffer '{name}' ({size} bytes)"),
+                    source,
+                });
+            }
+        };
+        let bind = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        if let Err(e) = bind {
+            let _ = ctx.allocator().free(allocation);
+            unsafe { device.destroy_buffer(raw, None) };
+            return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
+        }
+        let address = unsafe {
+            device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
+        };
+        if let Some(debug) = &ctx.shared.debug_device {
+            if let Ok(cname) = std::ffi::CString::new(name) {
+                let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(raw).object_name(&cname);
+                let _ = unsafe { debug.set_debug_utils_object_name(&info) };
+            }
+        }
+        Ok(Buffer { raw, size, address, allocation: Some(allocation), ctx: ctx.clone() })
+    }
+
+    /// A device-local buffer holding `data`, uploaded through a staging buffer.
+    pub fn from_slice<T: bytemuck::Pod>(ctx: &Context, name: &str, data: &[T]) -> Result<Self> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let buffer = Buffer::new(ctx, name, bytes.len() as u64, MemoryLocation::GpuOnly)?;
+        buffer.upload(bytes)?;
+        Ok(buffer)
+    }
+
+    /// Copies `bytes` to the start of the buffer (staging buffer + vkCmdCopyBuffer, waits).
+    pub fn upload(&self, bytes: &[u8]) -> Result<()> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        assert!(bytes.len() as u64 <= self.size, "upload larger than the buffer");
+        let mut staging =
+            Buffer::new(&self.ctx, "staging (upload)", bytes.len() as u64, MemoryLocation::CpuToGpu)?;
+        staging.mapped_mut()[..bytes.len()].copy_from_slice(bytes);
+        self.ctx.run_commands(|cmd| unsafe {
+            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len() as u64 };
+            self.ctx.device().cmd_copy_buffer(cmd, staging.raw, self.raw, &[region]);
+        })
+    }
+
+    /// Reads the first `len` bytes back (vkCmdCopyBuffer to a host buffer, waits).
+    pub fn download(&self, len: u64) -> Result<Vec<u8>> {
+        assert!(len <= self.size, "download larger than the buffer");
+        if len == 0 {
+            return Ok(Vec::new());
+        }
+        let readback = Buffer::new(&self.ctx, "staging (readback)", len, MemoryLocation::GpuToCpu)?;
+        self.ctx.run_commands(|cmd| unsafe {
+            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: len };
+            self.ctx.device().cmd_copy_buffer(cmd, self.raw, readback.raw, &[region]);
+        })?;
+        Ok(readback.mapped()[..len as usize].to_vec())
+    }
+
+    /// Reads back `count` elements of `T`.
+    pub fn download_as<T: bytemuck::Pod>(&self, count: usize) -> Result<Vec<T>> {
+        let bytes = self.download((count * std::mem::size_of::<T>()) as u64)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// The host mapping of a `CpuToGpu`/`GpuToCpu` buffer. Panics for unmapped memory.
+    pub fn mapped(&self) -> &[u8] {
+        self.allocation.as_ref().and_then(|a| a.mapped_slice()).expect("buffer is not host-mapped")
+    }
+
+    /// Mutable host mapping; see [`Buffer::mapped`].
+    pub fn mapped_mut(&mut self) -> &mut [u8] {
+        self.allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .expect("buffer is not host-mapped")
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(allocation) = self.allocation.take() {
+            let _ = self.ctx.allocator().free(allocation);
+        }
+        unsafe { self.ctx.device().destroy_buffer(self.raw, None) };
+    }
+}

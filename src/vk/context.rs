@@ -1,0 +1,473 @@
+//! The Vulkan context: instance, device, queue and memory allocator.
+
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use crate::error::{Error, Result, VkContext};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// Whether to enable the Khronos validation layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Validation {
+    /// Never.
+    Off,
+    /// When `VK_LAYER_KHRONOS_validation` is installed; silently without it otherwise.
+    IfAvailable,
+    /// Always; creating the context fails when the layer is missing.
+    Required,
+}
+
+impl Validation {
+    /// `Required` when the environment sets `RARA_VALIDATION=1`, else `Off`.
+    pub fn from_env() -> Self {
+        match std::env::var("RARA_VALIDATION").as_deref() {
+            Ok("1") | Ok("true") | Ok("on") => Validation::Required,
+            _ => Validation::Off,
+        }
+    }
+}
+
+/// How to create a headless [`Context`].
+#[derive(Clone, Debug)]
+pub struct ContextDesc {
+    /// Validation layer policy.
+    pub validation: Validation,
+    /// Pick the first device whose name contains this (case-insensitive); `None` picks by type
+    /// (discrete > integrated > virtual > CPU). [`ContextDesc::from_env`] reads `RARA_DEVICE`.
+    pub device_name: Option<String>,
+}
+
+impl ContextDesc {
+    /// Validation from `RARA_VALIDATION`, device from `RARA_DEVICE`.
+    pub fn from_env() -> Self {
+        ContextDesc {
+            validation: Validation::from_env(),
+            device_name: std::env::var("RARA_DEVICE").ok().filter(|s| !s.is_empty()),
+        }
+    }
+}
+
+impl Default for ContextDesc {
+    fn default() -> Self {
+        ContextDesc { validation: Validation::Off, device_name: None }
+    }
+}
+
+/// What is known about the chosen device.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    /// `VkPhysicalDeviceProperties::deviceName`.
+    pub name: String,
+    /// Physical device type.
+    pub device_type: vk::PhysicalDeviceType,
+    /// Driver name and version string (`VkPhysicalDeviceDriverProperties`).
+    pub driver: String,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period_ns: f32,
+    /// Whether the queue writes timestamps.
+    pub timestamps: bool,
+    /// Largest storage-buffer binding; rara uses device addresses and never binds, but reports it.
+    pub max_storage_buffer_range: u32,
+    /// Subgroup size of compute shaders.
+    pub subgroup_size: u32,
+}
+
+pub(crate) struct ContextShared {
+    _entry: ash::Entry,
+    pub(crate) instance: ash::Instance,
+    pub(crate) physical_device: vk::PhysicalDevice,
+    pub(crate) device: ash::Device,
+    pub(crate) queue: vk::Queue,
+    pub(crate) queue_family: u32,
+    pub(crate) info: DeviceInfo,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    pub(crate) debug_device: Option<ash::ext::debug_utils::Device>,
+    // Boxed so the pointer handed to the debug callback stays valid.
+    messages: Box<Mutex<Vec<String>>>,
+    upload_pool: Mutex<vk::CommandPool>,
+}
+
+/// A Vulkan device with its queue and memory allocator, owned by rara (headless).
+///
+/// Cheap to clone: clones share the device. Resources made from it keep it alive, and it is
+/// torn down in reverse order of creation once the last of them is dropped.
+#[derive(Clone)]
+pub struct Context {
+    pub(crate) shared: Arc<ContextShared>,
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    let messages = &*(user as *const Mutex<Vec<String>>);
+    let text = if data.is_null() || (*data).p_message.is_null() {
+        String::from("(no message)")
+    } else {
+        CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
+    };
+    let text = format!("[{severity:?}] {text}");
+    eprintln!("rara: Vulkan validation: {text}");
+    if let Ok(mut m) = messages.lock() {
+        m.push(text);
+    }
+    vk::FALSE
+}
+
+fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    }
+}
+
+impl Context {
+    /// A headless context configured from the environment (`RARA_VALIDATION`, `RARA_DEVICE`).
+    pub fn from_env() -> Result<Self> {
+        Self::headless(&ContextDesc::from_env())
+    }
+
+    /// Creates an instance and a device of its own, with no surface.
+    pub fn headless(desc: &ContextDesc) -> Result<Self> {
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loading(e.to_string()))?;
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }
+            .vk("vkEnumerateInstanceLayerProperties")?;
+        let has_validation = layers
+            .iter()
+            .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
+        let validation = match desc.validation {
+            Validation::Off => false,
+            Validation::IfAvailable => has_validation,
+            Validation::Required if !has_validation => {
+                return Err(Error::Loading(
+                    "the validation layer VK_LAYER_KHRONOS_validation is not installed \
+                     (Debian: apt-get install vulkan-validationlayers)"
+                        .into(),
+                ))
+            }
+            Validation::Required => true,
+        };
+        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("vkEnumerateInstanceExtensionProperties")?;
+        let has_debug_utils = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::debug_utils::NAME));
+
+        let app_name = CString::new("rara").unwrap();
+        let app = vk::ApplicationInfo::default()
+            .application_name(&app_name)
+            .engine_name(&app_name)
+            .api_version(vk::API_VERSION_1_2);
+        let layer_ptrs: Vec<*const i8> =
+            if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
+        let ext_ptrs: Vec<*const i8> =
+            if has_debug_utils { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+        let instance_info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layer_ptrs)
+            .enabled_extension_names(&ext_ptrs);
+        let instance =
+            unsafe { entry.create_instance(&instance_info, None) }.vk("vkCreateInstance")?;
+
+        let messages: Box<Mutex<Vec<String>>> = Box::default();
+        let debug = if validation && has_debug_utils {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(&*messages as *const Mutex<Vec<String>> as *mut c_void);
+            match unsafe { loader.create_debug_utils_messenger(&info, None) } {
+                Ok(m) => Some((loader, m)),
+                Err(e) => {
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(Error::Vulkan { call: "vkCreateDebugUtilsMessengerEXT", result: e });
+                }
+            }
+        } else {
+            None
+        };
+
+        // On failure create_device destroys the instance and messenger too.
+        Self::create_device(entry, instance, debug, messages, desc, has_debug_utils)
+    }
+
+    fn create_device(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+        messages: Box<Mutex<Vec<String>>>,
+        desc: &ContextDesc,
+        has_debug_utils: bool,
+    ) -> Result<Self> {
+        let destroy_instance = |debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| unsafe {
+            if let Some((loader, m)) = debug {
+                loader.destroy_debug_utils_messenger(*m, None);
+            }
+            instance.destroy_instance(None);
+        };
+        let chosen = match choose_physical_device(&instance, desc.device_name.as_deref()) {
+            Ok(c) => c,
+            Err(e) => {
+                destroy_instance(&debug);
+                return Err(e);
+            }
+        };
+        let (physical_device, queue_family) = chosen;
+
+        let priorities = [1.0f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
+        let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
+            .buffer_device_address(true)
+            .host_query_reset(true);
+        let features = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(
+            unsafe { instance.get_physical_device_features(physical_device) }
+                .pipeline_statistics_query
+                == vk::TRUE,
+        );
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&features)
+            .push_next(&mut features12);
+        let device = match unsafe { instance.create_device(physical_device, &device_info, None) } {
+            Ok(d) => d,
+            Err(e) => {
+                destroy_instance(&debug);
+                return Err(Error::Vulkan { call: "vkCreateDevice", result: e });
+            }
+        };
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let info = device_info_of(&instance, physical_device, queue_family);
+
+        let allocator = match Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: true,
+            allocation_sizes: Default::default(),
+        }) {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_device(None) };
+                destroy_instance(&debug);
+                return Err(Error::Allocation { what: "the allocator".into(), source: e });
+            }
+        };
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let upload_pool = unsafe { device.create_command_pool(&pool_info, None) }
+            .vk("vkCreateCommandPool")?;
+        let debug_device = has_debug_utils
+            .then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+
+        Ok(Context {
+            shared: Arc::new(ContextShared {
+                _entry: entry,
+                instance,
+                physical_device,
+                device,
+                queue,
+                queue_family,
+                info,
+                allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                debug,
+                debug_device,
+                messages,
+                upload_pool: Mutex::new(upload_pool),
+            }),
+        })
+    }
+
+    /// The logical device.
+    pub fn device(&self) -> &ash::Device {
+        &self.shared.device
+    }
+
+    /// The queue rara submits to in headless use.
+    pub fn queue(&self) -> vk::Queue {
+        self.shared.queue
+    }
+
+    /// Its queue family.
+    pub fn queue_family(&self) -> u32 {
+        self.shared.queue_family
+    }
+
+    /// Facts about the device (name, driver, timestamp period, ...).
+    pub fn info(&self) -> &DeviceInfo {
+        &self.shared.info
+    }
+
+    /// Whether the validation layer is reporting to this context.
+    pub fn validation_enabled(&self) -> bool {
+        self.shared.debug.is_some()
+    }
+
+    /// Takes the validation warnings and errors reported so far.
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        std::mem::take(&mut *self.shared.messages.lock().unwrap())
+    }
+
+    pub(crate) fn allocator(&self) -> MutexGuard<'_, Allocator> {
+        self.shared.allocator.lock().unwrap()
+    }
+
+    /// Records commands with `record` into a fresh command buffer, submits it and waits.
+    pub fn run_commands<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
+        let device = &self.shared.device;
+        let pool = self.shared.upload_pool.lock().unwrap();
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { device.allocate_command_buffers(&alloc) }
+            .vk("vkAllocateCommandBuffers")?[0];
+        let result = (|| {
+            let begin = vk::CommandBufferBeginInfo::default()
+                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+            let value = record(cmd);
+            unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+            self.submit_and_wait(cmd)?;
+            Ok(value)
+        })();
+        unsafe { device.free_command_buffers(*pool, &[cmd]) };
+        result
+    }
+
+    /// Submits a recorded command buffer to the queue and waits for it on a fence.
+    pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {
+        let device = &self.shared.device;
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .vk("vkCreateFence")?;
+        let cmds = [cmd];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        let result = unsafe { device.queue_submit(self.shared.queue, &submit, fence) }
+            .vk("vkQueueSubmit")
+            .and_then(|_| {
+                unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+            });
+        unsafe { device.destroy_fence(fence, None) };
+        result
+    }
+
+    /// Opens a named region for debuggers (RenderDoc, Nsight) when `VK_EXT_debug_utils` is on.
+    pub fn begin_label(&self, cmd: vk::CommandBuffer, name: &CStr) {
+        if let Some(d) = &self.shared.debug_device {
+            let label = vk::DebugUtilsLabelEXT::default().label_name(name);
+            unsafe { d.cmd_begin_debug_utils_label(cmd, &label) };
+        }
+    }
+
+    /// Closes the region opened by [`Context::begin_label`].
+    pub fn end_label(&self, cmd: vk::CommandBuffer) {
+        if let Some(d) = &self.shared.debug_device {
+            unsafe { d.cmd_end_debug_utils_label(cmd) };
+        }
+    }
+}
+
+impl Drop for ContextShared {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(*self.upload_pool.get_mut().unwrap(), None);
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+            if let Some((loader, messenger)) = &self.debug {
+                loader.destroy_debug_utils_messenger(*messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+fn choose_physical_device(
+    instance: &ash::Instance,
+    wanted_name: Option<&str>,
+) -> Result<(vk::PhysicalDevice, u32)> {
+    let devices =
+        unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+    let mut candidates = Vec::new();
+    let mut rejected = Vec::new();
+    for pd in devices {
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if let Some(wanted) = wanted_name {
+            if !name.to_lowercase().contains(&wanted.to_lowercase()) {
+                rejected.push(format!("{name} (name does not match RARA_DEVICE={wanted})"));
+                continue;
+            }
+        }
+        if props.api_version < vk::API_VERSION_1_2 {
+            rejected.push(format!("{name} (Vulkan {}.{} < 1.2)", vk::api_version_major(props.api_version), vk::api_version_minor(props.api_version)));
+            continue;
+        }
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
+        unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+        if f12.buffer_device_address != vk::TRUE || f12.host_query_reset != vk::TRUE {
+            rejected.push(format!("{name} (lacks bufferDeviceAddress or hostQueryReset)"));
+            continue;
+        }
+        let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let Some(family) = families
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+        else {
+            rejected.push(format!("{name} (no compute queue)"));
+            continue;
+        };
+        candidates.push((type_rank(props.device_type), pd, family as u32));
+    }
+    candidates.sort_by_key(|c| c.0);
+    candidates.first().map(|c| (c.1, c.2)).ok_or_else(|| {
+        Error::NoSuitableDevice(if rejected.is_empty() {
+            "no Vulkan device found (on Debian: apt-get install mesa-vulkan-drivers for lavapipe)"
+                .into()
+        } else {
+            format!("no suitable Vulkan device: {}", rejected.join("; "))
+        })
+    })
+}
+
+fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut subgroup);
+    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    let props = props2.properties;
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let driver_name = driver.driver_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+    let driver_info = driver.driver_info_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+    DeviceInfo {
+        name: props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        device_type: props.device_type,
+        driver: format!("{driver_name} {driver_info}").trim().to_owned(),
+        timestamp_period_ns: props.limits.timestamp_period,
+        timestamps: families[family as usize].timestamp_valid_bits > 0,
+        max_storage_buffer_range: props.limits.max_storage_buffer_range,
+        subgroup_size: subgroup.subgroup_size,
+    }
+}

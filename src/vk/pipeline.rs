@@ -1,0 +1,122 @@
+//! Compute pipelines whose only interface is a push-constant block of buffer addresses.
+
+use std::ffi::CStr;
+
+use ash::vk;
+
+use super::context::Context;
+use crate::error::{Result, VkContext};
+
+/// One compute kernel: its pipeline and the layout of its push constants.
+pub struct ComputePipeline {
+    /// The pipeline handle.
+    pub raw: vk::Pipeline,
+    /// Its layout (push constants only, no descriptor sets).
+    pub layout: vk::PipelineLayout,
+    /// Kernel name, used for debug labels.
+    pub name: &'static CStr,
+    ctx: Context,
+}
+
+impl ComputePipeline {
+    /// Builds a pipeline from embedded SPIR-V with a push-constant block of `P`.
+    pub fn new<P: bytemuck::Pod>(ctx: &Context, name: &'static CStr, spirv: &[u32]) -> Result<Self> {
+        let device = ctx.device();
+        let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
+        let module =
+            unsafe { device.create_shader_module(&module_info, None) }.vk("vkCreateShaderModule")?;
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .offset(0)
+            .size(std::mem::size_of::<P>() as u32)];
+        let layout_info = vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges);
+        let layout = match unsafe { device.create_pipeline_layout(&layout_info, None) } {
+            Ok(l) => l,
+            Err(e) => {
+                unsafe { device.destroy_shader_module(module, None) };
+                return Err(e).vk("vkCreatePipelineLayout");
+            }
+        };
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main");
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        let pipelines =
+            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        unsafe { device.destroy_shader_module(module, None) };
+        let raw = match pipelines {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                unsafe { device.destroy_pipeline_layout(layout, None) };
+                return Err(e).vk("vkCreateComputePipelines");
+            }
+        };
+        Ok(ComputePipeline { raw, layout, name, ctx: ctx.clone() })
+    }
+
+    fn bind(&self, cmd: vk::CommandBuffer, push: &[u8]) {
+        let device = self.ctx.device();
+        unsafe {
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+            device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+        }
+    }
+
+    /// Records a dispatch of `groups` workgroups with push constants `push`.
+    pub fn dispatch<P: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, push: &P, groups: [u32; 3]) {
+        if groups.contains(&0) {
+            return;
+        }
+        self.bind(cmd, bytemuck::bytes_of(push));
+        unsafe { self.ctx.device().cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+    }
+
+    /// Records an indirect dispatch whose workgroup counts the GPU wrote at `args`+`offset`.
+    pub fn dispatch_indirect<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &P,
+        args: vk::Buffer,
+        offset: u64,
+    ) {
+        self.bind(cmd, bytemuck::bytes_of(push));
+        unsafe { self.ctx.device().cmd_dispatch_indirect(cmd, args, offset) };
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        unsafe {
+            self.ctx.device().destroy_pipeline(self.raw, None);
+            self.ctx.device().destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
+
+/// Makes the writes of earlier compute dispatches (and transfers) visible to later dispatches
+/// and indirect-argument reads.
+pub fn compute_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+    let barrier = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::INDIRECT_COMMAND_READ
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE,
+        );
+    unsafe {
+        ctx.device().cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER
+                | vk::PipelineStageFlags::DRAW_INDIRECT
+                | vk::PipelineStageFlags::TRANSFER,
+            vk::DependencyFlags::empty(),
+            &[barrier],
+            &[],
+            &[],
+        )
+    };
+}
