@@ -38,5 +38,5 @@ pub mod shaders {
 pub use camera::Camera;
 pub use vk::Context;
 pub use error::{Error, Result};
-pub use renderer::{FrameStats, GpuScene, RenderOptions, Renderer};
+pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer};
 pub use scene::Scene;

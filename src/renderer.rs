@@ -103,6 +103,23 @@ struct FrameResources {
     state: Option<Buffer>,
     image: Buffer,
     readback: Buffer,
+    /// Which sort buffer holds the sorted pairs of the last frame.
+    sorted: usize,
+}
+
+/// The intermediate buffers of the last rendered frame, read back for tests and debugging.
+#[derive(Clone, Debug, Default)]
+pub struct Intermediates {
+    /// Output of project, per Gaussian.
+    pub splats: Vec<crate::gpu_types::GpuProjectedSplat>,
+    /// Exclusive prefix sum of tiles touched, per Gaussian.
+    pub offsets: Vec<u32>,
+    /// Sorted keys (tile in the high word, depth bits in the low word).
+    pub keys: Vec<u64>,
+    /// Splat index of each sorted key.
+    pub values: Vec<u32>,
+    /// `[start, end)` per tile.
+    pub ranges: Vec<[u32; 2]>,
 }
 
 /// Renders scenes with the GPU pipeline.
@@ -200,6 +217,7 @@ impl Renderer {
                 state: if rounds > 1 { Some(Buffer::new(ctx, "raster state", pixels * 16, gpu)?) } else { None },
                 image: Buffer::new(ctx, "image rgba8", pixels * 4, gpu)?,
                 readback: Buffer::new(ctx, "frame readback", pixels * 4 + COUNTER_SLOTS as u64 * 4, MemoryLocation::GpuToCpu)?,
+                sorted: 0,
             });
         }
         Ok(self.frame.as_ref().unwrap())
@@ -243,10 +261,28 @@ impl Renderer {
         }
     }
 
+    /// Reads back the intermediate buffers of the last frame rendered (of `scene`, which has
+    /// `stats.intersections` pairs). Slow; for tests and debugging.
+    pub fn intermediates(&self, scene: &GpuScene, stats: &FrameStats) -> Result<Intermediates> {
+        let f = self.frame.as_ref().expect("render a frame first");
+        let n = scene.count as usize;
+        let m = stats.intersections as usize;
+        let (gx, gy) = tile_grid(f.width, f.height);
+        Ok(Intermediates {
+            splats: f.splats.download_as(n)?,
+            offsets: f.tiles_touched.download_as(n)?,
+            keys: f.sort.keys[f.sorted].download_as(m)?,
+            values: f.sort.values[f.sorted].download_as(m)?,
+            ranges: f.ranges.download_as((gx * gy) as usize)?,
+        })
+    }
+
     fn render_once(&mut self, scene: &GpuScene, camera: &Camera, options: &RenderOptions, capacity: u64, rounds: u32) -> Result<(Vec<u8>, Vec<u32>)> {
         let (w, h) = (camera.width, camera.height);
         let (gx, gy) = tile_grid(w, h);
         self.frame_resources(w, h, scene.count, capacity, rounds)?;
+        let sorted_index = crate::stages::sort::passes_for(key_bits(w, h)) as usize % 2;
+        self.frame.as_mut().unwrap().sorted = sorted_index;
         let f = self.frame.as_ref().unwrap();
         let w2c = camera.world_to_camera();
         let (cx, cy) = camera.principal_point();
@@ -315,6 +351,7 @@ impl Renderer {
 
             ctx.begin_label(cmd, c"sort");
             let sorted = self.sort.record(&ctx, cmd, &f.sort, counters_at(COUNTER_INTERSECTIONS), key_bits(w, h));
+            debug_assert_eq!(sorted, sorted_index);
             ctx.end_label(cmd);
             timer.mark(cmd, "sort");
 

@@ -1,0 +1,73 @@
+//! Shared test helpers: a validated GPU context, real-scene discovery, image checks that
+//! leave actual/expected/diff images in target/test-artifacts/ when they fail.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use rara::metrics::{compare, diff_image, ImageDiff};
+use rara::vk::{Context, ContextDesc, Validation};
+
+/// A headless context with the validation layer on whenever it is installed.
+pub fn context() -> Context {
+    let ctx = Context::headless(&ContextDesc { validation: Validation::IfAvailable, device_name: std::env::var("RARA_DEVICE").ok() })
+        .expect("Vulkan context (is mesa-vulkan-drivers installed?)");
+    if !ctx.validation_enabled() {
+        eprintln!("note: the validation layer is not installed; running without it");
+    }
+    ctx
+}
+
+/// Fails the calling test when the validation layer reported anything.
+pub fn assert_no_validation_messages(ctx: &Context) {
+    let messages = ctx.take_validation_messages();
+    assert!(messages.is_empty(), "validation layer reported {} message(s):\n{}", messages.len(), messages.join("\n"));
+}
+
+/// The folder of real scenes: `$RARA_REAL_DATA`, else `../shared/data/real` beside the crate.
+pub fn real_data_dir() -> Option<PathBuf> {
+    let dir = std::env::var_os("RARA_REAL_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real"));
+    dir.is_dir().then_some(dir)
+}
+
+/// A real scene and its orbit cameras, or `None` (with a note) when they are not present.
+pub fn real_scene(stem: &str) -> Option<(PathBuf, Option<PathBuf>)> {
+    let Some(dir) = real_data_dir() else {
+        eprintln!("real-scene case '{stem}' SKIPPED: no real data (set RARA_REAL_DATA or provide ../shared/data/real)");
+        return None;
+    };
+    let ply = dir.join(format!("{stem}.ply"));
+    if !ply.is_file() {
+        eprintln!("real-scene case '{stem}' SKIPPED: {} is missing", ply.display());
+        return None;
+    }
+    let cams = dir.join(format!("{stem}.orbit_cameras.json"));
+    Some((ply, cams.is_file().then_some(cams)))
+}
+
+/// Directory for images of failed checks.
+pub fn artifacts_dir() -> PathBuf {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-artifacts");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Compares `actual` to `expected`; on failure of the bounds writes both and a diff map.
+pub fn check_images(name: &str, actual: &image::RgbaImage, expected: &image::RgbaImage, min_psnr: f64, max_diff: u8) -> ImageDiff {
+    let d = compare(actual, expected);
+    eprintln!("{name}: PSNR {:.2} dB, max diff {}, L1 {:.4}, differing pixels {}", d.psnr, d.max_diff, d.l1, d.differing_pixels);
+    if d.psnr < min_psnr || d.max_diff > max_diff {
+        let dir = artifacts_dir();
+        actual.save(dir.join(format!("{name}_actual.png"))).unwrap();
+        expected.save(dir.join(format!("{name}_expected.png"))).unwrap();
+        diff_image(actual, expected).save(dir.join(format!("{name}_diff.png"))).unwrap();
+        panic!(
+            "{name}: PSNR {:.2} dB (need >= {min_psnr}), max diff {} (need <= {max_diff}); images in {}",
+            d.psnr,
+            d.max_diff,
+            dir.display()
+        );
+    }
+    d
+}

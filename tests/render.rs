@@ -1,0 +1,222 @@
+//! End-to-end renders and each stage of the GPU pipeline against the CPU reference.
+
+mod common;
+
+use glam::{Quat, Vec3};
+use rara::reference::{self, project::project_one, rasterize::tile_lists};
+use rara::{Camera, RenderOptions, Renderer, Scene};
+
+/// Bounds of the 2nd..98th percentile of the centres, per axis.
+fn percentile_box(scene: &Scene) -> (Vec3, Vec3) {
+    let mut lo = Vec3::ZERO;
+    let mut hi = Vec3::ZERO;
+    for axis in 0..3 {
+        let mut v: Vec<f32> = scene.means.iter().map(|m| m[axis]).collect();
+        v.sort_by(f32::total_cmp);
+        lo[axis] = v[v.len() * 2 / 100];
+        hi[axis] = v[v.len() * 98 / 100];
+    }
+    (lo, hi)
+}
+
+/// Two views of `scene` at `width` pixels: from its orbit cameras, or around its percentile box.
+fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec<Camera> {
+    match cams {
+        Some(path) => {
+            let all = Camera::load_all(path).unwrap();
+            [0, all.len() / 2 + 1].iter().map(|&k| all[k % all.len()].resized(width, None).unwrap()).collect()
+        }
+        None => {
+            let (lo, hi) = percentile_box(scene);
+            let centre = 0.5 * (lo + hi);
+            let r = (hi - lo).length();
+            [0.3f32, 2.2]
+                .iter()
+                .map(|&a| {
+                    let eye = centre + r * Vec3::new(a.cos(), -0.25, a.sin());
+                    Camera::look_at(eye, centre, Vec3::NEG_Y, 50.0, width, width * 3 / 4).unwrap()
+                })
+                .collect()
+        }
+    }
+}
+
+fn render_real_scene(stem: &str) {
+    let Some((ply, cams)) = common::real_scene(stem) else { return };
+    let (scene, _) = rara::ply::load_ply(&ply).unwrap();
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    for (k, cam) in two_cameras(&scene, cams.as_deref(), 320).iter().enumerate() {
+        let options = RenderOptions { background: Vec3::new(0.1, 0.2, 0.3) };
+        let (gpu, stats) = renderer.render(&gpu_scene, cam, &options).unwrap();
+        let cpu = reference::render(&scene, cam, options.background);
+        let d = common::check_images(&format!("{stem}_view{k}"), &gpu, &cpu, 50.0, 4);
+        eprintln!("real-scene case '{stem}' view {k} RAN: {} intersections, PSNR {:.2} dB, max diff {}", stats.intersections, d.psnr, d.max_diff);
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn real_kacytran_sh3() {
+    render_real_scene("kacytran_indoor_iter7000_sh3");
+}
+#[test]
+fn real_plant() {
+    render_real_scene("plant_capture_sh0");
+}
+#[test]
+fn real_biker() {
+    render_real_scene("biker_capture_sh0");
+}
+#[test]
+fn real_guitar() {
+    render_real_scene("guitar_capture_sh0_anisotropic");
+}
+#[test]
+fn real_skull() {
+    render_real_scene("skull_mesh2splat_100k_sh0");
+}
+#[test]
+fn real_playbot_500k_sh2() {
+    render_real_scene("playbot_lod0_500k_sh2");
+}
+
+/// The crate's own fixtures: a shell at every SH degree, GPU against CPU.
+#[test]
+fn synthetic_scenes_every_sh_degree() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let cams = rara::synth::orbit_cameras(3, 3.0, 200, 150, 50.0).unwrap();
+    for degree in 0..=3 {
+        let scene = rara::synth::shell(6000, degree, degree as u64);
+        let gpu_scene = renderer.upload(&scene).unwrap();
+        for (k, cam) in cams.iter().enumerate() {
+            let (gpu, _) = renderer.render(&gpu_scene, cam, &RenderOptions::default()).unwrap();
+            let cpu = reference::render(&scene, cam, Vec3::ZERO);
+            common::check_images(&format!("shell_sh{degree}_view{k}"), &gpu, &cpu, 50.0, 4);
+        }
+    }
+    let demo = rara::synth::demo_scene();
+    let gpu_scene = renderer.upload(&demo).unwrap();
+    let (gpu, _) = renderer.render(&gpu_scene, &cams[1], &RenderOptions::default()).unwrap();
+    common::check_images("demo_scene", &gpu, &reference::render(&demo, &cams[1], Vec3::ZERO), 50.0, 4);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// project, emit + sort + tile ranges and rasterize, each against its CPU twin, on one frame.
+#[test]
+fn each_stage_matches_its_cpu_twin() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let scene = rara::synth::demo_scene();
+    let cam = &rara::synth::orbit_cameras(4, 3.0, 256, 192, 50.0).unwrap()[1];
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let (gpu_image, stats) = renderer.render(&gpu_scene, cam, &RenderOptions::default()).unwrap();
+    let mid = renderer.intermediates(&gpu_scene, &stats).unwrap();
+
+    // project: same visibility, values within float tolerance.
+    let mut cpu_splats = Vec::new();
+    let mut visible = 0;
+    for i in 0..scene.len() {
+        let g = &mid.splats[i];
+        let gpu_visible = g.rect[2] > g.rect[0] && g.rect[3] > g.rect[1];
+        let cpu = project_one(&scene, cam, i);
+        assert_eq!(gpu_visible, cpu.is_some(), "Gaussian {i}: visibility differs");
+        let Some(c) = cpu else { continue };
+        visible += 1;
+        let close = |a: f32, b: f32, what: &str| {
+            assert!((a - b).abs() <= 1e-4 + 1e-4 * b.abs(), "Gaussian {i}: {what} GPU {a} CPU {b}");
+        };
+        close(g.uv[0], c.uv.x, "u");
+        close(g.uv[1], c.uv.y, "v");
+        close(g.depth, c.depth, "depth");
+        close(g.opacity, c.opacity, "opacity");
+        for k in 0..3 {
+            close(g.conic[k], c.conic[k], "conic");
+            close(g.color[k], c.color[k], "colour");
+        }
+        assert_eq!(g.rect, c.rect, "Gaussian {i}: tile rect");
+        cpu_splats.push(c);
+    }
+    assert_eq!(visible, stats.visible as usize);
+
+    // prefix sum: offsets of the visible Gaussians' pairs.
+    let mut acc = 0u32;
+    for (i, g) in mid.splats.iter().enumerate() {
+        assert_eq!(mid.offsets[i], acc, "offset of Gaussian {i}");
+        acc += (g.rect[2] - g.rect[0]) * (g.rect[3] - g.rect[1]);
+    }
+    assert_eq!(acc, stats.intersections);
+
+    // emit + sort + tile ranges: every tile's list equals the CPU's (depth, index) order.
+    let cpu_lists = tile_lists(&cpu_splats, cam);
+    for (tile, list) in cpu_lists.iter().enumerate() {
+        let [start, end] = mid.ranges[tile];
+        let gpu_list: Vec<u32> = mid.values[start as usize..end as usize].to_vec();
+        let cpu_list: Vec<u32> = list.iter().map(|&k| cpu_splats[k as usize].index).collect();
+        assert_eq!(gpu_list, cpu_list, "tile {tile}: sorted list differs");
+        assert!(mid.keys[start as usize..end as usize].iter().all(|key| (key >> 32) as usize == tile));
+    }
+
+    // rasterize: the CPU compositor over the GPU's own projected splats and lists.
+    let gpu_as_cpu: Vec<_> = cpu_splats
+        .iter()
+        .map(|c| {
+            let g = &mid.splats[c.index as usize];
+            reference::project::ProjectedSplat {
+                uv: g.uv.into(),
+                depth: g.depth,
+                opacity: g.opacity,
+                conic: g.conic.into(),
+                color: g.color.into(),
+                ..*c
+            }
+        })
+        .collect();
+    let twin = reference::rasterize::rasterize(&gpu_as_cpu, cam, Vec3::ZERO);
+    common::check_images("rasterize_twin", &gpu_image, &twin, 55.0, 1);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// A tile list of more than 100k splats (lavapipe ends a shader invocation after 65,535 loop
+/// iterations): 120k splats too faint to count (opacity < 1/255) in front of one opaque splat.
+#[test]
+fn tile_with_more_than_100k_splats() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let mut scene = Scene { sh_degree: 0, ..Default::default() };
+    let mut rng = rara::synth::Rng::new(1);
+    let grey = [rara::scene::rgb_to_sh_dc(1.0); 3];
+    for _ in 0..120_000 {
+        let p = Vec3::new(rng.range(-0.05, 0.05), rng.range(-0.05, 0.05), rng.range(-0.5, 0.5));
+        scene.push(p, 0.003, Vec3::splat(0.5), Quat::IDENTITY, &grey);
+    }
+    let red = [rara::scene::rgb_to_sh_dc(0.9), rara::scene::rgb_to_sh_dc(0.1), rara::scene::rgb_to_sh_dc(0.1)];
+    scene.push(Vec3::new(0.0, 0.0, 2.0), 0.999, Vec3::splat(1.0), Quat::IDENTITY, &red);
+    let cam = Camera::look_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO, Vec3::NEG_Y, 40.0, 32, 32).unwrap();
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let (gpu, stats) = renderer.render(&gpu_scene, &cam, &RenderOptions::default()).unwrap();
+    assert!(stats.max_tile_len > 100_000, "longest tile list {}", stats.max_tile_len);
+    assert!(stats.rerenders >= 1, "the rasterizer should have needed more than one round");
+    let cpu = reference::render(&scene, &cam, Vec3::ZERO);
+    common::check_images("long_tile_list", &gpu, &cpu, 50.0, 4);
+    let centre = gpu.get_pixel(16, 16);
+    assert!(centre[0] > 200 && centre[1] < 60, "the opaque splat behind the list must show, got {centre:?}");
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The validation hook itself: an invalid command is reported (so a clean run means something).
+#[test]
+fn validation_messages_are_caught() {
+    let ctx = common::context();
+    if !ctx.validation_enabled() {
+        eprintln!("validation layer not installed: nothing to check");
+        return;
+    }
+    let buf = rara::vk::Buffer::new(&ctx, "misused", 64, rara::vk::MemoryLocation::GpuOnly).unwrap();
+    // vkCmdFillBuffer needs an offset that is a multiple of 4.
+    ctx.run_commands(|cmd| unsafe { ctx.device().cmd_fill_buffer(cmd, buf.raw, 2, 4, 0) }).unwrap();
+    let messages = ctx.take_validation_messages();
+    assert!(!messages.is_empty(), "the validation layer did not report a misaligned vkCmdFillBuffer");
+}

@@ -1,0 +1,90 @@
+//! The GPU radix sort against `sort_by_key` (stable), and the prefix sum against a CPU scan.
+
+mod common;
+
+use rara::constants::{SCAN_BLOCK, SORT_BLOCK, SORT_RADIX};
+use rara::stages::sort::RadixSort;
+use rara::synth::Rng;
+
+fn check_sort(sorter: &RadixSort, ctx: &rara::Context, keys: Vec<u64>, key_bits: u32, what: &str) {
+    let values: Vec<u32> = (0..keys.len() as u32).collect();
+    let (gpu_keys, gpu_values) = sorter.sort_pairs(ctx, &keys, &values, key_bits).unwrap();
+    let mask = if key_bits >= 64 { u64::MAX } else { (1u64 << key_bits) - 1 };
+    let mut expected: Vec<(u64, u32)> = keys.iter().copied().zip(values).collect();
+    expected.sort_by_key(|&(k, _)| k & mask); // stable
+    assert_eq!(gpu_keys.len(), keys.len(), "{what}");
+    for (i, (&(k, v), (&gk, &gv))) in expected.iter().zip(gpu_keys.iter().zip(&gpu_values)).enumerate() {
+        assert!(k == gk && v == gv, "{what} (n = {}): position {i}: GPU ({gk:#x}, {gv}), expected ({k:#x}, {v})", keys.len());
+    }
+    common::assert_no_validation_messages(ctx);
+}
+
+fn random_keys(n: usize, bits: u32, seed: u64) -> Vec<u64> {
+    let mut rng = Rng::new(seed);
+    let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+    (0..n).map(|_| rng.next_u64() & mask).collect()
+}
+
+#[test]
+fn sort_sizes_around_block_boundaries() {
+    let ctx = common::context();
+    let sorter = RadixSort::new(&ctx).unwrap();
+    let block = SORT_BLOCK as usize;
+    // Histogram length is SORT_RADIX per block: its scan changes level at SCAN_BLOCK entries.
+    let hist_level = (SCAN_BLOCK / SORT_RADIX) as usize * block;
+    let mut sizes = vec![0, 1, 2, 255, 256, 257];
+    for b in [block, 2 * block, hist_level] {
+        sizes.extend([b - 1, b, b + 1]);
+    }
+    for (k, n) in sizes.into_iter().enumerate() {
+        check_sort(&sorter, &ctx, random_keys(n, 43, k as u64), 43, "random 43-bit keys");
+    }
+}
+
+#[test]
+fn sort_key_patterns() {
+    let ctx = common::context();
+    let sorter = RadixSort::new(&ctx).unwrap();
+    let n = 3 * SORT_BLOCK as usize + 17;
+    check_sort(&sorter, &ctx, vec![0x1234_5678_9abc; n], 48, "all-equal keys");
+    check_sort(&sorter, &ctx, (0..n as u64).map(|i| i * 3).collect(), 32, "sorted keys");
+    check_sort(&sorter, &ctx, (0..n as u64).rev().map(|i| i << 20).collect(), 48, "reverse-sorted keys");
+    // Few distinct keys: stability decides the order of the values.
+    check_sort(&sorter, &ctx, random_keys(n, 3, 5), 3, "3-bit keys");
+    // Bits above key_bits must be ignored.
+    check_sort(&sorter, &ctx, random_keys(n, 64, 6), 40, "64-bit keys sorted on 40 bits");
+    check_sort(&sorter, &ctx, random_keys(n, 64, 7), 64, "full 64-bit keys");
+}
+
+#[test]
+fn sort_two_million_pairs() {
+    let ctx = common::context();
+    let sorter = RadixSort::new(&ctx).unwrap();
+    check_sort(&sorter, &ctx, random_keys(2_000_000, 43, 99), 43, "2M random pairs");
+}
+
+#[test]
+fn prefix_sum_matches_cpu() {
+    use rara::stages::prefix_sum::PrefixSum;
+    use rara::vk::Buffer;
+    let ctx = common::context();
+    let scan = PrefixSum::new(&ctx).unwrap();
+    let b = SCAN_BLOCK as usize;
+    let mut rng = Rng::new(3);
+    for n in [0, 1, 5, b - 1, b, b + 1, b * b - 1, b * b, b * b + 1, 3 * b * b + 7] {
+        let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 50) as u32).collect();
+        let buf = Buffer::from_slice(&ctx, "scan data", &data).unwrap();
+        let meta = Buffer::from_slice(&ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
+        let scratch = scan.scratch(&ctx, n as u64).unwrap();
+        ctx.run_commands(|cmd| scan.record(&ctx, cmd, buf.address, meta.address, Some(meta.address + 4), &scratch)).unwrap();
+        let got: Vec<u32> = buf.download_as(n).unwrap();
+        let mut acc = 0u32;
+        for (i, (&x, &g)) in data.iter().zip(&got).enumerate() {
+            assert_eq!(g, acc, "n = {n}: element {i}");
+            acc += x;
+        }
+        let total: Vec<u32> = meta.download_as(2).unwrap();
+        assert_eq!(total[1], acc, "n = {n}: total");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
