@@ -1,0 +1,147 @@
+//! The PLY loader: encodings, property order and types, SH degrees, non-finite values.
+
+use std::io::Write;
+
+use glam::{Quat, Vec3};
+use rara::ply::{load_ply, write_ply, PlyEncoding};
+use rara::Scene;
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("rara-ply-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn assert_close(a: &Scene, b: &Scene) {
+    assert_eq!(a.len(), b.len());
+    assert_eq!(a.sh_degree, b.sh_degree);
+    let close = |x: f32, y: f32| (x - y).abs() <= 1e-5 * (1.0 + y.abs());
+    for i in 0..a.len() {
+        assert!(a.means[i].abs_diff_eq(b.means[i], 1e-6), "mean {i}");
+        assert!(close(a.opacities[i], b.opacities[i]), "opacity {i}");
+        assert!(a.scales[i].abs_diff_eq(b.scales[i], 1e-5 * b.scales[i].max_element()), "scale {i}");
+        assert!(a.rotations[i].abs_diff_eq(b.rotations[i], 1e-5), "rotation {i}");
+    }
+    for (k, (x, y)) in a.sh.iter().zip(&b.sh).enumerate() {
+        assert!(close(*x, *y), "sh {k}: {x} vs {y}");
+    }
+}
+
+#[test]
+fn every_encoding_and_sh_degree_round_trips() {
+    for degree in 0..=3 {
+        let scene = rara::synth::shell(257, degree, 40 + degree as u64);
+        for (enc, name) in [
+            (PlyEncoding::BinaryLittleEndian, "le"),
+            (PlyEncoding::BinaryBigEndian, "be"),
+            (PlyEncoding::Ascii, "ascii"),
+        ] {
+            let path = tmp(&format!("shell_sh{degree}_{name}.ply"));
+            write_ply(&scene, &path, enc).unwrap();
+            let (loaded, report) = load_ply(&path).unwrap();
+            assert_eq!(report.dropped_non_finite, 0);
+            assert_close(&loaded, &scene);
+        }
+    }
+}
+
+/// Properties are found by name in any order, with doubles, integers, extra properties and
+/// another element before `vertex`.
+#[test]
+fn properties_by_name_any_order_and_type() {
+    let path = tmp("shuffled.ply");
+    let mut f = std::fs::File::create(&path).unwrap();
+    let header = "ply\nformat binary_little_endian 1.0\ncomment shuffled\nelement camera 1\nproperty float fov\n\
+        element vertex 2\nproperty double opacity\nproperty float rot_3\nproperty uchar flags\n\
+        property float scale_2\nproperty float f_dc_2\nproperty double z\nproperty float rot_0\n\
+        property float scale_0\nproperty float x\nproperty float f_dc_0\nproperty int y\n\
+        property float rot_1\nproperty float scale_1\nproperty float f_dc_1\nproperty float rot_2\n\
+        end_header\n";
+    f.write_all(header.as_bytes()).unwrap();
+    f.write_all(&1.5f32.to_le_bytes()).unwrap(); // the camera element
+    for v in 0..2 {
+        let v = v as f32;
+        f.write_all(&(0.5f64 + v as f64).to_le_bytes()).unwrap(); // opacity
+        f.write_all(&0.0f32.to_le_bytes()).unwrap(); // rot_3
+        f.write_all(&[7u8]).unwrap(); // flags (ignored)
+        f.write_all(&(-2.0f32).to_le_bytes()).unwrap(); // scale_2
+        f.write_all(&0.3f32.to_le_bytes()).unwrap(); // f_dc_2
+        f.write_all(&(3.0f64 + v as f64).to_le_bytes()).unwrap(); // z
+        f.write_all(&2.0f32.to_le_bytes()).unwrap(); // rot_0 (normalised to 1)
+        f.write_all(&(-1.0f32).to_le_bytes()).unwrap(); // scale_0
+        f.write_all(&(1.0 + v).to_le_bytes()).unwrap(); // x
+        f.write_all(&0.1f32.to_le_bytes()).unwrap(); // f_dc_0
+        f.write_all(&(-4i32).to_le_bytes()).unwrap(); // y
+        f.write_all(&0.0f32.to_le_bytes()).unwrap(); // rot_1
+        f.write_all(&(-1.5f32).to_le_bytes()).unwrap(); // scale_1
+        f.write_all(&0.2f32.to_le_bytes()).unwrap(); // f_dc_1
+        f.write_all(&0.0f32.to_le_bytes()).unwrap(); // rot_2
+    }
+    drop(f);
+    let (scene, _) = load_ply(&path).unwrap();
+    assert_eq!(scene.len(), 2);
+    assert_eq!(scene.sh_degree, 0);
+    assert_eq!(scene.means[1], Vec3::new(2.0, -4.0, 4.0));
+    assert!((scene.opacities[0] - 1.0 / (1.0 + (-0.5f32).exp())).abs() < 1e-6);
+    assert!(scene.scales[0].abs_diff_eq(Vec3::new((-1.0f32).exp(), (-1.5f32).exp(), (-2.0f32).exp()), 1e-6));
+    assert!(scene.rotations[0].abs_diff_eq(Quat::IDENTITY, 1e-6));
+    assert_eq!(&scene.sh[..3], &[0.1, 0.2, 0.3]);
+}
+
+/// f_rest is channel-major in the file and coefficient-major in memory.
+#[test]
+fn f_rest_is_channel_major() {
+    let mut scene = Scene { sh_degree: 1, ..Default::default() };
+    // coefficient-major: [dc r g b, c1 r g b, c2 r g b, c3 r g b]
+    let sh: Vec<f32> = (0..12).map(|k| k as f32).collect();
+    scene.push(Vec3::ZERO, 0.5, Vec3::ONE, Quat::IDENTITY, &sh);
+    let path = tmp("frest.ply");
+    write_ply(&scene, &path, PlyEncoding::Ascii).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let row: Vec<f32> = text.lines().last().unwrap().split(' ').map(|t| t.parse().unwrap()).collect();
+    // x y z nx ny nz dc0 dc1 dc2, then f_rest: channel r's coefficients 1..3 = 3, 6, 9.
+    assert_eq!(&row[6..18], &[0.0, 1.0, 2.0, 3.0, 6.0, 9.0, 4.0, 7.0, 10.0, 5.0, 8.0, 11.0]);
+    let (back, _) = load_ply(&path).unwrap();
+    assert_eq!(back.sh, sh);
+}
+
+#[test]
+fn non_finite_gaussians_are_dropped_and_counted() {
+    let mut scene = rara::synth::shell(10, 0, 1);
+    scene.means[3].x = f32::NAN;
+    scene.scales[5].y = f32::INFINITY; // ln(inf) = inf in the file
+    let path = tmp("nan.ply");
+    write_ply(&scene, &path, PlyEncoding::BinaryLittleEndian).unwrap();
+    let (loaded, report) = load_ply(&path).unwrap();
+    assert_eq!(report.vertices_in_file, 10);
+    assert_eq!(report.dropped_non_finite, 2);
+    assert_eq!(loaded.len(), 8);
+    let path = tmp("nan.txt.ply");
+    write_ply(&scene, &path, PlyEncoding::Ascii).unwrap();
+    assert_eq!(load_ply(&path).unwrap().1.dropped_non_finite, 2);
+}
+
+/// Loading the 500k SH2 playbot scene (82 MB): report the time; correctness of its values is
+/// covered by the render tests.
+#[test]
+fn load_playbot_when_present() {
+    let dir = std::env::var_os("RARA_REAL_DATA")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real"));
+    let path = dir.join("playbot_lod0_500k_sh2.ply");
+    if !path.is_file() {
+        eprintln!("real-scene case 'playbot load' SKIPPED: {} missing", path.display());
+        return;
+    }
+    let mut times = Vec::new();
+    for _ in 0..3 {
+        let t = std::time::Instant::now();
+        let (scene, report) = load_ply(&path).unwrap();
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        assert_eq!(scene.len(), 500_000);
+        assert_eq!(scene.sh_degree, 2);
+        assert_eq!(report.dropped_non_finite, 0);
+    }
+    times.sort_by(f64::total_cmp);
+    eprintln!("real-scene case 'playbot load' RAN: median {:.0} ms over 3 loads", times[1]);
+}
