@@ -47,7 +47,10 @@ impl Camera {
 
     /// Principal point `(W/2 - 0.5, H/2 - 0.5)`.
     pub fn principal_point(&self) -> (f32, f32) {
-        (self.width as f32 / 2.0 - 0.5, self.height as f32 / 2.0 - 0.5)
+        (
+            self.width as f32 / 2.0 - 0.5,
+            self.height as f32 / 2.0 - 0.5,
+        )
     }
 
     /// The forward (viewing) direction in world coordinates.
@@ -63,7 +66,14 @@ impl Camera {
 
     /// A camera at `eye` looking at `target`, with `up` pointing up in the image and a vertical
     /// field of view of `fov_y_deg` degrees (square pixels).
-    pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, fov_y_deg: f32, width: u32, height: u32) -> Result<Camera> {
+    pub fn look_at(
+        eye: Vec3,
+        target: Vec3,
+        up: Vec3,
+        fov_y_deg: f32,
+        width: u32,
+        height: u32,
+    ) -> Result<Camera> {
         let forward = (target - eye).normalize_or_zero();
         if forward == Vec3::ZERO {
             return Err(Error::InvalidInput("--eye and --target must differ".into()));
@@ -71,10 +81,14 @@ impl Camera {
         // Camera axes: x right, y down, z forward (x = y cross z with y = -up).
         let right = forward.cross(up).normalize_or_zero();
         if right == Vec3::ZERO {
-            return Err(Error::InvalidInput("--up must not be parallel to the viewing direction".into()));
+            return Err(Error::InvalidInput(
+                "--up must not be parallel to the viewing direction".into(),
+            ));
         }
         if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
-            return Err(Error::InvalidInput(format!("--fov-y {fov_y_deg} must lie in (0, 180) degrees")));
+            return Err(Error::InvalidInput(format!(
+                "--fov-y {fov_y_deg} must lie in (0, 180) degrees"
+            )));
         }
         check_size(width, height)?;
         let down = forward.cross(right);
@@ -95,14 +109,26 @@ impl Camera {
         let k = width as f32 / self.width as f32;
         let height = height.unwrap_or_else(|| (self.height as f32 * k).round() as u32);
         check_size(width, height)?;
-        Ok(Camera { width, height, fx: self.fx * k, fy: self.fy * k, ..*self })
+        Ok(Camera {
+            width,
+            height,
+            fx: self.fx * k,
+            fy: self.fy * k,
+            ..*self
+        })
     }
 
     /// Reads every camera of an INRIA `cameras.json` file.
     pub fn load_all(path: impl AsRef<Path>) -> Result<Vec<Camera>> {
         let path = path.as_ref();
-        let err = |message: String| Error::Cameras { path: path.to_path_buf(), message };
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let err = |message: String| Error::Cameras {
+            path: path.to_path_buf(),
+            message,
+        };
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         let cams: Vec<JsonCamera> = serde_json::from_str(&text).map_err(|e| {
             err(format!("not an INRIA cameras.json (an array of objects with width, height, position, rotation, fx, fy): {e}"))
         })?;
@@ -112,7 +138,11 @@ impl Camera {
         cams.iter()
             .enumerate()
             .map(|(n, c)| {
-                let finite = c.position.iter().chain(c.rotation.iter().flatten()).all(|v| v.is_finite())
+                let finite = c
+                    .position
+                    .iter()
+                    .chain(c.rotation.iter().flatten())
+                    .all(|v| v.is_finite())
                     && c.fx.is_finite()
                     && c.fy.is_finite();
                 if !finite || c.fx <= 0.0 || c.fy <= 0.0 || c.width == 0 || c.height == 0 {
@@ -141,7 +171,10 @@ impl Camera {
         let n = all.len();
         all.into_iter().nth(index).ok_or_else(|| Error::Cameras {
             path: path.to_path_buf(),
-            message: format!("camera index {index} is out of range: the file holds {n} camera(s), 0..{}", n - 1),
+            message: format!(
+                "camera index {index} is out of range: the file holds {n} camera(s), 0..{}",
+                n - 1
+            ),
         })
     }
 
@@ -162,7 +195,10 @@ impl Camera {
             })
             .collect();
         let text = serde_json::to_string_pretty(&list).expect("cameras serialise");
-        std::fs::write(path, text).map_err(|source| Error::Io { path: path.to_path_buf(), source })
+        std::fs::write(path, text).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 }
 

@@ -36,7 +36,7 @@ pub mod shaders {
 }
 
 pub use camera::Camera;
-pub use vk::Context;
 pub use error::{Error, Result};
 pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer};
 pub use scene::Scene;
+pub use vk::Context;

@@ -89,7 +89,9 @@ struct RenderArgs {
 fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 {
-        return Err(format!("expected X,Y,Z (three comma-separated numbers), got '{s}'"));
+        return Err(format!(
+            "expected X,Y,Z (three comma-separated numbers), got '{s}'"
+        ));
     }
     let mut v = [0f32; 3];
     for (slot, p) in v.iter_mut().zip(&parts) {
@@ -113,10 +115,14 @@ fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
     match (args.eye, args.target) {
         (Some(eye), Some(target)) => {
             let width = args.width.unwrap_or(640);
-            let height = args.height.unwrap_or_else(|| (width as f32 * 0.75).round().max(1.0) as u32);
+            let height = args
+                .height
+                .unwrap_or_else(|| (width as f32 * 0.75).round().max(1.0) as u32);
             Camera::look_at(eye, target, args.up, args.fov_y, width, height)
         }
-        _ => Err(Error::InvalidInput("give a camera: --cameras FILE [--camera N], or --eye X,Y,Z --target X,Y,Z".into())),
+        _ => Err(Error::InvalidInput(
+            "give a camera: --cameras FILE [--camera N], or --eye X,Y,Z --target X,Y,Z".into(),
+        )),
     }
 }
 
@@ -146,9 +152,15 @@ fn load_scene(path: &Path) -> Result<Scene> {
 
 fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.to_path_buf(), source })?;
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
     }
-    img.save(path).map_err(|source| Error::Image { path: path.to_path_buf(), source })
+    img.save(path).map_err(|source| Error::Image {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 fn median(values: &mut [f64]) -> f64 {
@@ -157,13 +169,19 @@ fn median(values: &mut [f64]) -> f64 {
     if n == 0 {
         return f64::NAN;
     }
-    if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) }
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
 }
 
 fn cmd_render(args: &RenderArgs) -> Result<()> {
     let camera = resolve_camera(&args.camera)?;
     let scene = load_scene(&args.scene)?;
-    let options = RenderOptions { background: args.background };
+    let options = RenderOptions {
+        background: args.background,
+    };
     if args.reference {
         let start = std::time::Instant::now();
         let img = rara::reference::render(&scene, &camera, options.background);
@@ -229,7 +247,11 @@ fn cmd_info(path: &Path, json: bool) -> Result<()> {
     let (scene, report) = rara::ply::load_ply(path)?;
     let n = scene.len();
     let range = |f: &dyn Fn(usize) -> f32| -> (f32, f32) {
-        (0..n).map(f).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+        (0..n)
+            .map(f)
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
     };
     let mut props: Vec<(String, (f32, f32))> = Vec::new();
     for (axis, name) in ["x", "y", "z"].iter().enumerate() {
@@ -237,12 +259,18 @@ fn cmd_info(path: &Path, json: bool) -> Result<()> {
     }
     props.push(("opacity (activated)".into(), range(&|i| scene.opacities[i])));
     for axis in 0..3 {
-        props.push((format!("scale_{axis} (activated)"), range(&|i| scene.scales[i][axis])));
+        props.push((
+            format!("scale_{axis} (activated)"),
+            range(&|i| scene.scales[i][axis]),
+        ));
     }
-    props.push(("anisotropy (max/min scale)".into(), range(&|i| {
-        let s = scene.scales[i];
-        s.max_element() / s.min_element()
-    })));
+    props.push((
+        "anisotropy (max/min scale)".into(),
+        range(&|i| {
+            let s = scene.scales[i];
+            s.max_element() / s.min_element()
+        }),
+    ));
     for c in 0..3 {
         props.push((format!("f_dc_{c}"), range(&|i| scene.sh_of(i)[c])));
     }
@@ -261,10 +289,17 @@ fn cmd_info(path: &Path, json: bool) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&v).unwrap());
     } else {
         println!("file:        {}", path.display());
-        println!("Gaussians:   {n} ({} in file, {} dropped as non-finite)", report.vertices_in_file, report.dropped_non_finite);
+        println!(
+            "Gaussians:   {n} ({} in file, {} dropped as non-finite)",
+            report.vertices_in_file, report.dropped_non_finite
+        );
         println!("SH degree:   {}", scene.sh_degree);
         println!("encoding:    {}", report.encoding);
-        println!("bounds:      min {:?} max {:?}", lo.to_array(), hi.to_array());
+        println!(
+            "bounds:      min {:?} max {:?}",
+            lo.to_array(),
+            hi.to_array()
+        );
         for (k, (a, b)) in props {
             println!("  {k:<28} {a:>12.5} .. {b:<12.5}");
         }
@@ -278,22 +313,41 @@ fn cmd_demo(dir: &Path) -> Result<()> {
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let gpu_scene = renderer.upload(&scene)?;
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.to_path_buf(), source })?;
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let bar = ProgressBar::new(cameras.len() as u64)
         .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len}").unwrap())
         .with_message("rendering demo");
     let mut written = Vec::new();
     for (k, cam) in cameras.iter().enumerate() {
-        let (img, stats) = renderer.render(&gpu_scene, cam, &RenderOptions { background: Vec3::splat(0.05) })?;
+        let (img, stats) = renderer.render(
+            &gpu_scene,
+            cam,
+            &RenderOptions {
+                background: Vec3::splat(0.05),
+            },
+        )?;
         let path = dir.join(format!("demo_view{k}.png"));
         save_png(&img, &path)?;
         written.push((path, stats));
         bar.inc(1);
     }
     bar.finish_and_clear();
-    println!("demo: {} Gaussians (built-in scene) rendered on {} ({})", scene.len(), ctx.info().name, ctx.info().driver);
+    println!(
+        "demo: {} Gaussians (built-in scene) rendered on {} ({})",
+        scene.len(),
+        ctx.info().name,
+        ctx.info().driver
+    );
     for (path, stats) in written {
-        println!("  wrote {} ({} tile intersections, GPU {:.1} ms)", path.display(), stats.intersections, stats.gpu_ms);
+        println!(
+            "  wrote {} ({} tile intersections, GPU {:.1} ms)",
+            path.display(),
+            stats.intersections,
+            stats.gpu_ms
+        );
     }
     Ok(())
 }

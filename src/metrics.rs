@@ -35,8 +35,17 @@ pub fn compare(a: &RgbaImage, b: &RgbaImage) -> ImageDiff {
     }
     let n = (a.width() as f64) * (a.height() as f64) * 3.0;
     let mse = sq / n;
-    let psnr = if mse == 0.0 { f64::INFINITY } else { 10.0 * (255.0f64 * 255.0 / mse).log10() };
-    ImageDiff { psnr, max_diff, l1: abs / n, differing_pixels: differing }
+    let psnr = if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (255.0f64 * 255.0 / mse).log10()
+    };
+    ImageDiff {
+        psnr,
+        max_diff,
+        l1: abs / n,
+        differing_pixels: differing,
+    }
 }
 
 /// A heat map of the per-pixel largest channel difference, scaled so 32 levels are white.

@@ -46,7 +46,10 @@ const BASE_NAMES: [&str; 14] = [
 ];
 
 fn ply_err(path: &Path, message: impl Into<String>) -> Error {
-    Error::Ply { path: path.to_path_buf(), message: message.into() }
+    Error::Ply {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
 }
 
 fn scalar_size(t: &ScalarType) -> usize {
@@ -62,7 +65,11 @@ fn decode_scalar(t: &ScalarType, b: &[u8], big_endian: bool) -> f32 {
     macro_rules! num {
         ($ty:ty, $n:expr) => {{
             let arr: [u8; $n] = b[..$n].try_into().unwrap();
-            (if big_endian { <$ty>::from_be_bytes(arr) } else { <$ty>::from_le_bytes(arr) }) as f32
+            (if big_endian {
+                <$ty>::from_be_bytes(arr)
+            } else {
+                <$ty>::from_le_bytes(arr)
+            }) as f32
         }};
     }
     match t {
@@ -85,12 +92,18 @@ fn read_header_bytes(path: &Path, reader: &mut impl BufRead) -> Result<Vec<u8>> 
             .by_ref()
             .take((MAX_HEADER_BYTES - header.len()) as u64)
             .read_until(b'\n', &mut header)
-            .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+            .map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
         if header.is_empty() && n == 0 {
             return Err(ply_err(path, "empty file: not a PLY file"));
         }
         if header.len() >= 4 && !header.starts_with(b"ply") {
-            return Err(ply_err(path, "not a PLY file (it does not start with 'ply')"));
+            return Err(ply_err(
+                path,
+                "not a PLY file (it does not start with 'ply')",
+            ));
         }
         let line_start = header[..header.len().saturating_sub(1)]
             .iter()
@@ -110,16 +123,42 @@ fn read_header_bytes(path: &Path, reader: &mut impl BufRead) -> Result<Vec<u8>> 
 /// endianness. Gaussians with non-finite values are dropped and counted in the report.
 pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     let path = path.as_ref();
-    let io = |source| Error::Io { path: path.to_path_buf(), source };
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     let file = File::open(path).map_err(io)?;
     let file_len = file.metadata().map_err(io)?.len();
     let mut reader = BufReader::with_capacity(1 << 20, file);
     let header_bytes = read_header_bytes(path, &mut reader)?;
     // ply-rs expects '\n' line ends; accept '\r\n' too.
     let header_text = String::from_utf8_lossy(&header_bytes).replace('\r', "");
-    let header = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new()
+    let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
+    let header = parser
         .read_header(&mut header_text.as_bytes())
-        .map_err(|e| ply_err(path, format!("malformed header: {e}")))?;
+        .map_err(|e| {
+            // ply-rs's message is a parser dump; name the offending line instead where we can.
+            let bad_line = header_text
+                .lines()
+                .enumerate()
+                .find(|(_, l)| parser.read_header_line(&format!("{l}\n")).is_err());
+            match bad_line {
+                Some((n, l)) => ply_err(
+                    path,
+                    format!(
+                        "malformed header: line {} '{l}' is not a valid PLY header line",
+                        n + 1
+                    ),
+                ),
+                None => ply_err(
+                    path,
+                    format!(
+                        "malformed header: {}",
+                        e.to_string().lines().next().unwrap_or("")
+                    ),
+                ),
+            }
+        })?;
 
     let (encoding_name, big_endian) = match header.encoding {
         Encoding::Ascii => ("ascii", false),
@@ -143,7 +182,10 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
             PropertyType::List(..) => {
                 return Err(ply_err(
                     path,
-                    format!("element 'vertex': list property '{}' is not supported", p.name),
+                    format!(
+                        "element 'vertex': list property '{}' is not supported",
+                        p.name
+                    ),
                 ))
             }
         }
@@ -151,8 +193,15 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     let layout = vertex_layout(path, vertex)?;
     let stride: usize = types.iter().map(scalar_size).sum();
 
-    let mut scene = Scene { sh_degree: layout.sh_degree, ..Default::default() };
-    let mut report = LoadReport { vertices_in_file: count, encoding: encoding_name, ..Default::default() };
+    let mut scene = Scene {
+        sh_degree: layout.sh_degree,
+        ..Default::default()
+    };
+    let mut report = LoadReport {
+        vertices_in_file: count,
+        encoding: encoding_name,
+        ..Default::default()
+    };
 
     match header.encoding {
         Encoding::Ascii => {
@@ -165,7 +214,16 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
                     "truncated payload: the header declares {count} vertices but only {remaining} bytes follow it"
                 )));
             }
-            read_ascii(path, &mut reader, skip_lines, count, &types, &layout, &mut scene, &mut report)?;
+            read_ascii(
+                path,
+                &mut reader,
+                skip_lines,
+                count,
+                &types,
+                &layout,
+                &mut scene,
+                &mut report,
+            )?;
         }
         _ => {
             let mut skip = 0u64;
@@ -175,10 +233,13 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
                     match &p.data_type {
                         PropertyType::Scalar(t) => size += scalar_size(t) as u64,
                         PropertyType::List(..) => {
-                            return Err(ply_err(path, format!(
+                            return Err(ply_err(
+                                path,
+                                format!(
                                 "element '{}' before 'vertex' has a list property; not supported",
                                 e.name
-                            )))
+                            ),
+                            ))
                         }
                     }
                 }
@@ -192,8 +253,20 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
                      ({needed} bytes with preceding elements) but only {payload} bytes follow the header"
                 )));
             }
-            reader.seek(SeekFrom::Start(header_bytes.len() as u64 + skip)).map_err(io)?;
-            read_binary(path, &mut reader, count, stride, big_endian, &types, &layout, &mut scene, &mut report)?;
+            reader
+                .seek(SeekFrom::Start(header_bytes.len() as u64 + skip))
+                .map_err(io)?;
+            read_binary(
+                path,
+                &mut reader,
+                count,
+                stride,
+                big_endian,
+                &types,
+                &layout,
+                &mut scene,
+                &mut report,
+            )?;
         }
     }
     Ok((scene, report))
@@ -210,13 +283,24 @@ fn vertex_layout(path: &Path, vertex: &ply_rs::ply::ElementDef) -> Result<Layout
         }
     }
     if !missing.is_empty() {
-        return Err(ply_err(path, format!(
-            "element 'vertex' lacks the propert{} {}",
-            if missing.len() == 1 { "y" } else { "ies" },
-            missing.iter().map(|m| format!("'{m}'")).collect::<Vec<_>>().join(", ")
-        )));
+        return Err(ply_err(
+            path,
+            format!(
+                "element 'vertex' lacks the propert{} {}",
+                if missing.len() == 1 { "y" } else { "ies" },
+                missing
+                    .iter()
+                    .map(|m| format!("'{m}'"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ));
     }
-    let f_rest = vertex.properties.keys().filter(|k| k.starts_with("f_rest_")).count();
+    let f_rest = vertex
+        .properties
+        .keys()
+        .filter(|k| k.starts_with("f_rest_"))
+        .count();
     let sh_degree = match f_rest {
         0 => 0,
         9 => 1,
@@ -232,14 +316,29 @@ fn vertex_layout(path: &Path, vertex: &ply_rs::ply::ElementDef) -> Result<Layout
         let name = format!("f_rest_{j}");
         match index_of(&name) {
             Some(i) => wanted.push(i),
-            None => return Err(ply_err(path, format!("element 'vertex' lacks the property '{name}'"))),
+            None => {
+                return Err(ply_err(
+                    path,
+                    format!("element 'vertex' lacks the property '{name}'"),
+                ))
+            }
         }
     }
-    Ok(Layout { wanted, sh_degree, f_rest })
+    Ok(Layout {
+        wanted,
+        sh_degree,
+        f_rest,
+    })
 }
 
 /// Turns one decoded property row into a Gaussian of `scene`, or counts it as dropped.
-fn push_gaussian(row: &[f32], layout: &Layout, scene: &mut Scene, report: &mut LoadReport, sh: &mut Vec<f32>) {
+fn push_gaussian(
+    row: &[f32],
+    layout: &Layout,
+    scene: &mut Scene,
+    report: &mut LoadReport,
+    sh: &mut Vec<f32>,
+) {
     let v = |k: usize| row[layout.wanted[k]];
     let all_finite = layout.wanted.iter().all(|&i| row[i].is_finite());
     let q = Quat::from_xyzw(v(11), v(12), v(13), v(10));
@@ -257,8 +356,8 @@ fn push_gaussian(row: &[f32], layout: &Layout, scene: &mut Scene, report: &mut L
     let per_channel = sh_coeffs(layout.sh_degree);
     sh.clear();
     sh.resize(per_channel * 3, 0.0);
-    for c in 0..3 {
-        sh[c] = v(3 + c);
+    for (c, slot) in sh[..3].iter_mut().enumerate() {
+        *slot = v(3 + c);
     }
     let rest_per_channel = layout.f_rest / 3;
     for c in 0..3 {
@@ -266,7 +365,13 @@ fn push_gaussian(row: &[f32], layout: &Layout, scene: &mut Scene, report: &mut L
             sh[3 * (j + 1) + c] = v(14 + c * rest_per_channel + j);
         }
     }
-    scene.push(Vec3::new(v(0), v(1), v(2)), opacity, scale, q.normalize(), sh);
+    scene.push(
+        Vec3::new(v(0), v(1), v(2)),
+        opacity,
+        scale,
+        q.normalize(),
+        sh,
+    );
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -304,9 +409,9 @@ fn read_binary(
     while done < count {
         let n = (count - done).min(CHUNK_VERTICES);
         let bytes = &mut chunk[..n * stride];
-        reader.read_exact(bytes).map_err(|e| {
-            ply_err(path, format!("truncated payload at vertex {done}: {e}"))
-        })?;
+        reader
+            .read_exact(bytes)
+            .map_err(|e| ply_err(path, format!("truncated payload at vertex {done}: {e}")))?;
         for v in bytes.chunks_exact(stride) {
             for &p in &used {
                 row[p] = decode_scalar(&types[p], &v[offsets[p]..], big_endian);
@@ -336,7 +441,10 @@ fn read_ascii(
             .read_line(line)
             .map_err(|e| ply_err(path, format!("reading {what}: {e}")))?;
         if n == 0 {
-            return Err(ply_err(path, format!("truncated payload: end of file while reading {what}")));
+            return Err(ply_err(
+                path,
+                format!("truncated payload: end of file while reading {what}"),
+            ));
         }
         Ok(())
     };
@@ -351,10 +459,16 @@ fn read_ascii(
         let mut tokens = line.split_ascii_whitespace();
         for (p, slot) in row.iter_mut().enumerate() {
             let token = tokens.next().ok_or_else(|| {
-                ply_err(path, format!("vertex {i}: expected {} values, found {p}", types.len()))
+                ply_err(
+                    path,
+                    format!("vertex {i}: expected {} values, found {p}", types.len()),
+                )
             })?;
             *slot = parse_ascii_value(token).ok_or_else(|| {
-                ply_err(path, format!("vertex {i}, property {p}: '{token}' is not a number"))
+                ply_err(
+                    path,
+                    format!("vertex {i}, property {p}: '{token}' is not a number"),
+                )
             })?;
         }
         push_gaussian(&row, layout, scene, report, &mut sh);
@@ -363,12 +477,15 @@ fn read_ascii(
 }
 
 fn parse_ascii_value(token: &str) -> Option<f32> {
-    token.parse::<f32>().ok().or_else(|| match token.to_ascii_lowercase().as_str() {
-        "nan" | "-nan" => Some(f32::NAN),
-        "inf" | "infinity" => Some(f32::INFINITY),
-        "-inf" | "-infinity" => Some(f32::NEG_INFINITY),
-        _ => None,
-    })
+    token
+        .parse::<f32>()
+        .ok()
+        .or_else(|| match token.to_ascii_lowercase().as_str() {
+            "nan" | "-nan" => Some(f32::NAN),
+            "inf" | "infinity" => Some(f32::INFINITY),
+            "-inf" | "-infinity" => Some(f32::NEG_INFINITY),
+            _ => None,
+        })
 }
 
 fn reserve(scene: &mut Scene, count: usize) {
@@ -395,14 +512,25 @@ pub enum PlyEncoding {
 /// inverting the activations, so that [`load_ply`] reads back the same scene.
 pub fn write_ply(scene: &Scene, path: impl AsRef<Path>, encoding: PlyEncoding) -> Result<()> {
     let path = path.as_ref();
-    let io = |source| Error::Io { path: PathBuf::from(path), source };
+    let io = |source| Error::Io {
+        path: PathBuf::from(path),
+        source,
+    };
     let mut w = BufWriter::new(File::create(path).map_err(io)?);
     let per_channel = scene.sh_coeffs_per_channel();
     let rest = (per_channel - 1) * 3;
-    let mut names: Vec<String> =
-        ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"].map(String::from).to_vec();
+    let mut names: Vec<String> = [
+        "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
+    ]
+    .map(String::from)
+    .to_vec();
     names.extend((0..rest).map(|j| format!("f_rest_{j}")));
-    names.extend(["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"].map(String::from));
+    names.extend(
+        [
+            "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3",
+        ]
+        .map(String::from),
+    );
     let format = match encoding {
         PlyEncoding::BinaryLittleEndian => "binary_little_endian",
         PlyEncoding::BinaryBigEndian => "binary_big_endian",

@@ -6,7 +6,8 @@ use glam::Vec3;
 
 use crate::camera::Camera;
 use crate::constants::{
-    COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE, RASTER_CHUNK, TILE_SIZE,
+    COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE, RASTER_CHUNK,
+    TILE_SIZE,
 };
 use crate::error::{Error, Result};
 use crate::gpu_types::{GpuFrameParams, GpuGaussian};
@@ -63,7 +64,9 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { background: Vec3::ZERO }
+        RenderOptions {
+            background: Vec3::ZERO,
+        }
     }
 }
 
@@ -168,8 +171,9 @@ impl Renderer {
 
     /// Uploads a scene.
     pub fn upload(&self, scene: &Scene) -> Result<GpuScene> {
-        let count = u32::try_from(scene.len())
-            .map_err(|_| Error::InvalidInput(format!("{} Gaussians exceed the 2^32 limit", scene.len())))?;
+        let count = u32::try_from(scene.len()).map_err(|_| {
+            Error::InvalidInput(format!("{} Gaussians exceed the 2^32 limit", scene.len()))
+        })?;
         let gaussians: Vec<GpuGaussian> = (0..scene.len())
             .map(|i| {
                 let m = scene.means[i];
@@ -190,9 +194,20 @@ impl Renderer {
         })
     }
 
-    fn frame_resources(&mut self, width: u32, height: u32, gaussians: u32, capacity: u64, rounds: u32) -> Result<&FrameResources> {
+    fn frame_resources(
+        &mut self,
+        width: u32,
+        height: u32,
+        gaussians: u32,
+        capacity: u64,
+        rounds: u32,
+    ) -> Result<&FrameResources> {
         let fits = self.frame.as_ref().is_some_and(|f| {
-            f.width == width && f.height == height && f.gaussians >= gaussians && f.capacity >= capacity && f.rounds >= rounds
+            f.width == width
+                && f.height == height
+                && f.gaussians >= gaussians
+                && f.capacity >= capacity
+                && f.rounds >= rounds
         });
         if !fits {
             self.frame = None; // free the old buffers first
@@ -207,16 +222,30 @@ impl Renderer {
                 gaussians,
                 capacity,
                 rounds,
-                params: Buffer::new(ctx, "frame params", std::mem::size_of::<GpuFrameParams>() as u64, gpu)?,
+                params: Buffer::new(
+                    ctx,
+                    "frame params",
+                    std::mem::size_of::<GpuFrameParams>() as u64,
+                    gpu,
+                )?,
                 counters: Buffer::new(ctx, "frame counters", COUNTER_SLOTS as u64 * 4, gpu)?,
                 splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
                 tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
                 touched_scan: self.prefix_sum.scratch(ctx, n)?,
                 sort: self.sort.buffers(ctx, capacity)?,
                 ranges: Buffer::new(ctx, "tile ranges", (gx * gy) as u64 * 8, gpu)?,
-                state: if rounds > 1 { Some(Buffer::new(ctx, "raster state", pixels * 16, gpu)?) } else { None },
+                state: if rounds > 1 {
+                    Some(Buffer::new(ctx, "raster state", pixels * 16, gpu)?)
+                } else {
+                    None
+                },
                 image: Buffer::new(ctx, "image rgba8", pixels * 4, gpu)?,
-                readback: Buffer::new(ctx, "frame readback", pixels * 4 + COUNTER_SLOTS as u64 * 4, MemoryLocation::GpuToCpu)?,
+                readback: Buffer::new(
+                    ctx,
+                    "frame readback",
+                    pixels * 4 + COUNTER_SLOTS as u64 * 4,
+                    MemoryLocation::GpuToCpu,
+                )?,
                 sorted: 0,
             });
         }
@@ -225,9 +254,19 @@ impl Renderer {
 
     /// Renders `scene` from `camera`; grows the intersection buffers (and the rasterizer's
     /// rounds) and renders again when a frame did not fit.
-    pub fn render(&mut self, scene: &GpuScene, camera: &Camera, options: &RenderOptions) -> Result<(image::RgbaImage, FrameStats)> {
+    pub fn render(
+        &mut self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+    ) -> Result<(image::RgbaImage, FrameStats)> {
         crate::camera::check_size(camera.width, camera.height)?;
-        let mut capacity = self.frame.as_ref().map_or(0, |f| f.capacity).max(scene.count as u64 * 4).max(1 << 16);
+        let mut capacity = self
+            .frame
+            .as_ref()
+            .map_or(0, |f| f.capacity)
+            .max(scene.count as u64 * 4)
+            .max(1 << 16);
         let mut rounds = self.frame.as_ref().map_or(1, |f| f.rounds);
         let mut rerenders = 0;
         loop {
@@ -256,7 +295,8 @@ impl Renderer {
                 passes,
                 wall_ms,
             };
-            let image = image::RgbaImage::from_raw(camera.width, camera.height, pixels).expect("image size");
+            let image = image::RgbaImage::from_raw(camera.width, camera.height, pixels)
+                .expect("image size");
             return Ok((image, stats));
         }
     }
@@ -277,7 +317,14 @@ impl Renderer {
         })
     }
 
-    fn render_once(&mut self, scene: &GpuScene, camera: &Camera, options: &RenderOptions, capacity: u64, rounds: u32) -> Result<(Vec<u8>, Vec<u32>)> {
+    fn render_once(
+        &mut self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        capacity: u64,
+        rounds: u32,
+    ) -> Result<(Vec<u8>, Vec<u32>)> {
         let (w, h) = (camera.width, camera.height);
         let (gx, gy) = tile_grid(w, h);
         self.frame_resources(w, h, scene.count, capacity, rounds)?;
@@ -294,9 +341,19 @@ impl Renderer {
             world_to_cam: [row(0), row(1), row(2)],
             cam_pos: [camera.position.x, camera.position.y, camera.position.z, 0.0],
             focal: [camera.fx, camera.fy, cx, cy],
-            background: [options.background.x, options.background.y, options.background.z, 0.0],
+            background: [
+                options.background.x,
+                options.background.y,
+                options.background.z,
+                0.0,
+            ],
             size: [w, h, gx, gy],
-            scene: [scene.count, scene.sh_degree, 3 * (scene.sh_degree + 1).pow(2), f.capacity.min(u32::MAX as u64) as u32],
+            scene: [
+                scene.count,
+                scene.sh_degree,
+                3 * (scene.sh_degree + 1).pow(2),
+                f.capacity.min(u32::MAX as u64) as u32,
+            ],
         };
         let ctx = self.ctx.clone();
         let device = ctx.device().clone();
@@ -350,7 +407,13 @@ impl Renderer {
             timer.mark(cmd, "emit");
 
             ctx.begin_label(cmd, c"sort");
-            let sorted = self.sort.record(&ctx, cmd, &f.sort, counters_at(COUNTER_INTERSECTIONS), key_bits(w, h));
+            let sorted = self.sort.record(
+                &ctx,
+                cmd,
+                &f.sort,
+                counters_at(COUNTER_INTERSECTIONS),
+                key_bits(w, h),
+            );
             debug_assert_eq!(sorted, sorted_index);
             ctx.end_label(cmd);
             timer.mark(cmd, "sort");
@@ -383,11 +446,17 @@ impl Renderer {
             ctx.end_label(cmd);
             timer.mark(cmd, "rasterize");
 
-            let regions = [
-                vk::BufferCopy { src_offset: 0, dst_offset: 0, size: image_bytes },
-            ];
+            let regions = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: image_bytes,
+            }];
             device.cmd_copy_buffer(cmd, f.image.raw, f.readback.raw, &regions);
-            let regions = [vk::BufferCopy { src_offset: 0, dst_offset: image_bytes, size: COUNTER_SLOTS as u64 * 4 }];
+            let regions = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: image_bytes,
+                size: COUNTER_SLOTS as u64 * 4,
+            }];
             device.cmd_copy_buffer(cmd, f.counters.raw, f.readback.raw, &regions);
             let to_host = vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
@@ -404,7 +473,9 @@ impl Renderer {
         })?;
         let mapped = f.readback.mapped();
         let pixels = mapped[..image_bytes as usize].to_vec();
-        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&mapped[image_bytes as usize..image_bytes as usize + COUNTER_SLOTS as usize * 4]);
+        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(
+            &mapped[image_bytes as usize..image_bytes as usize + COUNTER_SLOTS as usize * 4],
+        );
         Ok((pixels, counters))
     }
 }

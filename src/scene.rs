@@ -51,7 +51,11 @@ impl Scene {
     /// Axis-aligned bounds of the centres, `None` for an empty scene.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.means.first()?;
-        Some(self.means.iter().fold((first, first), |(lo, hi), &m| (lo.min(m), hi.max(m))))
+        Some(
+            self.means
+                .iter()
+                .fold((first, first), |(lo, hi), &m| (lo.min(m), hi.max(m))),
+        )
     }
 
     /// Appends one Gaussian (`sh` holds [`Scene::sh_stride`] floats).

@@ -38,7 +38,11 @@ impl Rng {
 
     /// A uniformly random unit quaternion.
     pub fn rotation(&mut self) -> Quat {
-        let (u1, u2, u3) = (self.f32(), self.f32() * std::f32::consts::TAU, self.f32() * std::f32::consts::TAU);
+        let (u1, u2, u3) = (
+            self.f32(),
+            self.f32() * std::f32::consts::TAU,
+            self.f32() * std::f32::consts::TAU,
+        );
         let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
         Quat::from_xyzw(a * u2.sin(), a * u2.cos(), b * u3.sin(), b * u3.cos()).normalize()
     }
@@ -60,7 +64,10 @@ fn sh_for(rgb: Vec3, degree: u32, rng: &mut Rng, wobble: f32) -> Vec<f32> {
 /// A unit sphere of `count` isotropic Gaussians, coloured by direction.
 pub fn shell(count: usize, sh_degree: u32, seed: u64) -> Scene {
     let mut rng = Rng::new(seed);
-    let mut scene = Scene { sh_degree, ..Default::default() };
+    let mut scene = Scene {
+        sh_degree,
+        ..Default::default()
+    };
     let spacing = (4.0 * std::f32::consts::PI / count.max(1) as f32).sqrt();
     let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
     for i in 0..count {
@@ -79,13 +86,23 @@ pub fn shell(count: usize, sh_degree: u32, seed: u64) -> Scene {
 
 /// `views` cameras on a circle around the origin at `distance`, 15 degrees above the equator
 /// (world up is -Y, the INRIA convention), looking at the origin.
-pub fn orbit_cameras(views: usize, distance: f32, width: u32, height: u32, fov_y_deg: f32) -> Result<Vec<Camera>> {
+pub fn orbit_cameras(
+    views: usize,
+    distance: f32,
+    width: u32,
+    height: u32,
+    fov_y_deg: f32,
+) -> Result<Vec<Camera>> {
     let elevation = 15f32.to_radians();
     (0..views)
         .map(|k| {
             let a = k as f32 / views as f32 * std::f32::consts::TAU;
             let eye = distance
-                * Vec3::new(elevation.cos() * a.cos(), -elevation.sin(), elevation.cos() * a.sin());
+                * Vec3::new(
+                    elevation.cos() * a.cos(),
+                    -elevation.sin(),
+                    elevation.cos() * a.sin(),
+                );
             Camera::look_at(eye, Vec3::ZERO, Vec3::NEG_Y, fov_y_deg, width, height)
         })
         .collect()
@@ -98,7 +115,12 @@ pub fn demo_scene() -> Scene {
     let mut rng = Rng::new(11);
     let core_count = 8_000;
     for _ in 0..core_count {
-        let dir = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)).normalize_or_zero();
+        let dir = Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize_or_zero();
         let p = dir * rng.range(0.2, 0.45);
         let rgb = Vec3::new(0.95, 0.55 + 0.3 * dir.y, 0.2);
         let sh = sh_for(rgb, 3, &mut rng, 0.1);

@@ -19,16 +19,28 @@ pub struct PassTimer {
 impl PassTimer {
     /// Creates the query pool (timestamps are skipped where the queue has none).
     pub fn new(ctx: &Context) -> Result<Self> {
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(MAX_MARKS);
-        let pool = unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
-        Ok(PassTimer { pool, names: Vec::new(), enabled: ctx.info().timestamps, ctx: ctx.clone() })
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(MAX_MARKS);
+        let pool =
+            unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        Ok(PassTimer {
+            pool,
+            names: Vec::new(),
+            enabled: ctx.info().timestamps,
+            ctx: ctx.clone(),
+        })
     }
 
     /// Resets the pool and writes the frame's first timestamp.
     pub fn begin(&mut self, cmd: vk::CommandBuffer) {
         self.names.clear();
         if self.enabled {
-            unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, MAX_MARKS) };
+            unsafe {
+                self.ctx
+                    .device()
+                    .cmd_reset_query_pool(cmd, self.pool, 0, MAX_MARKS)
+            };
         }
         self.mark(cmd, "start");
     }

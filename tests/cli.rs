@@ -5,7 +5,10 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn rara(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rara")).args(args).output().expect("run rara")
+    Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args(args)
+        .output()
+        .expect("run rara")
 }
 
 fn dir() -> PathBuf {
@@ -54,17 +57,35 @@ fn header(count: &str, props: &[&str]) -> String {
     h + "end_header\n"
 }
 
-const BASE: [&str; 14] = ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"];
+const BASE: [&str; 14] = [
+    "x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2",
+    "rot_0", "rot_1", "rot_2", "rot_3",
+];
 
 #[test]
 fn render_and_info_succeed() {
     let (scene, cams) = good_scene();
     let out = dir().join("out.png");
-    let o = rara(&render_args(scene.to_str().unwrap(), cams.to_str().unwrap(), out.to_str().unwrap()));
+    let o = rara(&render_args(
+        scene.to_str().unwrap(),
+        cams.to_str().unwrap(),
+        out.to_str().unwrap(),
+    ));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let img = image::open(&out).unwrap();
     assert_eq!((img.width(), img.height()), (64, 48));
-    let o = rara(&["render", scene.to_str().unwrap(), "--eye", "0,-1,-3", "--target", "0,0,0", "--width", "80", "-o", out.to_str().unwrap()]);
+    let o = rara(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--eye",
+        "0,-1,-3",
+        "--target",
+        "0,0,0",
+        "--width",
+        "80",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(image::open(&out).unwrap().height(), 60);
     let o = rara(&["info", scene.to_str().unwrap(), "--json"]);
@@ -83,35 +104,71 @@ fn hostile_scenes_fail_cleanly() {
     let bytes = std::fs::read(&good).unwrap();
 
     let truncated = write("truncated.ply", &bytes[..bytes.len() - 100]);
-    assert_error(&rara(&render_args(truncated.to_str().unwrap(), cams, out)), &["truncated.ply", "truncated payload"]);
+    assert_error(
+        &rara(&render_args(truncated.to_str().unwrap(), cams, out)),
+        &["truncated.ply", "truncated payload"],
+    );
 
-    let not_ply = write("not_a_ply.ply", b"\x89PNG\r\n\x1a\n this is not a ply file at all");
-    assert_error(&rara(&render_args(not_ply.to_str().unwrap(), cams, out)), &["not_a_ply.ply", "not a PLY"]);
+    let not_ply = write(
+        "not_a_ply.ply",
+        b"\x89PNG\r\n\x1a\n this is not a ply file at all",
+    );
+    assert_error(
+        &rara(&render_args(not_ply.to_str().unwrap(), cams, out)),
+        &["not_a_ply.ply", "not a PLY"],
+    );
 
     let empty = write("empty.ply", b"");
-    assert_error(&rara(&render_args(empty.to_str().unwrap(), cams, out)), &["empty.ply", "empty file"]);
+    assert_error(
+        &rara(&render_args(empty.to_str().unwrap(), cams, out)),
+        &["empty.ply", "empty file"],
+    );
 
     let huge = write("huge.ply", header("1000000000000", &BASE).as_bytes());
-    assert_error(&rara(&render_args(huge.to_str().unwrap(), cams, out)), &["huge.ply", "1000000000000 vertices", "truncated payload"]);
+    assert_error(
+        &rara(&render_args(huge.to_str().unwrap(), cams, out)),
+        &["huge.ply", "1000000000000 vertices", "truncated payload"],
+    );
 
     let mut props = BASE.to_vec();
     let rest: Vec<String> = (0..7).map(|j| format!("f_rest_{j}")).collect();
     props.extend(rest.iter().map(String::as_str));
     let bad_k = write("bad_k.ply", header("1", &props).as_bytes());
-    assert_error(&rara(&render_args(bad_k.to_str().unwrap(), cams, out)), &["bad_k.ply", "7 'f_rest_*'"]);
+    assert_error(
+        &rara(&render_args(bad_k.to_str().unwrap(), cams, out)),
+        &["bad_k.ply", "7 'f_rest_*'"],
+    );
 
     let no_opacity: Vec<&str> = BASE.iter().copied().filter(|p| *p != "opacity").collect();
     let missing = write("no_opacity.ply", header("1", &no_opacity).as_bytes());
-    assert_error(&rara(&render_args(missing.to_str().unwrap(), cams, out)), &["no_opacity.ply", "'vertex'", "'opacity'"]);
+    assert_error(
+        &rara(&render_args(missing.to_str().unwrap(), cams, out)),
+        &["no_opacity.ply", "'vertex'", "'opacity'"],
+    );
 
-    let garbage_header = write("garbage_header.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty flot x\nend_header\n");
-    assert_error(&rara(&render_args(garbage_header.to_str().unwrap(), cams, out)), &["garbage_header.ply", "malformed header"]);
+    let garbage_header = write(
+        "garbage_header.ply",
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty flot x\nend_header\n",
+    );
+    assert_error(
+        &rara(&render_args(garbage_header.to_str().unwrap(), cams, out)),
+        &["garbage_header.ply", "malformed header"],
+    );
 
-    let no_end = write("no_end.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n");
-    assert_error(&rara(&render_args(no_end.to_str().unwrap(), cams, out)), &["no_end.ply", "end_header"]);
+    let no_end = write(
+        "no_end.ply",
+        b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n",
+    );
+    assert_error(
+        &rara(&render_args(no_end.to_str().unwrap(), cams, out)),
+        &["no_end.ply", "end_header"],
+    );
 
     let missing_file = dir().join("does_not_exist.ply");
-    assert_error(&rara(&render_args(missing_file.to_str().unwrap(), cams, out)), &["does_not_exist.ply"]);
+    assert_error(
+        &rara(&render_args(missing_file.to_str().unwrap(), cams, out)),
+        &["does_not_exist.ply"],
+    );
 }
 
 /// SPEC section 1: Gaussians with NaN values are dropped with a counted warning; the load and
@@ -126,10 +183,17 @@ fn nan_values_are_dropped_with_a_warning() {
     let p = dir().join("nan.ply");
     rara::ply::write_ply(&scene, &p, rara::ply::PlyEncoding::BinaryLittleEndian).unwrap();
     let out = dir().join("nan.png");
-    let o = rara(&render_args(p.to_str().unwrap(), cams.to_str().unwrap(), out.to_str().unwrap()));
+    let o = rara(&render_args(
+        p.to_str().unwrap(),
+        cams.to_str().unwrap(),
+        out.to_str().unwrap(),
+    ));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
-    assert!(stderr.contains("dropped 7 of 100 Gaussians with non-finite values"), "{stderr}");
+    assert!(
+        stderr.contains("dropped 7 of 100 Gaussians with non-finite values"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -138,28 +202,58 @@ fn hostile_cameras_fail_cleanly() {
     let scene = scene.to_str().unwrap();
     let out = dir().join("never.png");
     let out = out.to_str().unwrap();
-    let o = rara(&["render", scene, "--cameras", cams.to_str().unwrap(), "--camera", "5", "-o", out]);
+    let o = rara(&[
+        "render",
+        scene,
+        "--cameras",
+        cams.to_str().unwrap(),
+        "--camera",
+        "5",
+        "-o",
+        out,
+    ]);
     assert_error(&o, &["camera index 5 is out of range", "2 camera(s)"]);
 
-    let malformed = write("malformed.cameras.json", b"[{\"width\": 640, \"height\": 480, \"position\": [0, 0]}]");
-    assert_error(&rara(&render_args(scene, malformed.to_str().unwrap(), out)), &["malformed.cameras.json", "cameras.json"]);
+    let malformed = write(
+        "malformed.cameras.json",
+        b"[{\"width\": 640, \"height\": 480, \"position\": [0, 0]}]",
+    );
+    assert_error(
+        &rara(&render_args(scene, malformed.to_str().unwrap(), out)),
+        &["malformed.cameras.json", "cameras.json"],
+    );
     let not_json = write("not_json.cameras.json", b"{{{ nope");
-    assert_error(&rara(&render_args(scene, not_json.to_str().unwrap(), out)), &["not_json.cameras.json"]);
+    assert_error(
+        &rara(&render_args(scene, not_json.to_str().unwrap(), out)),
+        &["not_json.cameras.json"],
+    );
     let empty = write("empty.cameras.json", b"[]");
-    assert_error(&rara(&render_args(scene, empty.to_str().unwrap(), out)), &["empty.cameras.json", "no camera"]);
+    assert_error(
+        &rara(&render_args(scene, empty.to_str().unwrap(), out)),
+        &["empty.cameras.json", "no camera"],
+    );
     let bad_values = write(
         "bad_values.cameras.json",
         b"[{\"width\": 640, \"height\": 480, \"position\": [0, 0, 0], \"rotation\": [[1,0,0],[0,1,0],[0,0,1]], \"fx\": -5, \"fy\": 500}]",
     );
-    assert_error(&rara(&render_args(scene, bad_values.to_str().unwrap(), out)), &["bad_values.cameras.json", "positive fx/fy"]);
+    assert_error(
+        &rara(&render_args(scene, bad_values.to_str().unwrap(), out)),
+        &["bad_values.cameras.json", "positive fx/fy"],
+    );
 
-    let o = rara(&["render", scene, "--eye", "0,0,0", "--target", "0,0,0", "-o", out]);
+    let o = rara(&[
+        "render", scene, "--eye", "0,0,0", "--target", "0,0,0", "-o", out,
+    ]);
     assert_error(&o, &["--eye and --target must differ"]);
-    let o = rara(&["render", scene, "--eye", "1,2", "--target", "0,0,0", "-o", out]);
+    let o = rara(&[
+        "render", scene, "--eye", "1,2", "--target", "0,0,0", "-o", out,
+    ]);
     assert_error(&o, &["X,Y,Z"]);
     let o = rara(&["render", scene, "-o", out]);
     assert_error(&o, &["give a camera"]);
-    let o = rara(&["render", scene, "--eye", "0,0,-3", "--target", "0,0,0", "--width", "0", "-o", out]);
+    let o = rara(&[
+        "render", scene, "--eye", "0,0,-3", "--target", "0,0,0", "--width", "0", "-o", out,
+    ]);
     assert_error(&o, &["out of range"]);
 }
 
@@ -170,6 +264,15 @@ fn demo_writes_pngs() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("wrote"), "{stdout}");
-    let pngs = std::fs::read_dir(&d).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png")).count();
+    let pngs = std::fs::read_dir(&d)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "png")
+        })
+        .count();
     assert!(pngs >= 4);
 }

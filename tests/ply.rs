@@ -19,8 +19,14 @@ fn assert_close(a: &Scene, b: &Scene) {
     for i in 0..a.len() {
         assert!(a.means[i].abs_diff_eq(b.means[i], 1e-6), "mean {i}");
         assert!(close(a.opacities[i], b.opacities[i]), "opacity {i}");
-        assert!(a.scales[i].abs_diff_eq(b.scales[i], 1e-5 * b.scales[i].max_element()), "scale {i}");
-        assert!(a.rotations[i].abs_diff_eq(b.rotations[i], 1e-5), "rotation {i}");
+        assert!(
+            a.scales[i].abs_diff_eq(b.scales[i], 1e-5 * b.scales[i].max_element()),
+            "scale {i}"
+        );
+        assert!(
+            a.rotations[i].abs_diff_eq(b.rotations[i], 1e-5),
+            "rotation {i}"
+        );
     }
     for (k, (x, y)) in a.sh.iter().zip(&b.sh).enumerate() {
         assert!(close(*x, *y), "sh {k}: {x} vs {y}");
@@ -83,7 +89,10 @@ fn properties_by_name_any_order_and_type() {
     assert_eq!(scene.sh_degree, 0);
     assert_eq!(scene.means[1], Vec3::new(2.0, -4.0, 4.0));
     assert!((scene.opacities[0] - 1.0 / (1.0 + (-0.5f32).exp())).abs() < 1e-6);
-    assert!(scene.scales[0].abs_diff_eq(Vec3::new((-1.0f32).exp(), (-1.5f32).exp(), (-2.0f32).exp()), 1e-6));
+    assert!(scene.scales[0].abs_diff_eq(
+        Vec3::new((-1.0f32).exp(), (-1.5f32).exp(), (-2.0f32).exp()),
+        1e-6
+    ));
     assert!(scene.rotations[0].abs_diff_eq(Quat::IDENTITY, 1e-6));
     assert_eq!(&scene.sh[..3], &[0.1, 0.2, 0.3]);
 }
@@ -91,16 +100,28 @@ fn properties_by_name_any_order_and_type() {
 /// f_rest is channel-major in the file and coefficient-major in memory.
 #[test]
 fn f_rest_is_channel_major() {
-    let mut scene = Scene { sh_degree: 1, ..Default::default() };
+    let mut scene = Scene {
+        sh_degree: 1,
+        ..Default::default()
+    };
     // coefficient-major: [dc r g b, c1 r g b, c2 r g b, c3 r g b]
     let sh: Vec<f32> = (0..12).map(|k| k as f32).collect();
     scene.push(Vec3::ZERO, 0.5, Vec3::ONE, Quat::IDENTITY, &sh);
     let path = tmp("frest.ply");
     write_ply(&scene, &path, PlyEncoding::Ascii).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
-    let row: Vec<f32> = text.lines().last().unwrap().split(' ').map(|t| t.parse().unwrap()).collect();
+    let row: Vec<f32> = text
+        .lines()
+        .last()
+        .unwrap()
+        .split(' ')
+        .map(|t| t.parse().unwrap())
+        .collect();
     // x y z nx ny nz dc0 dc1 dc2, then f_rest: channel r's coefficients 1..3 = 3, 6, 9.
-    assert_eq!(&row[6..18], &[0.0, 1.0, 2.0, 3.0, 6.0, 9.0, 4.0, 7.0, 10.0, 5.0, 8.0, 11.0]);
+    assert_eq!(
+        &row[6..18],
+        &[0.0, 1.0, 2.0, 3.0, 6.0, 9.0, 4.0, 7.0, 10.0, 5.0, 8.0, 11.0]
+    );
     let (back, _) = load_ply(&path).unwrap();
     assert_eq!(back.sh, sh);
 }
@@ -127,10 +148,15 @@ fn non_finite_gaussians_are_dropped_and_counted() {
 fn load_playbot_when_present() {
     let dir = std::env::var_os("RARA_REAL_DATA")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real"));
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real")
+        });
     let path = dir.join("playbot_lod0_500k_sh2.ply");
     if !path.is_file() {
-        eprintln!("real-scene case 'playbot load' SKIPPED: {} missing", path.display());
+        eprintln!(
+            "real-scene case 'playbot load' SKIPPED: {} missing",
+            path.display()
+        );
         return;
     }
     let mut times = Vec::new();
@@ -143,5 +169,8 @@ fn load_playbot_when_present() {
         assert_eq!(report.dropped_non_finite, 0);
     }
     times.sort_by(f64::total_cmp);
-    eprintln!("real-scene case 'playbot load' RAN: median {:.0} ms over 3 loads", times[1]);
+    eprintln!(
+        "real-scene case 'playbot load' RAN: median {:.0} ms over 3 loads",
+        times[1]
+    );
 }

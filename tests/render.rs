@@ -24,7 +24,10 @@ fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec
     match cams {
         Some(path) => {
             let all = Camera::load_all(path).unwrap();
-            [0, all.len() / 2 + 1].iter().map(|&k| all[k % all.len()].resized(width, None).unwrap()).collect()
+            [0, all.len() / 2 + 1]
+                .iter()
+                .map(|&k| all[k % all.len()].resized(width, None).unwrap())
+                .collect()
         }
         None => {
             let (lo, hi) = percentile_box(scene);
@@ -42,17 +45,24 @@ fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec
 }
 
 fn render_real_scene(stem: &str) {
-    let Some((ply, cams)) = common::real_scene(stem) else { return };
+    let Some((ply, cams)) = common::real_scene(stem) else {
+        return;
+    };
     let (scene, _) = rara::ply::load_ply(&ply).unwrap();
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
     let gpu_scene = renderer.upload(&scene).unwrap();
     for (k, cam) in two_cameras(&scene, cams.as_deref(), 320).iter().enumerate() {
-        let options = RenderOptions { background: Vec3::new(0.1, 0.2, 0.3) };
+        let options = RenderOptions {
+            background: Vec3::new(0.1, 0.2, 0.3),
+        };
         let (gpu, stats) = renderer.render(&gpu_scene, cam, &options).unwrap();
         let cpu = reference::render(&scene, cam, options.background);
         let d = common::check_images(&format!("{stem}_view{k}"), &gpu, &cpu, 50.0, 4);
-        eprintln!("real-scene case '{stem}' view {k} RAN: {} intersections, PSNR {:.2} dB, max diff {}", stats.intersections, d.psnr, d.max_diff);
+        eprintln!(
+            "real-scene case '{stem}' view {k} RAN: {} intersections, PSNR {:.2} dB, max diff {}",
+            stats.intersections, d.psnr, d.max_diff
+        );
     }
     common::assert_no_validation_messages(&ctx);
 }
@@ -92,15 +102,25 @@ fn synthetic_scenes_every_sh_degree() {
         let scene = rara::synth::shell(6000, degree, degree as u64);
         let gpu_scene = renderer.upload(&scene).unwrap();
         for (k, cam) in cams.iter().enumerate() {
-            let (gpu, _) = renderer.render(&gpu_scene, cam, &RenderOptions::default()).unwrap();
+            let (gpu, _) = renderer
+                .render(&gpu_scene, cam, &RenderOptions::default())
+                .unwrap();
             let cpu = reference::render(&scene, cam, Vec3::ZERO);
             common::check_images(&format!("shell_sh{degree}_view{k}"), &gpu, &cpu, 50.0, 4);
         }
     }
     let demo = rara::synth::demo_scene();
     let gpu_scene = renderer.upload(&demo).unwrap();
-    let (gpu, _) = renderer.render(&gpu_scene, &cams[1], &RenderOptions::default()).unwrap();
-    common::check_images("demo_scene", &gpu, &reference::render(&demo, &cams[1], Vec3::ZERO), 50.0, 4);
+    let (gpu, _) = renderer
+        .render(&gpu_scene, &cams[1], &RenderOptions::default())
+        .unwrap();
+    common::check_images(
+        "demo_scene",
+        &gpu,
+        &reference::render(&demo, &cams[1], Vec3::ZERO),
+        50.0,
+        4,
+    );
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -112,7 +132,9 @@ fn each_stage_matches_its_cpu_twin() {
     let scene = rara::synth::demo_scene();
     let cam = &rara::synth::orbit_cameras(4, 3.0, 256, 192, 50.0).unwrap()[1];
     let gpu_scene = renderer.upload(&scene).unwrap();
-    let (gpu_image, stats) = renderer.render(&gpu_scene, cam, &RenderOptions::default()).unwrap();
+    let (gpu_image, stats) = renderer
+        .render(&gpu_scene, cam, &RenderOptions::default())
+        .unwrap();
     let mid = renderer.intermediates(&gpu_scene, &stats).unwrap();
 
     // project: same visibility, values within float tolerance.
@@ -122,11 +144,18 @@ fn each_stage_matches_its_cpu_twin() {
         let g = &mid.splats[i];
         let gpu_visible = g.rect[2] > g.rect[0] && g.rect[3] > g.rect[1];
         let cpu = project_one(&scene, cam, i);
-        assert_eq!(gpu_visible, cpu.is_some(), "Gaussian {i}: visibility differs");
+        assert_eq!(
+            gpu_visible,
+            cpu.is_some(),
+            "Gaussian {i}: visibility differs"
+        );
         let Some(c) = cpu else { continue };
         visible += 1;
         let close = |a: f32, b: f32, what: &str| {
-            assert!((a - b).abs() <= 1e-4 + 1e-4 * b.abs(), "Gaussian {i}: {what} GPU {a} CPU {b}");
+            assert!(
+                (a - b).abs() <= 1e-4 + 1e-4 * b.abs(),
+                "Gaussian {i}: {what} GPU {a} CPU {b}"
+            );
         };
         close(g.uv[0], c.uv.x, "u");
         close(g.uv[1], c.uv.y, "v");
@@ -156,7 +185,9 @@ fn each_stage_matches_its_cpu_twin() {
         let gpu_list: Vec<u32> = mid.values[start as usize..end as usize].to_vec();
         let cpu_list: Vec<u32> = list.iter().map(|&k| cpu_splats[k as usize].index).collect();
         assert_eq!(gpu_list, cpu_list, "tile {tile}: sorted list differs");
-        assert!(mid.keys[start as usize..end as usize].iter().all(|key| (key >> 32) as usize == tile));
+        assert!(mid.keys[start as usize..end as usize]
+            .iter()
+            .all(|key| (key >> 32) as usize == tile));
     }
 
     // rasterize: the CPU compositor over the GPU's own projected splats and lists.
@@ -185,24 +216,61 @@ fn each_stage_matches_its_cpu_twin() {
 fn tile_with_more_than_100k_splats() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
-    let mut scene = Scene { sh_degree: 0, ..Default::default() };
+    let mut scene = Scene {
+        sh_degree: 0,
+        ..Default::default()
+    };
     let mut rng = rara::synth::Rng::new(1);
     let grey = [rara::scene::rgb_to_sh_dc(1.0); 3];
     for _ in 0..120_000 {
-        let p = Vec3::new(rng.range(-0.05, 0.05), rng.range(-0.05, 0.05), rng.range(-0.5, 0.5));
+        let p = Vec3::new(
+            rng.range(-0.05, 0.05),
+            rng.range(-0.05, 0.05),
+            rng.range(-0.5, 0.5),
+        );
         scene.push(p, 0.003, Vec3::splat(0.5), Quat::IDENTITY, &grey);
     }
-    let red = [rara::scene::rgb_to_sh_dc(0.9), rara::scene::rgb_to_sh_dc(0.1), rara::scene::rgb_to_sh_dc(0.1)];
-    scene.push(Vec3::new(0.0, 0.0, 2.0), 0.999, Vec3::splat(1.0), Quat::IDENTITY, &red);
-    let cam = Camera::look_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO, Vec3::NEG_Y, 40.0, 32, 32).unwrap();
+    let red = [
+        rara::scene::rgb_to_sh_dc(0.9),
+        rara::scene::rgb_to_sh_dc(0.1),
+        rara::scene::rgb_to_sh_dc(0.1),
+    ];
+    scene.push(
+        Vec3::new(0.0, 0.0, 2.0),
+        0.999,
+        Vec3::splat(1.0),
+        Quat::IDENTITY,
+        &red,
+    );
+    let cam = Camera::look_at(
+        Vec3::new(0.0, 0.0, -3.0),
+        Vec3::ZERO,
+        Vec3::NEG_Y,
+        40.0,
+        32,
+        32,
+    )
+    .unwrap();
     let gpu_scene = renderer.upload(&scene).unwrap();
-    let (gpu, stats) = renderer.render(&gpu_scene, &cam, &RenderOptions::default()).unwrap();
-    assert!(stats.max_tile_len > 100_000, "longest tile list {}", stats.max_tile_len);
-    assert!(stats.rerenders >= 1, "the rasterizer should have needed more than one round");
+    let (gpu, stats) = renderer
+        .render(&gpu_scene, &cam, &RenderOptions::default())
+        .unwrap();
+    assert!(
+        stats.max_tile_len > 100_000,
+        "longest tile list {}",
+        stats.max_tile_len
+    );
+    assert!(
+        stats.rerenders >= 1,
+        "the rasterizer should have needed more than one round"
+    );
     let cpu = reference::render(&scene, &cam, Vec3::ZERO);
     common::check_images("long_tile_list", &gpu, &cpu, 50.0, 4);
     let centre = gpu.get_pixel(16, 16);
-    assert!(centre[0] > 200 && centre[1] < 60, "the opaque splat behind the list must show, got {centre:?}");
+    assert!(
+        centre[0] > 200 && centre[1] < 60,
+        "the opaque splat behind the list must show, got {centre:?}"
+    );
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -214,9 +282,14 @@ fn validation_messages_are_caught() {
         eprintln!("validation layer not installed: nothing to check");
         return;
     }
-    let buf = rara::vk::Buffer::new(&ctx, "misused", 64, rara::vk::MemoryLocation::GpuOnly).unwrap();
+    let buf =
+        rara::vk::Buffer::new(&ctx, "misused", 64, rara::vk::MemoryLocation::GpuOnly).unwrap();
     // vkCmdFillBuffer needs an offset that is a multiple of 4.
-    ctx.run_commands(|cmd| unsafe { ctx.device().cmd_fill_buffer(cmd, buf.raw, 2, 4, 0) }).unwrap();
+    ctx.run_commands(|cmd| unsafe { ctx.device().cmd_fill_buffer(cmd, buf.raw, 2, 4, 0) })
+        .unwrap();
     let messages = ctx.take_validation_messages();
-    assert!(!messages.is_empty(), "the validation layer did not report a misaligned vkCmdFillBuffer");
+    assert!(
+        !messages.is_empty(),
+        "the validation layer did not report a misaligned vkCmdFillBuffer"
+    );
 }

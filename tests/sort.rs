@@ -9,19 +9,35 @@ use rara::synth::Rng;
 fn check_sort(sorter: &RadixSort, ctx: &rara::Context, keys: Vec<u64>, key_bits: u32, what: &str) {
     let values: Vec<u32> = (0..keys.len() as u32).collect();
     let (gpu_keys, gpu_values) = sorter.sort_pairs(ctx, &keys, &values, key_bits).unwrap();
-    let mask = if key_bits >= 64 { u64::MAX } else { (1u64 << key_bits) - 1 };
+    let mask = if key_bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << key_bits) - 1
+    };
     let mut expected: Vec<(u64, u32)> = keys.iter().copied().zip(values).collect();
     expected.sort_by_key(|&(k, _)| k & mask); // stable
     assert_eq!(gpu_keys.len(), keys.len(), "{what}");
-    for (i, (&(k, v), (&gk, &gv))) in expected.iter().zip(gpu_keys.iter().zip(&gpu_values)).enumerate() {
-        assert!(k == gk && v == gv, "{what} (n = {}): position {i}: GPU ({gk:#x}, {gv}), expected ({k:#x}, {v})", keys.len());
+    for (i, (&(k, v), (&gk, &gv))) in expected
+        .iter()
+        .zip(gpu_keys.iter().zip(&gpu_values))
+        .enumerate()
+    {
+        assert!(
+            k == gk && v == gv,
+            "{what} (n = {}): position {i}: GPU ({gk:#x}, {gv}), expected ({k:#x}, {v})",
+            keys.len()
+        );
     }
     common::assert_no_validation_messages(ctx);
 }
 
 fn random_keys(n: usize, bits: u32, seed: u64) -> Vec<u64> {
     let mut rng = Rng::new(seed);
-    let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+    let mask = if bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << bits) - 1
+    };
     (0..n).map(|_| rng.next_u64() & mask).collect()
 }
 
@@ -37,7 +53,13 @@ fn sort_sizes_around_block_boundaries() {
         sizes.extend([b - 1, b, b + 1]);
     }
     for (k, n) in sizes.into_iter().enumerate() {
-        check_sort(&sorter, &ctx, random_keys(n, 43, k as u64), 43, "random 43-bit keys");
+        check_sort(
+            &sorter,
+            &ctx,
+            random_keys(n, 43, k as u64),
+            43,
+            "random 43-bit keys",
+        );
     }
 }
 
@@ -46,13 +68,37 @@ fn sort_key_patterns() {
     let ctx = common::context();
     let sorter = RadixSort::new(&ctx).unwrap();
     let n = 3 * SORT_BLOCK as usize + 17;
-    check_sort(&sorter, &ctx, vec![0x1234_5678_9abc; n], 48, "all-equal keys");
-    check_sort(&sorter, &ctx, (0..n as u64).map(|i| i * 3).collect(), 32, "sorted keys");
-    check_sort(&sorter, &ctx, (0..n as u64).rev().map(|i| i << 20).collect(), 48, "reverse-sorted keys");
+    check_sort(
+        &sorter,
+        &ctx,
+        vec![0x1234_5678_9abc; n],
+        48,
+        "all-equal keys",
+    );
+    check_sort(
+        &sorter,
+        &ctx,
+        (0..n as u64).map(|i| i * 3).collect(),
+        32,
+        "sorted keys",
+    );
+    check_sort(
+        &sorter,
+        &ctx,
+        (0..n as u64).rev().map(|i| i << 20).collect(),
+        48,
+        "reverse-sorted keys",
+    );
     // Few distinct keys: stability decides the order of the values.
     check_sort(&sorter, &ctx, random_keys(n, 3, 5), 3, "3-bit keys");
     // Bits above key_bits must be ignored.
-    check_sort(&sorter, &ctx, random_keys(n, 64, 6), 40, "64-bit keys sorted on 40 bits");
+    check_sort(
+        &sorter,
+        &ctx,
+        random_keys(n, 64, 6),
+        40,
+        "64-bit keys sorted on 40 bits",
+    );
     check_sort(&sorter, &ctx, random_keys(n, 64, 7), 64, "full 64-bit keys");
 }
 
@@ -60,7 +106,13 @@ fn sort_key_patterns() {
 fn sort_two_million_pairs() {
     let ctx = common::context();
     let sorter = RadixSort::new(&ctx).unwrap();
-    check_sort(&sorter, &ctx, random_keys(2_000_000, 43, 99), 43, "2M random pairs");
+    check_sort(
+        &sorter,
+        &ctx,
+        random_keys(2_000_000, 43, 99),
+        43,
+        "2M random pairs",
+    );
 }
 
 #[test]
@@ -71,12 +123,33 @@ fn prefix_sum_matches_cpu() {
     let scan = PrefixSum::new(&ctx).unwrap();
     let b = SCAN_BLOCK as usize;
     let mut rng = Rng::new(3);
-    for n in [0, 1, 5, b - 1, b, b + 1, b * b - 1, b * b, b * b + 1, 3 * b * b + 7] {
+    for n in [
+        0,
+        1,
+        5,
+        b - 1,
+        b,
+        b + 1,
+        b * b - 1,
+        b * b,
+        b * b + 1,
+        3 * b * b + 7,
+    ] {
         let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 50) as u32).collect();
         let buf = Buffer::from_slice(&ctx, "scan data", &data).unwrap();
         let meta = Buffer::from_slice(&ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
         let scratch = scan.scratch(&ctx, n as u64).unwrap();
-        ctx.run_commands(|cmd| scan.record(&ctx, cmd, buf.address, meta.address, Some(meta.address + 4), &scratch)).unwrap();
+        ctx.run_commands(|cmd| {
+            scan.record(
+                &ctx,
+                cmd,
+                buf.address,
+                meta.address,
+                Some(meta.address + 4),
+                &scratch,
+            )
+        })
+        .unwrap();
         let got: Vec<u32> = buf.download_as(n).unwrap();
         let mut acc = 0u32;
         for (i, (&x, &g)) in data.iter().zip(&got).enumerate() {

@@ -9,9 +9,21 @@ use crate::scene::Scene;
 /// SH constant of degree 0.
 pub const SH_C0: f32 = 0.282_094_8;
 const SH_C1: f32 = 0.488_602_5;
-const SH_C2: [f32; 5] = [1.092_548_4, -1.092_548_4, 0.315_391_57, -1.092_548_4, 0.546_274_2];
+const SH_C2: [f32; 5] = [
+    1.092_548_4,
+    -1.092_548_4,
+    0.315_391_57,
+    -1.092_548_4,
+    0.546_274_2,
+];
 const SH_C3: [f32; 7] = [
-    -0.590_043_6, 2.890_611_4, -0.457_045_8, 0.373_176_34, -0.457_045_8, 1.445_305_7, -0.590_043_6,
+    -0.590_043_6,
+    2.890_611_4,
+    -0.457_045_8,
+    0.373_176_34,
+    -0.457_045_8,
+    1.445_305_7,
+    -0.590_043_6,
 ];
 
 /// What the project stage produces for one Gaussian that draws something.
@@ -37,9 +49,21 @@ pub struct ProjectedSplat {
 fn quat_rows(q: Quat) -> [Vec3; 3] {
     let (w, x, y, z) = (q.w, q.x, q.y, q.z);
     [
-        Vec3::new(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)),
-        Vec3::new(2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)),
-        Vec3::new(2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)),
+        Vec3::new(
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ),
+        Vec3::new(
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ),
+        Vec3::new(
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ),
     ]
 }
 
@@ -96,7 +120,11 @@ pub fn project_one(scene: &Scene, camera: &Camera, i: usize) -> Option<Projected
     let j1 = (fy / t.z) * r_y - (fy * yc / (t.z * t.z)) * r_z;
     // Sigma = M M^T, M = R S: v^T Sigma w = (S R^T v) . (S R^T w).
     let [q0, q1, q2] = quat_rows(scene.rotations[i]);
-    let cols = [Vec3::new(q0.x, q1.x, q2.x), Vec3::new(q0.y, q1.y, q2.y), Vec3::new(q0.z, q1.z, q2.z)];
+    let cols = [
+        Vec3::new(q0.x, q1.x, q2.x),
+        Vec3::new(q0.y, q1.y, q2.y),
+        Vec3::new(q0.z, q1.z, q2.z),
+    ];
     let s = scene.scales[i];
     let m0 = s * Vec3::new(cols[0].dot(j0), cols[1].dot(j0), cols[2].dot(j0));
     let m1 = s * Vec3::new(cols[0].dot(j1), cols[1].dot(j1), cols[2].dot(j1));
@@ -136,10 +164,15 @@ pub fn project_one(scene: &Scene, camera: &Camera, i: usize) -> Option<Projected
 
 /// Projects every Gaussian; the result holds only those that draw something, in index order.
 pub fn project_all(scene: &Scene, camera: &Camera) -> Vec<ProjectedSplat> {
-    (0..scene.len()).filter_map(|i| project_one(scene, camera, i)).collect()
+    (0..scene.len())
+        .filter_map(|i| project_one(scene, camera, i))
+        .collect()
 }
 
 /// Tiles across and down for a camera's image.
 pub fn tile_grid(camera: &Camera) -> (u32, u32) {
-    (camera.width.div_ceil(TILE_SIZE), camera.height.div_ceil(TILE_SIZE))
+    (
+        camera.width.div_ceil(TILE_SIZE),
+        camera.height.div_ceil(TILE_SIZE),
+    )
 }

@@ -29,7 +29,12 @@ pub fn tile_lists(splats: &[ProjectedSplat], camera: &Camera) -> Vec<Vec<u32>> {
 }
 
 /// Composites one pixel front to back; returns the colour over `background`.
-pub fn composite_pixel(splats: &[ProjectedSplat], list: &[u32], pixel: Vec2, background: Vec3) -> Vec3 {
+pub fn composite_pixel(
+    splats: &[ProjectedSplat],
+    list: &[u32],
+    pixel: Vec2,
+    background: Vec3,
+) -> Vec3 {
     let mut color = Vec3::ZERO;
     let mut t = 1.0f32;
     for &k in list {
@@ -75,7 +80,8 @@ pub fn rasterize(splats: &[ProjectedSplat], camera: &Camera, background: Vec3) -
         for _ in 0..threads {
             scope.spawn(|| loop {
                 let b = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some((ty, band)) = bands.lock().unwrap().get_mut(b).and_then(Option::take) else {
+                let Some((ty, band)) = bands.lock().unwrap().get_mut(b).and_then(Option::take)
+                else {
                     break;
                 };
                 let ty = ty as u32;
@@ -86,7 +92,12 @@ pub fn rasterize(splats: &[ProjectedSplat], camera: &Camera, background: Vec3) -
                     }
                     for i in 0..w {
                         let list = &lists[(ty * gx + i / TILE_SIZE) as usize];
-                        let c = composite_pixel(splats, list, Vec2::new(i as f32, j as f32), background);
+                        let c = composite_pixel(
+                            splats,
+                            list,
+                            Vec2::new(i as f32, j as f32),
+                            background,
+                        );
                         let o = ((row * w + i) * 4) as usize;
                         band[o..o + 4].copy_from_slice(&to_rgba8(c));
                     }

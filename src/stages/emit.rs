@@ -32,11 +32,14 @@ pub struct Emit {
 impl Emit {
     /// Builds the kernel.
     pub fn new(ctx: &Context) -> Result<Self> {
-        Ok(Emit { pipeline: ComputePipeline::new::<EmitPush>(ctx, c"emit", shaders::EMIT)? })
+        Ok(Emit {
+            pipeline: ComputePipeline::new::<EmitPush>(ctx, c"emit", shaders::EMIT)?,
+        })
     }
 
     /// Records the emission for `count` Gaussians.
     pub fn record(&self, cmd: vk::CommandBuffer, push: &EmitPush, count: u32) {
-        self.pipeline.dispatch(cmd, push, [count.div_ceil(LINEAR_WORKGROUP), 1, 1]);
+        self.pipeline
+            .dispatch(cmd, push, [count.div_ceil(LINEAR_WORKGROUP), 1, 1]);
     }
 }

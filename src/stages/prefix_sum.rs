@@ -72,7 +72,11 @@ impl PrefixSum {
     /// Builds the kernels.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(PrefixSum {
-            prepare: ComputePipeline::new::<PreparePush>(ctx, c"scan_prepare", shaders::SCAN_PREPARE)?,
+            prepare: ComputePipeline::new::<PreparePush>(
+                ctx,
+                c"scan_prepare",
+                shaders::SCAN_PREPARE,
+            )?,
             reduce: ComputePipeline::new::<ReducePush>(ctx, c"scan_reduce", shaders::SCAN_REDUCE)?,
             block: ComputePipeline::new::<BlockPush>(ctx, c"scan_block", shaders::SCAN_BLOCK)?,
         })
@@ -82,7 +86,10 @@ impl PrefixSum {
     pub fn scratch(&self, ctx: &Context, capacity: u64) -> Result<PrefixSumScratch> {
         let block = SCAN_BLOCK as u64;
         let max = block.pow(SCAN_LEVELS);
-        assert!(capacity <= max, "prefix sum capacity {capacity} exceeds {max}");
+        assert!(
+            capacity <= max,
+            "prefix sum capacity {capacity} exceeds {max}"
+        );
         let mut level_offsets = Vec::new();
         let mut offset = PARTIALS_OFFSET;
         let mut n = capacity.max(1);
@@ -92,7 +99,11 @@ impl PrefixSum {
             offset += (n * 4).next_multiple_of(16);
         }
         let buffer = Buffer::new(ctx, "prefix sum scratch", offset, MemoryLocation::GpuOnly)?;
-        Ok(PrefixSumScratch { buffer, capacity, level_offsets })
+        Ok(PrefixSumScratch {
+            buffer,
+            capacity,
+            level_offsets,
+        })
     }
 
     /// Records an in-place exclusive scan of the `u32` array at device address `data`, whose
@@ -117,12 +128,21 @@ impl PrefixSum {
             .collect();
         let top = levels.len() - 1;
 
-        let push = PreparePush { count, level_sizes: base, args: base + ARGS_OFFSET };
+        let push = PreparePush {
+            count,
+            level_sizes: base,
+            args: base + ARGS_OFFSET,
+        };
         self.prepare.dispatch(cmd, &push, [1, 1, 1]);
         compute_barrier(ctx, cmd);
         for l in 0..top {
-            let push = ReducePush { data: levels[l], count: sizes(l), partials: levels[l + 1] };
-            self.reduce.dispatch_indirect(cmd, &push, scratch.buffer.raw, args_offset(l));
+            let push = ReducePush {
+                data: levels[l],
+                count: sizes(l),
+                partials: levels[l + 1],
+            };
+            self.reduce
+                .dispatch_indirect(cmd, &push, scratch.buffer.raw, args_offset(l));
             compute_barrier(ctx, cmd);
         }
         let push = BlockPush {
@@ -144,7 +164,8 @@ impl PrefixSum {
                 flags: SCAN_ADD_OFFSETS,
                 pad: 0,
             };
-            self.block.dispatch_indirect(cmd, &push, scratch.buffer.raw, args_offset(l));
+            self.block
+                .dispatch_indirect(cmd, &push, scratch.buffer.raw, args_offset(l));
             compute_barrier(ctx, cmd);
         }
     }

@@ -34,11 +34,14 @@ pub struct Project {
 impl Project {
     /// Builds the kernel.
     pub fn new(ctx: &Context) -> Result<Self> {
-        Ok(Project { pipeline: ComputePipeline::new::<ProjectPush>(ctx, c"project", shaders::PROJECT)? })
+        Ok(Project {
+            pipeline: ComputePipeline::new::<ProjectPush>(ctx, c"project", shaders::PROJECT)?,
+        })
     }
 
     /// Records the projection of `count` Gaussians.
     pub fn record(&self, cmd: vk::CommandBuffer, push: &ProjectPush, count: u32) {
-        self.pipeline.dispatch(cmd, push, [count.div_ceil(LINEAR_WORKGROUP), 1, 1]);
+        self.pipeline
+            .dispatch(cmd, push, [count.div_ceil(LINEAR_WORKGROUP), 1, 1]);
     }
 }

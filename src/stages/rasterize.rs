@@ -43,16 +43,26 @@ pub struct Rasterize {
 impl Rasterize {
     /// Builds the kernel.
     pub fn new(ctx: &Context) -> Result<Self> {
-        Ok(Rasterize { pipeline: ComputePipeline::new::<RasterizePush>(ctx, c"rasterize", shaders::RASTERIZE)? })
+        Ok(Rasterize {
+            pipeline: ComputePipeline::new::<RasterizePush>(ctx, c"rasterize", shaders::RASTERIZE)?,
+        })
     }
 
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
     /// entries of every tile list.
-    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, push: &RasterizePush, tiles: (u32, u32), rounds: u32) {
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        push: &RasterizePush,
+        tiles: (u32, u32),
+        rounds: u32,
+    ) {
         for round in 0..rounds {
             let mut p = *push;
             p.round_index = round;
-            p.flags = if round == 0 { ROUND_FIRST } else { 0 } | if round + 1 == rounds { ROUND_LAST } else { 0 };
+            p.flags = if round == 0 { ROUND_FIRST } else { 0 }
+                | if round + 1 == rounds { ROUND_LAST } else { 0 };
             self.pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]);
             if round + 1 < rounds {
                 compute_barrier(ctx, cmd);

@@ -93,9 +93,17 @@ impl RadixSort {
     /// Builds the kernels.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(RadixSort {
-            prepare: ComputePipeline::new::<PreparePush>(ctx, c"sort_prepare", shaders::SORT_PREPARE)?,
+            prepare: ComputePipeline::new::<PreparePush>(
+                ctx,
+                c"sort_prepare",
+                shaders::SORT_PREPARE,
+            )?,
             count: ComputePipeline::new::<CountPush>(ctx, c"sort_count", shaders::SORT_COUNT)?,
-            scatter: ComputePipeline::new::<ScatterPush>(ctx, c"sort_scatter", shaders::SORT_SCATTER)?,
+            scatter: ComputePipeline::new::<ScatterPush>(
+                ctx,
+                c"sort_scatter",
+                shaders::SORT_SCATTER,
+            )?,
             scan: PrefixSum::new(ctx)?,
         })
     }
@@ -115,7 +123,12 @@ impl RadixSort {
                 Buffer::new(ctx, "sort values A", capacity * 4, gpu)?,
                 Buffer::new(ctx, "sort values B", capacity * 4, gpu)?,
             ],
-            info: Buffer::new(ctx, "sort info + histograms", SORT_HIST_OFFSET + hist_len * 4, gpu)?,
+            info: Buffer::new(
+                ctx,
+                "sort info + histograms",
+                SORT_HIST_OFFSET + hist_len * 4,
+                gpu,
+            )?,
             scan: self.scan.scratch(ctx, hist_len)?,
             capacity,
         })
@@ -125,19 +138,39 @@ impl RadixSort {
     /// `u32` at device address `count`, clamped to the capacity. Only the low `key_bits` bits
     /// of the keys are sorted. Returns the index (0 or 1) of the buffers holding the result.
     /// Ends with a barrier.
-    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, bufs: &SortBuffers, count: u64, key_bits: u32) -> usize {
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        bufs: &SortBuffers,
+        count: u64,
+        key_bits: u32,
+    ) -> usize {
         let info = bufs.info.address;
         let hist = info + SORT_HIST_OFFSET;
-        let push = PreparePush { count, info, capacity: bufs.capacity.min(u32::MAX as u64) as u32, pad: 0 };
+        let push = PreparePush {
+            count,
+            info,
+            capacity: bufs.capacity.min(u32::MAX as u64) as u32,
+            pad: 0,
+        };
         self.prepare.dispatch(cmd, &push, [1, 1, 1]);
         compute_barrier(ctx, cmd);
         let mut src = 0;
         for pass in 0..passes_for(key_bits) {
             let shift = pass * SORT_RADIX_BITS;
-            let push = CountPush { keys: bufs.keys[src].address, info, hist, shift, pad: 0 };
-            self.count.dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
+            let push = CountPush {
+                keys: bufs.keys[src].address,
+                info,
+                hist,
+                shift,
+                pad: 0,
+            };
+            self.count
+                .dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
-            self.scan.record(ctx, cmd, hist, info + HIST_LEN_OFFSET, None, &bufs.scan);
+            self.scan
+                .record(ctx, cmd, hist, info + HIST_LEN_OFFSET, None, &bufs.scan);
             let push = ScatterPush {
                 keys_in: bufs.keys[src].address,
                 values_in: bufs.values[src].address,
@@ -148,7 +181,8 @@ impl RadixSort {
                 shift,
                 pad: 0,
             };
-            self.scatter.dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
+            self.scatter
+                .dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             src = 1 - src;
         }
@@ -157,13 +191,22 @@ impl RadixSort {
 
     /// Sorts `keys` with their `values` on the GPU (upload, sort, read back), comparing only the
     /// low `key_bits` bits. Stable: equal keys keep their input order.
-    pub fn sort_pairs(&self, ctx: &Context, keys: &[u64], values: &[u32], key_bits: u32) -> Result<(Vec<u64>, Vec<u32>)> {
+    pub fn sort_pairs(
+        &self,
+        ctx: &Context,
+        keys: &[u64],
+        values: &[u32],
+        key_bits: u32,
+    ) -> Result<(Vec<u64>, Vec<u32>)> {
         assert_eq!(keys.len(), values.len(), "one value per key");
         let bufs = self.buffers(ctx, keys.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(keys))?;
         bufs.values[0].upload(bytemuck::cast_slice(values))?;
         let count = Buffer::from_slice(ctx, "sort count", &[keys.len() as u32])?;
         let out = ctx.run_commands(|cmd| self.record(ctx, cmd, &bufs, count.address, key_bits))?;
-        Ok((bufs.keys[out].download_as(keys.len())?, bufs.values[out].download_as(values.len())?))
+        Ok((
+            bufs.keys[out].download_as(keys.len())?,
+            bufs.values[out].download_as(values.len())?,
+        ))
     }
 }

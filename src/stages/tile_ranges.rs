@@ -28,11 +28,18 @@ pub struct TileRanges {
 impl TileRanges {
     /// Builds the kernel.
     pub fn new(ctx: &Context) -> Result<Self> {
-        Ok(TileRanges { pipeline: ComputePipeline::new::<TileRangesPush>(ctx, c"tile_ranges", shaders::TILE_RANGES)? })
+        Ok(TileRanges {
+            pipeline: ComputePipeline::new::<TileRangesPush>(
+                ctx,
+                c"tile_ranges",
+                shaders::TILE_RANGES,
+            )?,
+        })
     }
 
     /// Records the kernel, one invocation per sorted pair (indirect, from the sort's info).
     pub fn record(&self, cmd: vk::CommandBuffer, push: &TileRangesPush, sort_info: &Buffer) {
-        self.pipeline.dispatch_indirect(cmd, push, sort_info.raw, LINEAR_ARGS_OFFSET);
+        self.pipeline
+            .dispatch_indirect(cmd, push, sort_info.raw, LINEAR_ARGS_OFFSET);
     }
 }

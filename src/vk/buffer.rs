@@ -57,22 +57,34 @@ impl Buffer {
                 });
             }
         };
-        let bind = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        let bind =
+            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
         if let Err(e) = bind {
             let _ = ctx.allocator().free(allocation);
             unsafe { device.destroy_buffer(raw, None) };
-            return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
+            return Err(Error::Vulkan {
+                call: "vkBindBufferMemory",
+                result: e,
+            });
         }
         let address = unsafe {
             device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
         };
         if let Some(debug) = &ctx.shared.debug_device {
             if let Ok(cname) = std::ffi::CString::new(name) {
-                let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(raw).object_name(&cname);
+                let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                    .object_handle(raw)
+                    .object_name(&cname);
                 let _ = unsafe { debug.set_debug_utils_object_name(&info) };
             }
         }
-        Ok(Buffer { raw, size, address, allocation: Some(allocation), ctx: ctx.clone() })
+        Ok(Buffer {
+            raw,
+            size,
+            address,
+            allocation: Some(allocation),
+            ctx: ctx.clone(),
+        })
     }
 
     /// A device-local buffer holding `data`, uploaded through a staging buffer.
@@ -88,13 +100,26 @@ impl Buffer {
         if bytes.is_empty() {
             return Ok(());
         }
-        assert!(bytes.len() as u64 <= self.size, "upload larger than the buffer");
-        let mut staging =
-            Buffer::new(&self.ctx, "staging (upload)", bytes.len() as u64, MemoryLocation::CpuToGpu)?;
+        assert!(
+            bytes.len() as u64 <= self.size,
+            "upload larger than the buffer"
+        );
+        let mut staging = Buffer::new(
+            &self.ctx,
+            "staging (upload)",
+            bytes.len() as u64,
+            MemoryLocation::CpuToGpu,
+        )?;
         staging.mapped_mut()[..bytes.len()].copy_from_slice(bytes);
         self.ctx.run_commands(|cmd| unsafe {
-            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len() as u64 };
-            self.ctx.device().cmd_copy_buffer(cmd, staging.raw, self.raw, &[region]);
+            let region = vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: bytes.len() as u64,
+            };
+            self.ctx
+                .device()
+                .cmd_copy_buffer(cmd, staging.raw, self.raw, &[region]);
         })
     }
 
@@ -104,10 +129,21 @@ impl Buffer {
         if len == 0 {
             return Ok(Vec::new());
         }
-        let readback = Buffer::new(&self.ctx, "staging (readback)", len, MemoryLocation::GpuToCpu)?;
+        let readback = Buffer::new(
+            &self.ctx,
+            "staging (readback)",
+            len,
+            MemoryLocation::GpuToCpu,
+        )?;
         self.ctx.run_commands(|cmd| unsafe {
-            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: len };
-            self.ctx.device().cmd_copy_buffer(cmd, self.raw, readback.raw, &[region]);
+            let region = vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: len,
+            };
+            self.ctx
+                .device()
+                .cmd_copy_buffer(cmd, self.raw, readback.raw, &[region]);
         })?;
         Ok(readback.mapped()[..len as usize].to_vec())
     }
@@ -120,7 +156,10 @@ impl Buffer {
 
     /// The host mapping of a `CpuToGpu`/`GpuToCpu` buffer. Panics for unmapped memory.
     pub fn mapped(&self) -> &[u8] {
-        self.allocation.as_ref().and_then(|a| a.mapped_slice()).expect("buffer is not host-mapped")
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .expect("buffer is not host-mapped")
     }
 
     /// Mutable host mapping; see [`Buffer::mapped`].

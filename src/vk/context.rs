@@ -54,7 +54,10 @@ impl ContextDesc {
 
 impl Default for ContextDesc {
     fn default() -> Self {
-        ContextDesc { validation: Validation::Off, device_name: None }
+        ContextDesc {
+            validation: Validation::Off,
+            device_name: None,
+        }
     }
 }
 
@@ -80,6 +83,8 @@ pub struct DeviceInfo {
 pub(crate) struct ContextShared {
     _entry: ash::Entry,
     pub(crate) instance: ash::Instance,
+    /// Kept for the engine-facing API (requirements checks, borrowed contexts).
+    #[allow(dead_code)]
     pub(crate) physical_device: vk::PhysicalDevice,
     pub(crate) device: ash::Device,
     pub(crate) queue: vk::Queue,
@@ -112,7 +117,9 @@ unsafe extern "system" fn debug_callback(
     let text = if data.is_null() || (*data).p_message.is_null() {
         String::from("(no message)")
     } else {
-        CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
+        CStr::from_ptr((*data).p_message)
+            .to_string_lossy()
+            .into_owned()
     };
     let text = format!("[{severity:?}] {text}");
     eprintln!("rara: Vulkan validation: {text}");
@@ -160,19 +167,26 @@ impl Context {
         };
         let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
             .vk("vkEnumerateInstanceExtensionProperties")?;
-        let has_debug_utils = extensions
-            .iter()
-            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::debug_utils::NAME));
+        let has_debug_utils = extensions.iter().any(|e| {
+            e.extension_name_as_c_str()
+                .is_ok_and(|n| n == ash::ext::debug_utils::NAME)
+        });
 
         let app_name = CString::new("rara").unwrap();
         let app = vk::ApplicationInfo::default()
             .application_name(&app_name)
             .engine_name(&app_name)
             .api_version(vk::API_VERSION_1_2);
-        let layer_ptrs: Vec<*const i8> =
-            if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
-        let ext_ptrs: Vec<*const i8> =
-            if has_debug_utils { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+        let layer_ptrs: Vec<*const i8> = if validation {
+            vec![VALIDATION_LAYER.as_ptr()]
+        } else {
+            vec![]
+        };
+        let ext_ptrs: Vec<*const i8> = if has_debug_utils {
+            vec![ash::ext::debug_utils::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
         let instance_info = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layer_ptrs)
@@ -198,7 +212,10 @@ impl Context {
                 Ok(m) => Some((loader, m)),
                 Err(e) => {
                     unsafe { instance.destroy_instance(None) };
-                    return Err(Error::Vulkan { call: "vkCreateDebugUtilsMessengerEXT", result: e });
+                    return Err(Error::Vulkan {
+                        call: "vkCreateDebugUtilsMessengerEXT",
+                        result: e,
+                    });
                 }
             }
         } else {
@@ -217,7 +234,10 @@ impl Context {
         desc: &ContextDesc,
         has_debug_utils: bool,
     ) -> Result<Self> {
-        let destroy_instance = |debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| unsafe {
+        let destroy_instance = |debug: &Option<(
+            ash::ext::debug_utils::Instance,
+            vk::DebugUtilsMessengerEXT,
+        )>| unsafe {
             if let Some((loader, m)) = debug {
                 loader.destroy_debug_utils_messenger(*m, None);
             }
@@ -252,7 +272,10 @@ impl Context {
             Ok(d) => d,
             Err(e) => {
                 destroy_instance(&debug);
-                return Err(Error::Vulkan { call: "vkCreateDevice", result: e });
+                return Err(Error::Vulkan {
+                    call: "vkCreateDevice",
+                    result: e,
+                });
             }
         };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -270,16 +293,19 @@ impl Context {
             Err(e) => {
                 unsafe { device.destroy_device(None) };
                 destroy_instance(&debug);
-                return Err(Error::Allocation { what: "the allocator".into(), source: e });
+                return Err(Error::Allocation {
+                    what: "the allocator".into(),
+                    source: e,
+                });
             }
         };
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let upload_pool = unsafe { device.create_command_pool(&pool_info, None) }
-            .vk("vkCreateCommandPool")?;
-        let debug_device = has_debug_utils
-            .then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let upload_pool =
+            unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        let debug_device =
+            has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
 
         Ok(Context {
             shared: Arc::new(ContextShared {
@@ -341,8 +367,8 @@ impl Context {
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        let cmd = unsafe { device.allocate_command_buffers(&alloc) }
-            .vk("vkAllocateCommandBuffers")?[0];
+        let cmd =
+            unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let result = (|| {
             let begin = vk::CommandBufferBeginInfo::default()
                 .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
@@ -392,7 +418,8 @@ impl Drop for ContextShared {
     fn drop(&mut self) {
         unsafe {
             let _ = self.device.device_wait_idle();
-            self.device.destroy_command_pool(*self.upload_pool.get_mut().unwrap(), None);
+            self.device
+                .destroy_command_pool(*self.upload_pool.get_mut().unwrap(), None);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             if let Some((loader, messenger)) = &self.debug {
@@ -413,7 +440,10 @@ fn choose_physical_device(
     let mut rejected = Vec::new();
     for pd in devices {
         let props = unsafe { instance.get_physical_device_properties(pd) };
-        let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = props
+            .device_name_as_c_str()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         if let Some(wanted) = wanted_name {
             if !name.to_lowercase().contains(&wanted.to_lowercase()) {
                 rejected.push(format!("{name} (name does not match RARA_DEVICE={wanted})"));
@@ -421,14 +451,20 @@ fn choose_physical_device(
             }
         }
         if props.api_version < vk::API_VERSION_1_2 {
-            rejected.push(format!("{name} (Vulkan {}.{} < 1.2)", vk::api_version_major(props.api_version), vk::api_version_minor(props.api_version)));
+            rejected.push(format!(
+                "{name} (Vulkan {}.{} < 1.2)",
+                vk::api_version_major(props.api_version),
+                vk::api_version_minor(props.api_version)
+            ));
             continue;
         }
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
         unsafe { instance.get_physical_device_features2(pd, &mut f2) };
         if f12.buffer_device_address != vk::TRUE || f12.host_query_reset != vk::TRUE {
-            rejected.push(format!("{name} (lacks bufferDeviceAddress or hostQueryReset)"));
+            rejected.push(format!(
+                "{name} (lacks bufferDeviceAddress or hostQueryReset)"
+            ));
             continue;
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
@@ -455,14 +491,25 @@ fn choose_physical_device(
 fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut subgroup);
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut driver)
+        .push_next(&mut subgroup);
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-    let driver_name = driver.driver_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
-    let driver_info = driver.driver_info_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+    let driver_name = driver
+        .driver_name_as_c_str()
+        .map(|c| c.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let driver_info = driver
+        .driver_info_as_c_str()
+        .map(|c| c.to_string_lossy().into_owned())
+        .unwrap_or_default();
     DeviceInfo {
-        name: props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        name: props
+            .device_name_as_c_str()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         device_type: props.device_type,
         driver: format!("{driver_name} {driver_info}").trim().to_owned(),
         timestamp_period_ns: props.limits.timestamp_period,

@@ -20,11 +20,15 @@ pub struct ComputePipeline {
 
 impl ComputePipeline {
     /// Builds a pipeline from embedded SPIR-V with a push-constant block of `P`.
-    pub fn new<P: bytemuck::Pod>(ctx: &Context, name: &'static CStr, spirv: &[u32]) -> Result<Self> {
+    pub fn new<P: bytemuck::Pod>(
+        ctx: &Context,
+        name: &'static CStr,
+        spirv: &[u32],
+    ) -> Result<Self> {
         let device = ctx.device();
         let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
-        let module =
-            unsafe { device.create_shader_module(&module_info, None) }.vk("vkCreateShaderModule")?;
+        let module = unsafe { device.create_shader_module(&module_info, None) }
+            .vk("vkCreateShaderModule")?;
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .offset(0)
@@ -41,7 +45,9 @@ impl ComputePipeline {
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
-        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout)];
         let pipelines =
             unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
         unsafe { device.destroy_shader_module(module, None) };
@@ -52,7 +58,12 @@ impl ComputePipeline {
                 return Err(e).vk("vkCreateComputePipelines");
             }
         };
-        Ok(ComputePipeline { raw, layout, name, ctx: ctx.clone() })
+        Ok(ComputePipeline {
+            raw,
+            layout,
+            name,
+            ctx: ctx.clone(),
+        })
     }
 
     fn bind(&self, cmd: vk::CommandBuffer, push: &[u8]) {
@@ -69,7 +80,11 @@ impl ComputePipeline {
             return;
         }
         self.bind(cmd, bytemuck::bytes_of(push));
-        unsafe { self.ctx.device().cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_dispatch(cmd, groups[0], groups[1], groups[2])
+        };
     }
 
     /// Records an indirect dispatch whose workgroup counts the GPU wrote at `args`+`offset`.

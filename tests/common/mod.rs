@@ -9,8 +9,11 @@ use rara::vk::{Context, ContextDesc, Validation};
 
 /// A headless context with the validation layer on whenever it is installed.
 pub fn context() -> Context {
-    let ctx = Context::headless(&ContextDesc { validation: Validation::IfAvailable, device_name: std::env::var("RARA_DEVICE").ok() })
-        .expect("Vulkan context (is mesa-vulkan-drivers installed?)");
+    let ctx = Context::headless(&ContextDesc {
+        validation: Validation::IfAvailable,
+        device_name: std::env::var("RARA_DEVICE").ok(),
+    })
+    .expect("Vulkan context (is mesa-vulkan-drivers installed?)");
     if !ctx.validation_enabled() {
         eprintln!("note: the validation layer is not installed; running without it");
     }
@@ -20,7 +23,12 @@ pub fn context() -> Context {
 /// Fails the calling test when the validation layer reported anything.
 pub fn assert_no_validation_messages(ctx: &Context) {
     let messages = ctx.take_validation_messages();
-    assert!(messages.is_empty(), "validation layer reported {} message(s):\n{}", messages.len(), messages.join("\n"));
+    assert!(
+        messages.is_empty(),
+        "validation layer reported {} message(s):\n{}",
+        messages.len(),
+        messages.join("\n")
+    );
 }
 
 /// The folder of real scenes: `$RARA_REAL_DATA`, else `../shared/data/real` beside the crate.
@@ -39,7 +47,10 @@ pub fn real_scene(stem: &str) -> Option<(PathBuf, Option<PathBuf>)> {
     };
     let ply = dir.join(format!("{stem}.ply"));
     if !ply.is_file() {
-        eprintln!("real-scene case '{stem}' SKIPPED: {} is missing", ply.display());
+        eprintln!(
+            "real-scene case '{stem}' SKIPPED: {} is missing",
+            ply.display()
+        );
         return None;
     }
     let cams = dir.join(format!("{stem}.orbit_cameras.json"));
@@ -54,14 +65,27 @@ pub fn artifacts_dir() -> PathBuf {
 }
 
 /// Compares `actual` to `expected`; on failure of the bounds writes both and a diff map.
-pub fn check_images(name: &str, actual: &image::RgbaImage, expected: &image::RgbaImage, min_psnr: f64, max_diff: u8) -> ImageDiff {
+pub fn check_images(
+    name: &str,
+    actual: &image::RgbaImage,
+    expected: &image::RgbaImage,
+    min_psnr: f64,
+    max_diff: u8,
+) -> ImageDiff {
     let d = compare(actual, expected);
-    eprintln!("{name}: PSNR {:.2} dB, max diff {}, L1 {:.4}, differing pixels {}", d.psnr, d.max_diff, d.l1, d.differing_pixels);
+    eprintln!(
+        "{name}: PSNR {:.2} dB, max diff {}, L1 {:.4}, differing pixels {}",
+        d.psnr, d.max_diff, d.l1, d.differing_pixels
+    );
     if d.psnr < min_psnr || d.max_diff > max_diff {
         let dir = artifacts_dir();
         actual.save(dir.join(format!("{name}_actual.png"))).unwrap();
-        expected.save(dir.join(format!("{name}_expected.png"))).unwrap();
-        diff_image(actual, expected).save(dir.join(format!("{name}_diff.png"))).unwrap();
+        expected
+            .save(dir.join(format!("{name}_expected.png")))
+            .unwrap();
+        diff_image(actual, expected)
+            .save(dir.join(format!("{name}_diff.png")))
+            .unwrap();
         panic!(
             "{name}: PSNR {:.2} dB (need >= {min_psnr}), max diff {} (need <= {max_diff}); images in {}",
             d.psnr,

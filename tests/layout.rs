@@ -1,0 +1,127 @@
+//! Host struct layouts against what the compiled SPIR-V says, and spirv-val on every kernel.
+
+use std::mem::offset_of;
+
+use rara::gpu_types::{GpuFrameParams, GpuGaussian, GpuProjectedSplat, GpuSortInfo};
+use rara::shaders;
+
+/// Member offsets of the struct type named `name` in a SPIR-V module (from OpName and
+/// OpMemberDecorate ... Offset).
+fn member_offsets(words: &[u32], name: &str) -> Vec<u32> {
+    let mut ids = Vec::new();
+    let mut offsets: Vec<(u32, u32, u32)> = Vec::new();
+    let mut i = 5;
+    while i < words.len() {
+        let (count, opcode) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+        let ops = &words[i + 1..i + count];
+        match opcode {
+            5 => {
+                // OpName: target id, then a nul-terminated string.
+                let bytes: Vec<u8> = ops[1..].iter().flat_map(|w| w.to_le_bytes()).collect();
+                let s = String::from_utf8_lossy(
+                    &bytes[..bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len())],
+                )
+                .into_owned();
+                if s == name {
+                    ids.push(ops[0]);
+                }
+            }
+            72 if ops[2] == 35 => offsets.push((ops[0], ops[1], ops[3])), // OpMemberDecorate Offset
+            _ => {}
+        }
+        i += count.max(1);
+    }
+    let id = ids
+        .into_iter()
+        .find(|id| offsets.iter().any(|o| o.0 == *id))
+        .unwrap_or_else(|| panic!("struct {name} not found"));
+    let mut members: Vec<(u32, u32)> = offsets
+        .iter()
+        .filter(|o| o.0 == id)
+        .map(|o| (o.1, o.2))
+        .collect();
+    members.sort();
+    members.into_iter().map(|m| m.1).collect()
+}
+
+#[test]
+fn gpu_struct_layouts_match_spirv() {
+    let projected = [
+        offset_of!(GpuProjectedSplat, uv),
+        offset_of!(GpuProjectedSplat, depth),
+        offset_of!(GpuProjectedSplat, opacity),
+        offset_of!(GpuProjectedSplat, conic),
+        offset_of!(GpuProjectedSplat, cutoff),
+        offset_of!(GpuProjectedSplat, color),
+        offset_of!(GpuProjectedSplat, pad),
+        offset_of!(GpuProjectedSplat, rect),
+    ];
+    let got = member_offsets(shaders::PROJECT, "ProjectedSplat");
+    assert_eq!(got, projected.map(|o| o as u32), "ProjectedSplat");
+    let gaussian = [
+        offset_of!(GpuGaussian, pos_opacity),
+        offset_of!(GpuGaussian, rot),
+        offset_of!(GpuGaussian, scale),
+    ];
+    assert_eq!(
+        member_offsets(shaders::PROJECT, "Gaussian"),
+        gaussian.map(|o| o as u32),
+        "Gaussian"
+    );
+    let frame = [
+        offset_of!(GpuFrameParams, world_to_cam),
+        offset_of!(GpuFrameParams, world_to_cam) + 16,
+        offset_of!(GpuFrameParams, world_to_cam) + 32,
+        offset_of!(GpuFrameParams, cam_pos),
+        offset_of!(GpuFrameParams, focal),
+        offset_of!(GpuFrameParams, background),
+        offset_of!(GpuFrameParams, size),
+        offset_of!(GpuFrameParams, scene),
+    ];
+    assert_eq!(
+        member_offsets(shaders::PROJECT, "FrameParams"),
+        frame.map(|o| o as u32),
+        "FrameParams"
+    );
+    let sort = [
+        offset_of!(GpuSortInfo, num_keys),
+        offset_of!(GpuSortInfo, num_blocks),
+        offset_of!(GpuSortInfo, hist_len),
+        offset_of!(GpuSortInfo, pad),
+        offset_of!(GpuSortInfo, block_args),
+        offset_of!(GpuSortInfo, linear_args),
+    ];
+    assert_eq!(
+        member_offsets(shaders::SORT_PREPARE, "SortInfo"),
+        sort.map(|o| o as u32),
+        "SortInfo"
+    );
+}
+
+#[test]
+fn every_kernel_passes_spirv_val() {
+    let Ok(out) = std::process::Command::new("spirv-val")
+        .arg("--version")
+        .output()
+    else {
+        eprintln!("spirv-val not installed (apt-get install spirv-tools): skipped");
+        return;
+    };
+    assert!(out.status.success());
+    let dir = std::env::temp_dir().join(format!("rara-spirv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, words) in shaders::ALL_KERNELS {
+        let path = dir.join(format!("{name}.spv"));
+        std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(words)).unwrap();
+        let out = std::process::Command::new("spirv-val")
+            .args(["--target-env", "vulkan1.2"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
