@@ -8,4 +8,10 @@ cd "$(dirname "$0")/.."
 . scripts/setup.sh
 data="${RARA_REAL_DATA:-../shared/data/real}"
 if [ -d "$data" ]; then echo "real scenes: $data"; else echo "real scenes: none at $data (those cases are skipped)"; fi
-cargo test --release "$@" -- --show-output
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+status=0
+cargo test --release "$@" -- --show-output 2>&1 | tee "$log" || status=$?
+# One closing line over all test binaries (cargo prints one summary per binary).
+awk '/^test result:/ { p += $4; f += $6; i += $8 } END { printf "all tests: %d passed, %d failed, %d skipped\n", p, f, i }' "$log"
+exit "$status"

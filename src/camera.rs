@@ -66,6 +66,17 @@ impl Camera {
 
     /// A camera at `eye` looking at `target`, with `up` pointing up in the image and a vertical
     /// field of view of `fov_y_deg` degrees (square pixels).
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// let cam = rara::Camera::look_at(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO, Vec3::NEG_Y, 50.0, 640, 480).unwrap();
+    /// // The target projects to the principal point (W/2 - 0.5, H/2 - 0.5).
+    /// let t = cam.to_camera(Vec3::ZERO);
+    /// let u = cam.fx * t.x / t.z + cam.principal_point().0;
+    /// assert!((u - 319.5).abs() < 1e-4);
+    /// // World up (-Y) is up in the image: camera y points down.
+    /// assert!(cam.to_camera(Vec3::new(0.0, -1.0, 0.0)).y < 0.0);
+    /// ```
     pub fn look_at(
         eye: Vec3,
         target: Vec3,

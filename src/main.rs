@@ -29,6 +29,19 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Compare two images: L1 (mean absolute difference, 8-bit units), PSNR (dB), SSIM.
+    Compare {
+        /// First image.
+        a: PathBuf,
+        /// Second image.
+        b: PathBuf,
+        /// Write a heat map of the per-pixel difference here.
+        #[arg(long)]
+        diff: Option<PathBuf>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Render the built-in demo scene from a few views and write PNGs.
     Demo {
         /// Output directory.
@@ -352,11 +365,57 @@ fn cmd_demo(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+fn load_png(path: &Path) -> Result<image::RgbaImage> {
+    Ok(image::open(path)
+        .map_err(|source| Error::Image {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .to_rgba8())
+}
+
+fn cmd_compare(a: &Path, b: &Path, diff: Option<&Path>, json: bool) -> Result<()> {
+    let (ia, ib) = (load_png(a)?, load_png(b)?);
+    if ia.dimensions() != ib.dimensions() {
+        return Err(Error::InvalidInput(format!(
+            "{} is {}x{} but {} is {}x{}",
+            a.display(),
+            ia.width(),
+            ia.height(),
+            b.display(),
+            ib.width(),
+            ib.height()
+        )));
+    }
+    let d = rara::metrics::compare(&ia, &ib);
+    let ssim = rara::metrics::ssim(&ia, &ib);
+    if let Some(path) = diff {
+        save_png(&rara::metrics::diff_image(&ia, &ib), path)?;
+    }
+    // JSON has no infinity: identical images report a PSNR of null.
+    let psnr = d.psnr.is_finite().then_some(d.psnr);
+    if json {
+        let v = serde_json::json!({"l1": d.l1, "psnr": psnr, "ssim": ssim, "max_diff": d.max_diff, "differing_pixels": d.differing_pixels});
+        println!("{v}");
+    } else {
+        println!(
+            "L1 {:.4}  PSNR {}  SSIM {:.6}  max diff {}  differing pixels {}",
+            d.l1,
+            psnr.map_or("inf".into(), |p| format!("{p:.2} dB")),
+            ssim,
+            d.max_diff,
+            d.differing_pixels
+        );
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Info { scene, json } => cmd_info(scene, *json),
+        Command::Compare { a, b, diff, json } => cmd_compare(a, b, diff.as_deref(), *json),
         Command::Demo { output } => cmd_demo(output),
     };
     match result {

@@ -276,3 +276,45 @@ fn demo_writes_pngs() {
         .count();
     assert!(pngs >= 4);
 }
+
+#[test]
+fn compare_reports_metrics() {
+    let a = dir().join("cmp_a.png");
+    let b = dir().join("cmp_b.png");
+    image::RgbaImage::from_pixel(30, 20, image::Rgba([100, 100, 100, 255]))
+        .save(&a)
+        .unwrap();
+    image::RgbaImage::from_pixel(30, 20, image::Rgba([104, 100, 100, 255]))
+        .save(&b)
+        .unwrap();
+    let diff = dir().join("cmp_diff.png");
+    let o = rara(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--json",
+        "--diff",
+        diff.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["l1"].as_f64().unwrap() - 4.0 / 3.0).abs() < 1e-9);
+    assert_eq!(v["max_diff"], 4);
+    assert!(v["ssim"].as_f64().unwrap() < 1.0);
+    assert!(diff.is_file());
+    let o = rara(&[
+        "compare",
+        a.to_str().unwrap(),
+        a.to_str().unwrap(),
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["ssim"], 1.0);
+    assert!(v["psnr"].is_null());
+    let small = dir().join("cmp_small.png");
+    image::RgbaImage::new(3, 3).save(&small).unwrap();
+    assert_error(
+        &rara(&["compare", a.to_str().unwrap(), small.to_str().unwrap()]),
+        &["30x20", "3x3"],
+    );
+}

@@ -293,3 +293,70 @@ fn validation_messages_are_caught() {
         "the validation layer did not report a misaligned vkCmdFillBuffer"
     );
 }
+
+/// More tile pairs than the intersection buffers first hold: the frame detects it, the buffers
+/// grow and the frame is rendered again, with nothing truncated.
+#[test]
+fn intersection_overflow_grows_and_rerenders() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let mut scene = Scene {
+        sh_degree: 0,
+        ..Default::default()
+    };
+    let mut rng = rara::synth::Rng::new(5);
+    for _ in 0..3000 {
+        let p = Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        let c = [
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        ];
+        scene.push(
+            p,
+            0.05,
+            Vec3::splat(rng.range(0.2, 0.5)),
+            rng.rotation(),
+            &c,
+        );
+    }
+    let cam = Camera::look_at(
+        Vec3::new(0.0, -0.5, -4.0),
+        Vec3::ZERO,
+        Vec3::NEG_Y,
+        50.0,
+        256,
+        256,
+    )
+    .unwrap();
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let (gpu, stats) = renderer
+        .render(&gpu_scene, &cam, &RenderOptions::default())
+        .unwrap();
+    assert!(
+        stats.intersections > 1 << 16,
+        "only {} intersections: the case does not overflow",
+        stats.intersections
+    );
+    assert!(
+        stats.rerenders >= 1,
+        "the first frame should have overflowed"
+    );
+    common::check_images(
+        "overflow",
+        &gpu,
+        &reference::render(&scene, &cam, Vec3::ZERO),
+        50.0,
+        4,
+    );
+    // The grown buffers are kept: the next frame fits at once.
+    let (_, again) = renderer
+        .render(&gpu_scene, &cam, &RenderOptions::default())
+        .unwrap();
+    assert_eq!(again.rerenders, 0);
+    common::assert_no_validation_messages(&ctx);
+}
