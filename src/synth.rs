@@ -129,3 +129,140 @@ pub fn demo_scene() -> Scene {
     }
     scene
 }
+
+/// Kinds of scene `rara synth` makes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SynthKind {
+    /// A unit sphere of isotropic Gaussians ([`shell`]).
+    Shell,
+    /// Strands of needle-like Gaussians ([`hair`]).
+    Hair,
+    /// Nested closed surfaces ([`layers`]).
+    Layers,
+}
+
+/// Makes a scene of `kind` with about `count` Gaussians.
+pub fn generate(kind: SynthKind, count: usize, sh_degree: u32, seed: u64) -> Scene {
+    match kind {
+        SynthKind::Shell => shell(count, sh_degree, seed),
+        SynthKind::Hair => hair(count, sh_degree, seed),
+        SynthKind::Layers => layers(count, sh_degree, seed),
+    }
+}
+
+/// Hair: strands rooted on the upper half of a unit "scalp" sphere that leave along the
+/// normal and bend down under gravity, each strand a chain of highly anisotropic Gaussians
+/// (length/width = 30) along its smooth curve, as in strand-based hair reconstructions.
+pub fn hair(count: usize, sh_degree: u32, seed: u64) -> Scene {
+    const SEGMENTS: usize = 16;
+    let mut rng = Rng::new(seed);
+    let mut scene = Scene {
+        sh_degree,
+        ..Default::default()
+    };
+    let strands = count.div_ceil(SEGMENTS).max(1);
+    for _ in 0..strands {
+        // Root on the upper hemisphere (world up is -Y).
+        let root = loop {
+            let v = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 0.2),
+                rng.range(-1.0, 1.0),
+            );
+            if v.length_squared() > 0.01 && v.length_squared() <= 1.0 {
+                break v.normalize();
+            }
+        };
+        let length = rng.range(0.8, 1.4);
+        let seg = length / SEGMENTS as f32;
+        let tint = rng.range(0.8, 1.2);
+        let base = Vec3::new(0.35, 0.22, 0.12) * tint;
+        let mut p = root;
+        let mut dir = root;
+        for k in 0..SEGMENTS {
+            if scene.len() >= count {
+                break;
+            }
+            // Gravity (+Y is down) bends the strand smoothly.
+            let next_dir = (dir + Vec3::new(0.0, 0.18, 0.0)).normalize();
+            let next = p + seg * next_dir;
+            let mid = 0.5 * (p + next);
+            let tangent = (next - p).normalize();
+            let rgb = base * (0.8 + 0.4 * k as f32 / SEGMENTS as f32);
+            let sh = sh_for(rgb, sh_degree, &mut rng, 0.05);
+            let long = 0.6 * seg;
+            scene.push(
+                mid,
+                rng.range(0.7, 0.95),
+                Vec3::new(long, long / 30.0, long / 30.0),
+                Quat::from_rotation_arc(Vec3::X, tangent),
+                &sh,
+            );
+            p = next;
+            dir = next_dir;
+        }
+    }
+    scene
+}
+
+/// Layers: three nested closed ellipsoids, like multi-layer anatomy scenes for cutaways: an
+/// outer translucent "skin", a red "muscle" and an opaque white "bone" core, each covered by
+/// flat Gaussians tangent to the surface.
+pub fn layers(count: usize, sh_degree: u32, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed);
+    let mut scene = Scene {
+        sh_degree,
+        ..Default::default()
+    };
+    // (semi-axes, colour, opacity)
+    let shells = [
+        (Vec3::new(1.0, 1.25, 0.9), Vec3::new(0.93, 0.76, 0.65), 0.55),
+        (
+            Vec3::new(0.75, 0.95, 0.68),
+            Vec3::new(0.75, 0.15, 0.15),
+            0.8,
+        ),
+        (
+            Vec3::new(0.42, 0.6, 0.38),
+            Vec3::new(0.95, 0.93, 0.85),
+            0.97,
+        ),
+    ];
+    let areas: Vec<f32> = shells
+        .iter()
+        .map(|(a, _, _)| a.x * a.y + a.y * a.z + a.x * a.z)
+        .collect();
+    let total: f32 = areas.iter().sum();
+    for (k, (axes, rgb, opacity)) in shells.iter().enumerate() {
+        let n = if k + 1 == shells.len() {
+            count.saturating_sub(scene.len())
+        } else {
+            ((count as f32) * areas[k] / total) as usize
+        };
+        let size = (4.0 * std::f32::consts::PI * areas[k] / 3.0 / n.max(1) as f32).sqrt();
+        for _ in 0..n {
+            let dir = loop {
+                let v = Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                );
+                if v.length_squared() > 0.01 && v.length_squared() <= 1.0 {
+                    break v.normalize();
+                }
+            };
+            let p = dir * *axes;
+            let normal = (p / (*axes * *axes)).normalize();
+            let s = size * rng.range(0.7, 1.0);
+            let sh = sh_for(*rgb * rng.range(0.9, 1.05), sh_degree, &mut rng, 0.05);
+            scene.push(
+                p,
+                *opacity,
+                Vec3::new(s, s, s / 6.0),
+                Quat::from_rotation_arc(Vec3::Z, normal),
+                &sh,
+            );
+        }
+    }
+    scene
+}
