@@ -2,7 +2,7 @@
 //!
 //! The frame is a pipeline of compute stages, each visible three times under one name: the
 //! kernel `glsl/<stage>.comp`, the host side that records it in [`stages`], and the CPU twin in
-//! [`reference`] that the tests use as the oracle:
+//! [`reference`](mod@reference) that the tests use as the oracle:
 //!
 //! 1. `project`: cull, 2D conic, radius, tiles touched, SH colour per Gaussian;
 //! 2. `prefix_sum`: offsets of each Gaussian's tile pairs;
@@ -13,6 +13,8 @@
 //!
 //! Entry points: [`ply::load_ply`], [`camera::Camera`], [`vk::Context`],
 //! [`renderer::Renderer`], [`reference::render`].
+
+#![warn(missing_docs)]
 
 pub mod camera;
 /// Integer constants shared by the host and the GLSL kernels (tile size, workgroup sizes,

@@ -36,6 +36,20 @@ impl Rng {
         lo + (hi - lo) * self.f32()
     }
 
+    /// A uniformly random unit vector (rejection sampling in the unit ball).
+    pub fn unit_vector(&mut self) -> Vec3 {
+        loop {
+            let v = Vec3::new(
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            );
+            if v.length_squared() > 0.01 && v.length_squared() <= 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+
     /// A uniformly random unit quaternion.
     pub fn rotation(&mut self) -> Quat {
         let (u1, u2, u3) = (
@@ -115,12 +129,7 @@ pub fn demo_scene() -> Scene {
     let mut rng = Rng::new(11);
     let core_count = 8_000;
     for _ in 0..core_count {
-        let dir = Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        )
-        .normalize_or_zero();
+        let dir = rng.unit_vector();
         let p = dir * rng.range(0.2, 0.45);
         let rgb = Vec3::new(0.95, 0.55 + 0.3 * dir.y, 0.2);
         let sh = sh_for(rgb, 3, &mut rng, 0.1);
@@ -163,16 +172,8 @@ pub fn hair(count: usize, sh_degree: u32, seed: u64) -> Scene {
     let strands = count.div_ceil(SEGMENTS).max(1);
     for _ in 0..strands {
         // Root on the upper hemisphere (world up is -Y).
-        let root = loop {
-            let v = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 0.2),
-                rng.range(-1.0, 1.0),
-            );
-            if v.length_squared() > 0.01 && v.length_squared() <= 1.0 {
-                break v.normalize();
-            }
-        };
+        let mut root = rng.unit_vector();
+        root.y = -root.y.abs();
         let length = rng.range(0.8, 1.4);
         let seg = length / SEGMENTS as f32;
         let tint = rng.range(0.8, 1.2);
@@ -241,16 +242,7 @@ pub fn layers(count: usize, sh_degree: u32, seed: u64) -> Scene {
         };
         let size = (4.0 * std::f32::consts::PI * areas[k] / 3.0 / n.max(1) as f32).sqrt();
         for _ in 0..n {
-            let dir = loop {
-                let v = Vec3::new(
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                );
-                if v.length_squared() > 0.01 && v.length_squared() <= 1.0 {
-                    break v.normalize();
-                }
-            };
+            let dir = rng.unit_vector();
             let p = dir * *axes;
             let normal = (p / (*axes * *axes)).normalize();
             let s = size * rng.range(0.7, 1.0);
