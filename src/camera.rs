@@ -213,6 +213,14 @@ impl Camera {
     }
 }
 
+/// Tiles across and down for an image of `width` x `height` pixels.
+pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
+    (
+        width.div_ceil(crate::constants::TILE_SIZE),
+        height.div_ceil(crate::constants::TILE_SIZE),
+    )
+}
+
 /// Rejects image sizes the renderer cannot produce.
 pub fn check_size(width: u32, height: u32) -> Result<()> {
     const MAX: u32 = 16384;

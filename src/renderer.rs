@@ -4,10 +4,9 @@
 use ash::vk;
 use glam::Vec3;
 
-use crate::camera::Camera;
+use crate::camera::{tile_grid, Camera};
 use crate::constants::{
     COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE, RASTER_CHUNK,
-    TILE_SIZE,
 };
 use crate::error::{Error, Result};
 use crate::gpu_types::{GpuFrameParams, GpuGaussian};
@@ -136,10 +135,6 @@ pub struct Renderer {
     rasterize: Rasterize,
     timer: PassTimer,
     frame: Option<FrameResources>,
-}
-
-fn tile_grid(width: u32, height: u32) -> (u32, u32) {
-    (width.div_ceil(TILE_SIZE), height.div_ceil(TILE_SIZE))
 }
 
 /// Sort key bits: 32 depth bits + enough bits for the tile id.

@@ -171,8 +171,5 @@ pub fn project_all(scene: &Scene, camera: &Camera) -> Vec<ProjectedSplat> {
 
 /// Tiles across and down for a camera's image.
 pub fn tile_grid(camera: &Camera) -> (u32, u32) {
-    (
-        camera.width.div_ceil(TILE_SIZE),
-        camera.height.div_ceil(TILE_SIZE),
-    )
+    crate::camera::tile_grid(camera.width, camera.height)
 }
