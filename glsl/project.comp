@@ -1,10 +1,13 @@
-// Stage 1, project (SPEC section 3): one invocation per Gaussian. Culls, projects the 3D
-// covariance to a 2D conic, finds the screen radius and the touched tiles, evaluates the SH
-// colour, and writes the ProjectedSplat record plus the number of tiles touched (0 = not drawn)
-// for the prefix sum that sizes the tile lists.
+// Stage 1, project (SPEC sections 3 and 5): one invocation per Gaussian. Classifies it against
+// the clip region (dropped / drawn / cutoff), culls, projects the 3D covariance to a 2D conic,
+// finds the screen radius and the touched tiles, evaluates the SH colour, and writes the
+// ProjectedSplat record plus the number of tiles touched (0 = not drawn) for the prefix sum
+// that sizes the tile lists. Cutoff Gaussians also get a compact side record (CutoffRecord)
+// for the rasterizer's per-pixel weight; the others cost nothing extra.
 #version 460
 #include "common.glsl"
 #include "sh.glsl"
+#include "clip.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
 
@@ -15,9 +18,13 @@ layout(push_constant) uniform Push {
     ProjectedSplats splats;
     U32s tiles_touched;
     U32s counters;
+    ClipParamsRef clip;
+    CutoffRecords cutoffs;  // out: one record per cutoff Gaussian, packed
 } pc;
 
 shared uint wg_visible;
+shared uint wg_cutoff_count;
+shared uint wg_cutoff_base;
 
 // Rotation matrix of a normalised quaternion (w, x, y, z), as rows.
 void quat_rows(vec4 q, out vec3 r0, out vec3 r1, out vec3 r2) {
@@ -33,16 +40,22 @@ void skip(uint i) {
     pc.splats.v[i].rect = uvec4(0u);
 }
 
-void project(uint i) {
+// Projects Gaussian i; returns true when it is drawn as cutoff, with its side record in rec.
+bool project(uint i, out CutoffRecord rec) {
     FrameParams f = pc.frame.p;
     Gaussian g = pc.gaussians.v[i];
     vec3 mu = g.pos_opacity.xyz;
+    uint kind = clip_classify(pc.clip, mu, g.scale.xyz);
+    if (kind == CLASS_DROPPED) {
+        skip(i);
+        return false;
+    }
     vec3 rel = mu - f.cam_pos.xyz;
     vec3 t = vec3(dot(f.world_to_cam0.xyz, rel), dot(f.world_to_cam1.xyz, rel),
                   dot(f.world_to_cam2.xyz, rel));
     if (t.z <= 0.2) {
         skip(i);
-        return;
+        return false;
     }
     float fx = f.focal.x, fy = f.focal.y;
     float W = float(f.size.x), H = float(f.size.y);
@@ -67,7 +80,7 @@ void project(uint i) {
     float det = a * c - b * b;
     if (det <= 0.0) {
         skip(i);
-        return;
+        return false;
     }
     vec3 conic = vec3(c, -b, a) / det;
     float mid = 0.5 * (a + c);
@@ -82,7 +95,7 @@ void project(uint i) {
     uint touched = uint(max(x1 - x0, 0) * max(y1 - y0, 0));
     if (touched == 0u) {
         skip(i);
-        return;
+        return false;
     }
     vec3 dir = normalize(rel);
     uint sh_stride = f.scene.z;
@@ -100,19 +113,45 @@ void project(uint i) {
     pc.splats.v[i] = p;
     pc.tiles_touched.v[i] = touched;
     atomicAdd(wg_visible, 1u);
+    if (kind != CLASS_CUTOFF) {
+        return false;
+    }
+    // M = S^-1 R^T: row k is column k of R over s_k. o' = M (eye - mu) = -M rel.
+    vec3 w0 = vec3(r0.x, r1.x, r2.x) / s.x;
+    vec3 w1 = vec3(r0.y, r1.y, r2.y) / s.y;
+    vec3 w2 = vec3(r0.z, r1.z, r2.z) / s.z;
+    rec.m0 = vec4(w0, -dot(w0, rel));
+    rec.m1 = vec4(w1, -dot(w1, rel));
+    rec.m2 = vec4(w2, -dot(w2, rel));
+    return true;
 }
 
 void main() {
-    if (gl_LocalInvocationIndex == 0u) {
+    uint lid = gl_LocalInvocationIndex;
+    if (lid == 0u) {
         wg_visible = 0u;
+        wg_cutoff_count = 0u;
     }
     barrier();
     uint i = gl_GlobalInvocationID.x;
-    if (i < pc.frame.p.scene.x) {
-        project(i);
+    CutoffRecord rec;
+    bool cutoff = i < pc.frame.p.scene.x && project(i, rec);
+    // Side records are packed: a slot within the workgroup, then one global atomic per
+    // workgroup for the base.
+    uint slot = cutoff ? atomicAdd(wg_cutoff_count, 1u) : 0u;
+    barrier();
+    if (lid == 0u) {
+        if (wg_visible > 0u) {
+            atomicAdd(pc.counters.v[COUNTER_VISIBLE], wg_visible);
+        }
+        if (wg_cutoff_count > 0u) {
+            wg_cutoff_base = atomicAdd(pc.counters.v[COUNTER_CUTOFF], wg_cutoff_count);
+        }
     }
     barrier();
-    if (gl_LocalInvocationIndex == 0u && wg_visible > 0u) {
-        atomicAdd(pc.counters.v[COUNTER_VISIBLE], wg_visible);
+    if (cutoff) {
+        uint index = wg_cutoff_base + slot;
+        pc.cutoffs.v[index] = rec;
+        pc.splats.v[i].cutoff = index;
     }
 }

@@ -6,8 +6,13 @@
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
 // invocation after 65,535 loop iterations). Longer lists take several rounds; between rounds
 // the per-pixel state (colour, transmittance, done) lives in `state`.
+//
+// RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
+// most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
+// ray (clip.glsl), staged with the batch. Splats that are not cutoff take the plain path.
 #version 460
 #include "common.glsl"
+#include "clip.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 
@@ -22,13 +27,16 @@ layout(push_constant) uniform Push {
     Vec4s state;        // per pixel (rgb, T), T negated once the pixel is done
     U32s image;         // rgba8 per pixel
     U32s counters;
+    ClipParamsRef clip;
+    CutoffRecords cutoffs;
     uint round_index;
     uint flags;
 } pc;
 
 shared vec2 batch_uv[RASTER_WORKGROUP];
 shared vec4 batch_conic_opacity[RASTER_WORKGROUP];
-shared vec3 batch_color[RASTER_WORKGROUP];
+shared vec4 batch_color_cutoff[RASTER_WORKGROUP];   // rgb, w = 1 for a cutoff splat
+shared CutoffRecord batch_cutoff[RASTER_WORKGROUP];
 shared uint pixels_done;
 
 uint pack_rgba8(vec3 c) {
@@ -44,6 +52,19 @@ void main() {
     bool inside = pixel.x < f.size.x && pixel.y < f.size.y;
     uint pixel_index = pixel.y * f.size.x + pixel.x;
     vec2 pixf = vec2(pixel);
+
+    // The pixel's ray (SPEC section 2) and its visible intervals, for cutoff weights.
+    uvec4 clip_config = pc.clip.p.config;
+    bool rara = clip_config.x == CLIP_MODE_RARA;
+    float band2 = pc.clip.p.band.y;
+    vec3 ray_dir = vec3(0.0);
+    vec4 spans = vec4(0.0);
+    if (rara) {
+        vec2 c = (pixf - f.focal.zw) / f.focal.xy;
+        ray_dir = normalize(c.x * f.world_to_cam0.xyz + c.y * f.world_to_cam1.xyz
+                            + f.world_to_cam2.xyz);
+        spans = clip_ray_spans(pc.clip, f.cam_pos.xyz, ray_dir);
+    }
 
     uvec2 range = pc.ranges.v[tile.y * f.size.z + tile.x];
     uint start = min(range.x + pc.round_index * RASTER_CHUNK, range.y);
@@ -80,7 +101,11 @@ void main() {
             ProjectedSplat p = pc.splats.v[s];
             batch_uv[lid] = p.uv;
             batch_conic_opacity[lid] = vec4(p.conic, p.opacity);
-            batch_color[lid] = p.color;
+            bool cutoff = p.cutoff != NO_CUTOFF;
+            batch_color_cutoff[lid] = vec4(p.color, cutoff ? 1.0 : 0.0);
+            if (cutoff) {
+                batch_cutoff[lid] = pc.cutoffs.v[p.cutoff];
+            }
         }
         barrier();
         uint count = min(RASTER_WORKGROUP, end - batch);
@@ -91,7 +116,15 @@ void main() {
             if (power > 0.0) {
                 continue;
             }
-            float alpha = min(0.99, co.w * exp(power));
+            float alpha = co.w * exp(power);
+            if (alpha < 1.0 / 255.0) {
+                continue; // w <= 1 cannot lift it over the threshold
+            }
+            vec4 color_cutoff = batch_color_cutoff[k];
+            if (color_cutoff.w != 0.0) {
+                alpha *= cutoff_weight(batch_cutoff[k], ray_dir, spans, clip_config.y, band2);
+            }
+            alpha = min(0.99, alpha);
             if (alpha < 1.0 / 255.0) {
                 continue;
             }
@@ -101,7 +134,7 @@ void main() {
                 atomicAdd(pixels_done, 1u);
                 break;
             }
-            color += alpha * T * batch_color[k];
+            color += alpha * T * color_cutoff.rgb;
             T = next_T;
         }
     }

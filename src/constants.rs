@@ -50,6 +50,25 @@ pub const COUNTER_SORT_COUNT: u32 = 4;
 /// Number of counter slots.
 pub const COUNTER_SLOTS: u32 = 8;
 
+/// Most half-spaces one clip region may have (an oriented box uses six).
+pub const MAX_CLIP_PLANES: u32 = 16;
+/// Clip mode `none` (SPEC section 5): nothing is clipped.
+pub const CLIP_MODE_NONE: u32 = 0;
+/// Clip mode `hard`: a Gaussian is drawn when its centre is visible, else dropped.
+pub const CLIP_MODE_HARD: u32 = 1;
+/// Clip mode `rara`: dropped / drawn / cutoff with a per-pixel weight.
+pub const CLIP_MODE_RARA: u32 = 2;
+/// Cutoff weight `mass`: the probability mass of the Gaussian along the ray that is visible.
+pub const CLIP_WEIGHT_MASS: u32 = 0;
+/// Cutoff weight `length`: the visible fraction of the ray's chord through the band ellipsoid.
+pub const CLIP_WEIGHT_LENGTH: u32 = 1;
+/// Clip flag: the visible set is the complement of the region (a cutaway).
+pub const CLIP_FLAG_INVERT: u32 = 1;
+/// Clip flag: every Gaussian that is not dropped is cutoff (the paper's "w/o RaRa" ablation).
+pub const CLIP_FLAG_TRACE_ALL: u32 = 2;
+/// Clip flag: the region is a sphere, not an intersection of half-spaces.
+pub const CLIP_FLAG_SPHERE: u32 = 4;
+
 /// Every constant above, by the macro name the kernels see.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TILE_SIZE", TILE_SIZE),
@@ -69,4 +88,13 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("COUNTER_VISIBLE", COUNTER_VISIBLE),
     ("COUNTER_CUTOFF", COUNTER_CUTOFF),
     ("COUNTER_SORT_COUNT", COUNTER_SORT_COUNT),
+    ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
+    ("CLIP_MODE_NONE", CLIP_MODE_NONE),
+    ("CLIP_MODE_HARD", CLIP_MODE_HARD),
+    ("CLIP_MODE_RARA", CLIP_MODE_RARA),
+    ("CLIP_WEIGHT_MASS", CLIP_WEIGHT_MASS),
+    ("CLIP_WEIGHT_LENGTH", CLIP_WEIGHT_LENGTH),
+    ("CLIP_FLAG_INVERT", CLIP_FLAG_INVERT),
+    ("CLIP_FLAG_TRACE_ALL", CLIP_FLAG_TRACE_ALL),
+    ("CLIP_FLAG_SPHERE", CLIP_FLAG_SPHERE),
 ];

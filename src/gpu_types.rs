@@ -5,6 +5,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::constants::MAX_CLIP_PLANES;
+
 /// `Gaussian` in common.glsl: one uploaded Gaussian, activated values.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -75,7 +77,36 @@ pub struct GpuSortInfo {
     pub linear_args: [u32; 4],
 }
 
+/// `ClipParams` in clip.glsl: the clip region and mode of a frame (see [`crate::clip::Clip`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuClipParams {
+    /// Mode (`CLIP_MODE_*`), weight (`CLIP_WEIGHT_*`), flags (`CLIP_FLAG_*`), plane count.
+    pub config: [u32; 4],
+    /// band, band^2, unused, unused.
+    pub band: [f32; 4],
+    /// Sphere centre xyz and radius (with `CLIP_FLAG_SPHERE`).
+    pub sphere: [f32; 4],
+    /// Half-spaces `(n, d)`, visible where `n.x + d >= 0`.
+    pub planes: [[f32; 4]; MAX_CLIP_PLANES as usize],
+}
+
+/// `CutoffRecord` in common.glsl: what a cutoff Gaussian carries for the per-pixel weight.
+/// Rows of `M = S^-1 R^T` in xyz, and `o' = M (eye - mu)` spread over the three w.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuCutoffRecord {
+    /// Row 0 of `M`, `o'.x`.
+    pub m0: [f32; 4],
+    /// Row 1 of `M`, `o'.y`.
+    pub m1: [f32; 4],
+    /// Row 2 of `M`, `o'.z`.
+    pub m2: [f32; 4],
+}
+
 const _: () = assert!(std::mem::size_of::<GpuGaussian>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuClipParams>() == 48 + 16 * MAX_CLIP_PLANES as usize);
+const _: () = assert!(std::mem::size_of::<GpuCutoffRecord>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuProjectedSplat>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuFrameParams>() == 128);
 const _: () = assert!(std::mem::size_of::<GpuSortInfo>() == 48);

@@ -17,6 +17,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod clip;
 /// Integer constants shared by the host and the GLSL kernels (tile size, workgroup sizes,
 /// counter slots). `build.rs` passes them to the shader compiler as macros.
 pub mod constants;
@@ -38,6 +39,7 @@ pub mod shaders {
 }
 
 pub use camera::Camera;
+pub use clip::{Clip, ClipMode, ClipRegion, ClipWeight, Plane};
 pub use error::{Error, Result};
 pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer};
 pub use scene::Scene;

@@ -9,6 +9,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use rara::{Camera, Context, Error, RenderOptions, Renderer, Result, Scene};
 
+mod cli;
+use cli::clip_args::{describe, ClipArgs};
+
 /// Renders 3D Gaussian Splatting scenes on Vulkan compute (lavapipe or a GPU).
 #[derive(Parser)]
 #[command(name = "rara", version, about)]
@@ -19,8 +22,11 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene from one camera to a PNG.
+    /// Render a scene from one camera to a PNG, optionally clipped.
     Render(RenderArgs),
+    /// Move a clip plane across a scene: numbered PNGs, an animated GIF and the frame-to-frame
+    /// change (popping) per clip mode.
+    Sweep(cli::sweep::SweepArgs),
     /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
     Info {
         /// The scene (.ply).
@@ -81,7 +87,7 @@ enum SynthKindArg {
 
 /// Where the camera comes from and the image size.
 #[derive(Args, Clone)]
-struct CameraArgs {
+pub struct CameraArgs {
     /// INRIA cameras.json file.
     #[arg(long, conflicts_with_all = ["eye", "target"])]
     cameras: Option<PathBuf>,
@@ -126,9 +132,11 @@ struct RenderArgs {
     /// Render this many more times after the first and report median timings.
     #[arg(long, default_value_t = 0)]
     repeat: usize,
+    #[command(flatten)]
+    clip: ClipArgs,
 }
 
-fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
+pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 {
         return Err(format!(
@@ -145,7 +153,7 @@ fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
     Ok(Vec3::from_array(v))
 }
 
-fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
+pub fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
     if let Some(path) = &args.cameras {
         let cam = Camera::load_one(path, args.camera)?;
         return match args.width {
@@ -168,7 +176,7 @@ fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
     }
 }
 
-fn load_scene(path: &Path) -> Result<Scene> {
+pub fn load_scene(path: &Path) -> Result<Scene> {
     let spinner = ProgressBar::new_spinner().with_message(format!("loading {}", path.display()));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
     let start = std::time::Instant::now();
@@ -192,7 +200,7 @@ fn load_scene(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
+pub fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|source| Error::Io {
             path: dir.to_path_buf(),
@@ -205,7 +213,7 @@ fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
     })
 }
 
-fn median(values: &mut [f64]) -> f64 {
+pub fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
     let n = values.len();
     if n == 0 {
@@ -223,10 +231,14 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let options = RenderOptions {
         background: args.background,
+        clip: args.clip.build(&[])?,
     };
+    if options.clip.region.is_some() {
+        eprintln!("{}", describe(&options.clip));
+    }
     if args.reference {
         let start = std::time::Instant::now();
-        let img = rara::reference::render(&scene, &camera, options.background);
+        let img = rara::reference::render(&scene, &camera, &options);
         save_png(&img, &args.output)?;
         println!(
             "wrote {} ({}x{}, CPU reference, {:.0} ms)",
@@ -243,12 +255,13 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     let (img, stats) = renderer.render(&gpu_scene, &camera, &options)?;
     save_png(&img, &args.output)?;
     println!(
-        "wrote {} ({}x{}) on {}: {} visible Gaussians, {} tile intersections",
+        "wrote {} ({}x{}) on {}: {} visible Gaussians ({} cutoff), {} tile intersections",
         args.output.display(),
         camera.width,
         camera.height,
         ctx.info().name,
         stats.visible,
+        stats.cutoff,
         stats.intersections
     );
     if args.repeat > 0 {
@@ -369,6 +382,7 @@ fn cmd_demo(dir: &Path) -> Result<()> {
             cam,
             &RenderOptions {
                 background: Vec3::splat(0.05),
+                ..RenderOptions::default()
             },
         )?;
         let path = dir.join(format!("demo_view{k}.png"));
@@ -481,6 +495,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(args) => cmd_render(args),
+        Command::Sweep(args) => cli::sweep::run(args),
         Command::Info { scene, json } => cmd_info(scene, *json),
         Command::Compare { a, b, diff, json } => cmd_compare(a, b, diff.as_deref(), *json),
         Command::Synth {

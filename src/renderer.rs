@@ -5,11 +5,13 @@ use ash::vk;
 use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
+use crate::clip::{Clip, ClipMode};
 use crate::constants::{
-    COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE, RASTER_CHUNK,
+    COUNTER_CUTOFF, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE,
+    RASTER_CHUNK,
 };
 use crate::error::{Error, Result};
-use crate::gpu_types::{GpuFrameParams, GpuGaussian};
+use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams, GpuGaussian};
 use crate::scene::Scene;
 use crate::stages::emit::{Emit, EmitPush};
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
@@ -55,16 +57,19 @@ impl GpuScene {
 }
 
 /// How to render a frame.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
     /// Colour behind the splats.
     pub background: Vec3,
+    /// Clipping (SPEC section 5); the default clips nothing.
+    pub clip: Clip,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
         RenderOptions {
             background: Vec3::ZERO,
+            clip: Clip::default(),
         }
     }
 }
@@ -76,6 +81,8 @@ pub struct FrameStats {
     pub intersections: u32,
     /// Gaussians that touched at least one tile.
     pub visible: u32,
+    /// Gaussians drawn as cutoff (per-pixel clip weight), among `visible`.
+    pub cutoff: u32,
     /// Longest tile list.
     pub max_tile_len: u32,
     /// How often the frame was rendered again after growing a buffer.
@@ -96,7 +103,10 @@ struct FrameResources {
     capacity: u64,
     rounds: u32,
     params: Buffer,
+    clip_params: Buffer,
     counters: Buffer,
+    /// Cutoff side records, one slot per Gaussian; allocated on the first rara frame.
+    cutoffs: Option<Buffer>,
     splats: Buffer,
     tiles_touched: Buffer,
     touched_scan: PrefixSumScratch,
@@ -223,7 +233,14 @@ impl Renderer {
                     std::mem::size_of::<GpuFrameParams>() as u64,
                     gpu,
                 )?,
+                clip_params: Buffer::new(
+                    ctx,
+                    "clip params",
+                    std::mem::size_of::<GpuClipParams>() as u64,
+                    gpu,
+                )?,
                 counters: Buffer::new(ctx, "frame counters", COUNTER_SLOTS as u64 * 4, gpu)?,
+                cutoffs: None,
                 splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
                 tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
                 touched_scan: self.prefix_sum.scratch(ctx, n)?,
@@ -256,6 +273,7 @@ impl Renderer {
         options: &RenderOptions,
     ) -> Result<(image::RgbaImage, FrameStats)> {
         crate::camera::check_size(camera.width, camera.height)?;
+        options.clip.validate()?;
         let mut capacity = self
             .frame
             .as_ref()
@@ -284,6 +302,7 @@ impl Renderer {
             let stats = FrameStats {
                 intersections,
                 visible: counters[COUNTER_VISIBLE as usize],
+                cutoff: counters[COUNTER_CUTOFF as usize],
                 max_tile_len,
                 rerenders,
                 gpu_ms: passes.iter().map(|p| p.1).sum(),
@@ -323,6 +342,13 @@ impl Renderer {
         let (w, h) = (camera.width, camera.height);
         let (gx, gy) = tile_grid(w, h);
         self.frame_resources(w, h, scene.count, capacity, rounds)?;
+        let rara = options.clip.effective_mode() == ClipMode::Rara;
+        if rara && self.frame.as_ref().unwrap().cutoffs.is_none() {
+            let bytes = scene.count.max(1) as u64 * std::mem::size_of::<GpuCutoffRecord>() as u64;
+            let buffer = Buffer::new(&self.ctx, "cutoff records", bytes, MemoryLocation::GpuOnly)?;
+            self.frame.as_mut().unwrap().cutoffs = Some(buffer);
+        }
+        let clip_params = options.clip.to_gpu();
         let sorted_index = crate::stages::sort::passes_for(key_bits(w, h)) as usize % 2;
         self.frame.as_mut().unwrap().sorted = sorted_index;
         let f = self.frame.as_ref().unwrap();
@@ -350,6 +376,8 @@ impl Renderer {
                 f.capacity.min(u32::MAX as u64) as u32,
             ],
         };
+        // Only rara frames write or read side records; other frames pass a null address.
+        let cutoffs_address = f.cutoffs.as_ref().map_or(0, |b| b.address);
         let ctx = self.ctx.clone();
         let device = ctx.device().clone();
         let counters_at = |slot: u32| f.counters.address + 4 * slot as u64;
@@ -358,6 +386,7 @@ impl Renderer {
         ctx.run_commands(|cmd| unsafe {
             timer.begin(cmd);
             device.cmd_update_buffer(cmd, f.params.raw, 0, bytemuck::bytes_of(&params));
+            device.cmd_update_buffer(cmd, f.clip_params.raw, 0, bytemuck::bytes_of(&clip_params));
             device.cmd_fill_buffer(cmd, f.counters.raw, 0, vk::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, f.ranges.raw, 0, vk::WHOLE_SIZE, 0);
             compute_barrier(&ctx, cmd);
@@ -370,6 +399,8 @@ impl Renderer {
                 splats: f.splats.address,
                 tiles_touched: f.tiles_touched.address,
                 counters: f.counters.address,
+                clip: f.clip_params.address,
+                cutoffs: cutoffs_address,
             };
             self.project.record(cmd, &push, scene.count);
             compute_barrier(&ctx, cmd);
@@ -433,6 +464,8 @@ impl Renderer {
                 state: f.state.as_ref().map_or(0, |s| s.address),
                 image: f.image.address,
                 counters: f.counters.address,
+                clip: f.clip_params.address,
+                cutoffs: cutoffs_address,
                 round_index: 0,
                 flags: 0,
             };

@@ -4,7 +4,7 @@ mod common;
 
 use glam::{Quat, Vec3};
 use rara::reference::{self, project::project_one, rasterize::tile_lists};
-use rara::{Camera, RenderOptions, Renderer, Scene};
+use rara::{Camera, Clip, RenderOptions, Renderer, Scene};
 
 /// Bounds of the 2nd..98th percentile of the centres, per axis.
 fn percentile_box(scene: &Scene) -> (Vec3, Vec3) {
@@ -55,9 +55,10 @@ fn render_real_scene(stem: &str) {
     for (k, cam) in two_cameras(&scene, cams.as_deref(), 320).iter().enumerate() {
         let options = RenderOptions {
             background: Vec3::new(0.1, 0.2, 0.3),
+            ..RenderOptions::default()
         };
         let (gpu, stats) = renderer.render(&gpu_scene, cam, &options).unwrap();
-        let cpu = reference::render(&scene, cam, options.background);
+        let cpu = reference::render(&scene, cam, &options);
         let d = common::check_images(&format!("{stem}_view{k}"), &gpu, &cpu, 50.0, 4);
         eprintln!(
             "real-scene case '{stem}' view {k} RAN: {} intersections, PSNR {:.2} dB, max diff {}",
@@ -105,7 +106,7 @@ fn synthetic_scenes_every_sh_degree() {
             let (gpu, _) = renderer
                 .render(&gpu_scene, cam, &RenderOptions::default())
                 .unwrap();
-            let cpu = reference::render(&scene, cam, Vec3::ZERO);
+            let cpu = reference::render(&scene, cam, &RenderOptions::default());
             common::check_images(&format!("shell_sh{degree}_view{k}"), &gpu, &cpu, 50.0, 4);
         }
     }
@@ -117,7 +118,7 @@ fn synthetic_scenes_every_sh_degree() {
     common::check_images(
         "demo_scene",
         &gpu,
-        &reference::render(&demo, &cams[1], Vec3::ZERO),
+        &reference::render(&demo, &cams[1], &RenderOptions::default()),
         50.0,
         4,
     );
@@ -143,7 +144,7 @@ fn each_stage_matches_its_cpu_twin() {
     for i in 0..scene.len() {
         let g = &mid.splats[i];
         let gpu_visible = g.rect[2] > g.rect[0] && g.rect[3] > g.rect[1];
-        let cpu = project_one(&scene, cam, i);
+        let cpu = project_one(&scene, cam, &Clip::default(), i);
         assert_eq!(
             gpu_visible,
             cpu.is_some(),
@@ -205,7 +206,7 @@ fn each_stage_matches_its_cpu_twin() {
             }
         })
         .collect();
-    let twin = reference::rasterize::rasterize(&gpu_as_cpu, cam, Vec3::ZERO);
+    let twin = reference::rasterize::rasterize(&gpu_as_cpu, cam, Vec3::ZERO, &Clip::default());
     common::check_images("rasterize_twin", &gpu_image, &twin, 55.0, 1);
     common::assert_no_validation_messages(&ctx);
 }
@@ -264,7 +265,7 @@ fn tile_with_more_than_100k_splats() {
         stats.rerenders >= 1,
         "the rasterizer should have needed more than one round"
     );
-    let cpu = reference::render(&scene, &cam, Vec3::ZERO);
+    let cpu = reference::render(&scene, &cam, &RenderOptions::default());
     common::check_images("long_tile_list", &gpu, &cpu, 50.0, 4);
     let centre = gpu.get_pixel(16, 16);
     assert!(
@@ -349,7 +350,7 @@ fn intersection_overflow_grows_and_rerenders() {
     common::check_images(
         "overflow",
         &gpu,
-        &reference::render(&scene, &cam, Vec3::ZERO),
+        &reference::render(&scene, &cam, &RenderOptions::default()),
         50.0,
         4,
     );

@@ -6,16 +6,15 @@
 pub mod project;
 pub mod rasterize;
 
-use glam::Vec3;
-
 use crate::camera::Camera;
+use crate::renderer::RenderOptions;
 use crate::scene::Scene;
 
 /// An 8-bit RGBA image, row-major, row 0 at the top.
 pub type Rgba8Image = image::RgbaImage;
 
-/// Renders `scene` from `camera` over `background`.
-pub fn render(scene: &Scene, camera: &Camera, background: Vec3) -> Rgba8Image {
-    let splats = project::project_all(scene, camera);
-    rasterize::rasterize(&splats, camera, background)
+/// Renders `scene` from `camera` with `options` (background, clipping).
+pub fn render(scene: &Scene, camera: &Camera, options: &RenderOptions) -> Rgba8Image {
+    let splats = project::project_all(scene, camera, &options.clip);
+    rasterize::rasterize(&splats, camera, options.background, &options.clip)
 }

@@ -1,8 +1,9 @@
-//! CPU twin of `glsl/project.comp` (SPEC section 3).
+//! CPU twin of `glsl/project.comp` (SPEC sections 3 and 5).
 
 use glam::{Quat, Vec2, Vec3};
 
 use crate::camera::Camera;
+use crate::clip::{Classification, Clip, CutoffRay};
 use crate::constants::TILE_SIZE;
 use crate::scene::Scene;
 
@@ -43,6 +44,8 @@ pub struct ProjectedSplat {
     pub color: Vec3,
     /// Touched tiles `(x0, y0, x1, y1)`, end exclusive.
     pub rect: [u32; 4],
+    /// For a cutoff Gaussian, what its per-pixel clip weight needs; `None` means w = 1.
+    pub cutoff: Option<CutoffRay>,
 }
 
 /// Rows of the rotation matrix of a normalised quaternion.
@@ -98,8 +101,17 @@ pub fn eval_sh(sh: &[f32], degree: u32, dir: Vec3) -> Vec3 {
     (result + 0.5).max(Vec3::ZERO)
 }
 
-/// Projects Gaussian `i`, or `None` when it is culled or touches no tile.
-pub fn project_one(scene: &Scene, camera: &Camera, i: usize) -> Option<ProjectedSplat> {
+/// Projects Gaussian `i`, or `None` when it is clipped away, culled or touches no tile.
+pub fn project_one(
+    scene: &Scene,
+    camera: &Camera,
+    clip: &Clip,
+    i: usize,
+) -> Option<ProjectedSplat> {
+    let class = clip.classify(scene.means[i], scene.scales[i]);
+    if class == Classification::Dropped {
+        return None;
+    }
     let w2c = camera.world_to_camera();
     // Rows of R_wc.
     let (r_x, r_y, r_z) = (w2c.row(0), w2c.row(1), w2c.row(2));
@@ -159,13 +171,16 @@ pub fn project_one(scene: &Scene, camera: &Camera, i: usize) -> Option<Projected
         conic,
         color,
         rect: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
+        cutoff: (class == Classification::Cutoff).then(|| {
+            CutoffRay::new(mu, scene.scales[i], scene.rotations[i], camera.position)
+        }),
     })
 }
 
 /// Projects every Gaussian; the result holds only those that draw something, in index order.
-pub fn project_all(scene: &Scene, camera: &Camera) -> Vec<ProjectedSplat> {
+pub fn project_all(scene: &Scene, camera: &Camera, clip: &Clip) -> Vec<ProjectedSplat> {
     (0..scene.len())
-        .filter_map(|i| project_one(scene, camera, i))
+        .filter_map(|i| project_one(scene, camera, clip, i))
         .collect()
 }
 

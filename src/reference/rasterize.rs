@@ -1,12 +1,49 @@
 //! CPU twin of the tile lists (emit + sort + tile ranges) and of `glsl/rasterize.comp`
 //! (SPEC section 4).
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 use super::project::{tile_grid, ProjectedSplat};
 use super::Rgba8Image;
 use crate::camera::Camera;
+use crate::clip::{Clip, ClipMode, ClipWeight, Spans};
 use crate::constants::TILE_SIZE;
+
+/// One pixel's ray against the clip region, for the weights of cutoff splats.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelClip {
+    /// Unit world direction of the pixel's ray (SPEC section 2).
+    pub dir: DVec3,
+    /// Visible part of the ray.
+    pub spans: Spans,
+    /// Weight kind.
+    pub weight: ClipWeight,
+    /// Band.
+    pub band: f64,
+}
+
+impl PixelClip {
+    /// The ray of pixel `(i, j)` against `clip`, or `None` when no weight is ever needed.
+    pub fn new(clip: &Clip, camera: &Camera, i: u32, j: u32) -> Option<PixelClip> {
+        let region = clip.region.as_ref()?;
+        if clip.effective_mode() != ClipMode::Rara {
+            return None;
+        }
+        let (cx, cy) = camera.principal_point();
+        let c = DVec3::new(
+            (i as f64 - cx as f64) / camera.fx as f64,
+            (j as f64 - cy as f64) / camera.fy as f64,
+            1.0,
+        );
+        let dir = (camera.rotation.as_dmat3() * c).normalize();
+        Some(PixelClip {
+            dir,
+            spans: region.ray_intervals(camera.position.as_dvec3(), dir),
+            weight: clip.weight,
+            band: clip.band as f64,
+        })
+    }
+}
 
 /// Per tile, the splats that touch it in compositing order: ascending depth, ties by index.
 pub fn tile_lists(splats: &[ProjectedSplat], camera: &Camera) -> Vec<Vec<u32>> {
@@ -28,12 +65,14 @@ pub fn tile_lists(splats: &[ProjectedSplat], camera: &Camera) -> Vec<Vec<u32>> {
         .collect()
 }
 
-/// Composites one pixel front to back; returns the colour over `background`.
+/// Composites one pixel front to back; returns the colour over `background`. `clip` is the
+/// pixel's ray against the clip region, needed when some splats are cutoff.
 pub fn composite_pixel(
     splats: &[ProjectedSplat],
     list: &[u32],
     pixel: Vec2,
     background: Vec3,
+    clip: Option<&PixelClip>,
 ) -> Vec3 {
     let mut color = Vec3::ZERO;
     let mut t = 1.0f32;
@@ -44,7 +83,12 @@ pub fn composite_pixel(
         if power > 0.0 {
             continue;
         }
-        let alpha = (s.opacity * power.exp()).min(0.99);
+        let w = match (&s.cutoff, clip) {
+            (Some(ray), Some(c)) => ray.weight(c.dir, &c.spans, c.weight, c.band) as f32,
+            (Some(_), None) => panic!("a cutoff splat needs the pixel's clip ray"),
+            (None, _) => 1.0,
+        };
+        let alpha = (s.opacity * power.exp() * w).min(0.99);
         if alpha < 1.0 / 255.0 {
             continue;
         }
@@ -65,7 +109,12 @@ pub fn to_rgba8(c: Vec3) -> [u8; 4] {
 }
 
 /// Rasterizes projected splats into an 8-bit image, tiles spread over the host's cores.
-pub fn rasterize(splats: &[ProjectedSplat], camera: &Camera, background: Vec3) -> Rgba8Image {
+pub fn rasterize(
+    splats: &[ProjectedSplat],
+    camera: &Camera,
+    background: Vec3,
+    clip: &Clip,
+) -> Rgba8Image {
     let lists = tile_lists(splats, camera);
     let (gx, _) = tile_grid(camera);
     let (w, h) = (camera.width, camera.height);
@@ -97,6 +146,7 @@ pub fn rasterize(splats: &[ProjectedSplat], camera: &Camera, background: Vec3) -
                             list,
                             Vec2::new(i as f32, j as f32),
                             background,
+                            PixelClip::new(clip, camera, i, j).as_ref(),
                         );
                         let o = ((row * w + i) * 4) as usize;
                         band[o..o + 4].copy_from_slice(&to_rgba8(c));

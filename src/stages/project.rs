@@ -24,6 +24,10 @@ pub struct ProjectPush {
     pub tiles_touched: u64,
     /// Frame counters (visible count).
     pub counters: u64,
+    /// `ClipParams`.
+    pub clip: u64,
+    /// Cutoff side records (0 when the frame is not rara-clipped).
+    pub cutoffs: u64,
 }
 
 /// The project kernel.

@@ -26,6 +26,10 @@ pub struct RasterizePush {
     pub image: u64,
     /// Frame counters (longest tile list).
     pub counters: u64,
+    /// `ClipParams`.
+    pub clip: u64,
+    /// Cutoff side records (0 when the frame is not rara-clipped).
+    pub cutoffs: u64,
     /// Which RASTER_CHUNK of every tile list this dispatch walks.
     pub round_index: u32,
     /// ROUND_FIRST | ROUND_LAST.

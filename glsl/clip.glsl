@@ -1,0 +1,155 @@
+// RaRa clipping (SPEC section 5), shared by project (classification, side records) and
+// rasterize (per-pixel weights). Host twin: src/clip.rs, which explains the whitened-frame
+// maths; keep the two in step.
+#ifndef RARA_CLIP_GLSL
+#define RARA_CLIP_GLSL
+
+#include "common.glsl"
+
+// The clip region and mode of a frame (GpuClipParams on the host).
+struct ClipParams {
+    uvec4 config;       // mode, weight, flags, plane count
+    vec4 band;          // band, band^2, unused, unused
+    vec4 sphere;        // centre xyz, radius
+    vec4 planes[MAX_CLIP_PLANES]; // (n, d): visible where n.x + d >= 0
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer ClipParamsRef { ClipParams p; };
+
+// What a cutoff Gaussian carries (GpuCutoffRecord): rows of M = S^-1 R^T in xyz and
+// o' = M (eye - mu) in the three w.
+struct CutoffRecord {
+    vec4 m0;
+    vec4 m1;
+    vec4 m2;
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer CutoffRecords { CutoffRecord v[]; };
+
+#define CLASS_DROPPED 0u
+#define CLASS_DRAWN 1u
+#define CLASS_CUTOFF 2u
+
+// Unbounded end of a ray interval: finite so no inf - inf, far enough that Phi is 0 or 1.
+#define UNBOUNDED 1e30
+
+// Signed distance of a centre to the visible set, positive inside.
+float clip_signed_distance(ClipParamsRef clip, vec3 p) {
+    uvec4 config = clip.p.config;
+    float s;
+    if ((config.z & CLIP_FLAG_SPHERE) != 0u) {
+        vec4 sphere = clip.p.sphere;
+        s = sphere.w - length(p - sphere.xyz);
+    } else {
+        s = UNBOUNDED;
+        for (uint k = 0u; k < config.w; ++k) {
+            vec4 pl = clip.p.planes[k];
+            s = min(s, dot(pl.xyz, p) + pl.w);
+        }
+    }
+    return (config.z & CLIP_FLAG_INVERT) != 0u ? -s : s;
+}
+
+// CLASS_DROPPED, CLASS_DRAWN or CLASS_CUTOFF for a Gaussian with centre mu and standard
+// deviations scale.
+uint clip_classify(ClipParamsRef clip, vec3 mu, vec3 scale) {
+    uvec4 config = clip.p.config;
+    if (config.x == CLIP_MODE_NONE) {
+        return CLASS_DRAWN;
+    }
+    float s = clip_signed_distance(clip, mu);
+    if (config.x == CLIP_MODE_HARD) {
+        return s >= 0.0 ? CLASS_DRAWN : CLASS_DROPPED;
+    }
+    float r = clip.p.band.x * max(scale.x, max(scale.y, scale.z));
+    if (s < -r) {
+        return CLASS_DROPPED;
+    }
+    if (s > r && (config.z & CLIP_FLAG_TRACE_ALL) == 0u) {
+        return CLASS_DRAWN;
+    }
+    return CLASS_CUTOFF;
+}
+
+// The visible part of the ray eye + t dir (all real t) as two intervals (lo0, hi0, lo1, hi1);
+// an unused or empty interval is (0, 0).
+vec4 clip_ray_spans(ClipParamsRef clip, vec3 eye, vec3 dir) {
+    uvec4 config = clip.p.config;
+    float lo, hi;
+    if ((config.z & CLIP_FLAG_SPHERE) != 0u) {
+        vec4 sphere = clip.p.sphere;
+        vec3 oc = eye - sphere.xyz;
+        float b = dot(oc, dir);
+        float disc = b * b - (dot(oc, oc) - sphere.w * sphere.w);
+        if (disc > 0.0) {
+            float h = sqrt(disc);
+            lo = -b - h;
+            hi = -b + h;
+        } else {
+            lo = 0.0;
+            hi = 0.0;
+        }
+    } else {
+        lo = -UNBOUNDED;
+        hi = UNBOUNDED;
+        for (uint k = 0u; k < config.w; ++k) {
+            vec4 pl = clip.p.planes[k];
+            float nd = dot(pl.xyz, dir);
+            float ne = dot(pl.xyz, eye) + pl.w;
+            if (nd > 0.0) {
+                lo = max(lo, -ne / nd);
+            } else if (nd < 0.0) {
+                hi = min(hi, -ne / nd);
+            } else if (ne < 0.0) {
+                lo = 0.0;
+                hi = 0.0;
+            }
+        }
+    }
+    bool empty = lo >= hi;
+    if ((config.z & CLIP_FLAG_INVERT) == 0u) {
+        return empty ? vec4(0.0) : vec4(lo, hi, 0.0, 0.0);
+    }
+    return empty ? vec4(-UNBOUNDED, UNBOUNDED, 0.0, 0.0) : vec4(-UNBOUNDED, lo, hi, UNBOUNDED);
+}
+
+// Standard normal CDF: Abramowitz-Stegun 7.1.26 erfc on |x| (abs. error < 1.5e-7), reflected
+// so that Phi(x) + Phi(-x) = 1; clamped to +-10 where it is exactly 0 or 1 in float.
+float normal_cdf(float x) {
+    x = clamp(x, -10.0, 10.0);
+    float z = abs(x) * 0.70710678118654752;
+    float t = 1.0 / (1.0 + 0.3275911 * z);
+    float poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741
+                 + t * (-1.453152027 + t * 1.061405429))));
+    float tail = 0.5 * poly * exp(-z * z);
+    return x >= 0.0 ? 1.0 - tail : tail;
+}
+
+// The weight of a cutoff Gaussian along the unit ray direction dir whose visible part is
+// spans (from clip_ray_spans).
+float cutoff_weight(CutoffRecord rec, vec3 dir, vec4 spans, uint weight, float band2) {
+    vec3 d = vec3(dot(rec.m0.xyz, dir), dot(rec.m1.xyz, dir), dot(rec.m2.xyz, dir));
+    vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
+    float a = dot(d, d);
+    float t_star = -dot(o, d) / a;
+    if (weight == CLIP_WEIGHT_MASS) {
+        float sqrt_a = sqrt(a);
+        float w = normal_cdf((spans.y - t_star) * sqrt_a) - normal_cdf((spans.x - t_star) * sqrt_a)
+                + normal_cdf((spans.w - t_star) * sqrt_a) - normal_cdf((spans.z - t_star) * sqrt_a);
+        return clamp(w, 0.0, 1.0);
+    }
+    vec3 c = cross(o, d);
+    float q_min = dot(c, c) / a;
+    if (q_min >= band2) {
+        // The ray misses the band ellipsoid: visible or not where it passes closest.
+        bool seen = (spans.x <= t_star && t_star <= spans.y && spans.x < spans.y)
+                 || (spans.z <= t_star && t_star <= spans.w && spans.z < spans.w);
+        return seen ? 1.0 : 0.0;
+    }
+    float half_chord = sqrt((band2 - q_min) / a);
+    float t1 = t_star - half_chord;
+    float t2 = t_star + half_chord;
+    float inside = max(min(t2, spans.y) - max(t1, spans.x), 0.0)
+                 + max(min(t2, spans.w) - max(t1, spans.z), 0.0);
+    return clamp(inside / (t2 - t1), 0.0, 1.0);
+}
+
+#endif

@@ -1,0 +1,4 @@
+//! Subcommands of the `rara` tool that live in their own files.
+
+pub mod clip_args;
+pub mod sweep;

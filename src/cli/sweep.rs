@@ -1,0 +1,280 @@
+//! `rara sweep`: a clip plane moving across a scene, as numbered PNGs and an animated GIF,
+//! with the frame-to-frame change that shows popping (hard) or its absence (rara).
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use rara::clip::{Clip, ClipMode, Plane};
+use rara::{Context, Error, RenderOptions, Renderer, Result, Scene};
+
+use super::clip_args::{describe, ClipArgs};
+use crate::{load_scene, resolve_camera, save_png, CameraArgs};
+
+/// `rara sweep` options.
+#[derive(Args)]
+pub struct SweepArgs {
+    /// The scene (.ply).
+    scene: PathBuf,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Normal NX,NY,NZ of the moving plane; visible where n.x + d >= 0.
+    #[arg(long, value_parser = crate::parse_vec3)]
+    plane_normal: Vec3,
+    /// Plane offset d of the first frame (default: the whole scene visible).
+    #[arg(long, allow_hyphen_values = true)]
+    from: Option<f32>,
+    /// Plane offset d of the last frame (default: nearly nothing visible).
+    #[arg(long, allow_hyphen_values = true)]
+    to: Option<f32>,
+    /// Number of frames.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(2..=10000))]
+    frames: u32,
+    /// Put hard clipping (left) and rara (right) side by side in every frame.
+    #[arg(long)]
+    side_by_side: bool,
+    /// Background colour R,G,B in [0, 1].
+    #[arg(long, value_parser = crate::parse_vec3, default_value = "0,0,0")]
+    background: Vec3,
+    /// GIF frame delay in milliseconds.
+    #[arg(long, default_value_t = 100)]
+    delay_ms: u32,
+    #[command(flatten)]
+    clip: ClipArgs,
+    /// Output directory: frame_NNNN.png, sweep.gif, sweep.json.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Frame-to-frame change and cutoff counts of one clip configuration over a sweep.
+#[derive(Default)]
+struct SeriesStats {
+    label: String,
+    /// |a - b| of every RGB channel of every pixel, over all consecutive frame pairs.
+    changes: Vec<u8>,
+    cutoff_per_frame: Vec<u32>,
+    gpu_ms: Vec<f64>,
+    previous: Option<image::RgbaImage>,
+}
+
+impl SeriesStats {
+    fn add(&mut self, img: &image::RgbaImage, cutoff: u32, gpu_ms: f64) {
+        if let Some(prev) = &self.previous {
+            for (a, b) in prev.pixels().zip(img.pixels()) {
+                for c in 0..3 {
+                    self.changes.push(a.0[c].abs_diff(b.0[c]));
+                }
+            }
+        }
+        self.previous = Some(img.clone());
+        self.cutoff_per_frame.push(cutoff);
+        self.gpu_ms.push(gpu_ms);
+    }
+
+    /// Mean and 99.9th percentile of the frame-to-frame change, 8-bit units.
+    fn change_summary(&self) -> (f64, f64) {
+        if self.changes.is_empty() {
+            return (0.0, 0.0);
+        }
+        let mean = self.changes.iter().map(|&c| c as f64).sum::<f64>() / self.changes.len() as f64;
+        let mut histogram = [0usize; 256];
+        for &c in &self.changes {
+            histogram[c as usize] += 1;
+        }
+        let rank = ((self.changes.len() as f64) * 0.999).ceil() as usize;
+        let mut seen = 0;
+        let mut p999 = 255;
+        for (value, &n) in histogram.iter().enumerate() {
+            seen += n;
+            if seen >= rank {
+                p999 = value;
+                break;
+            }
+        }
+        (mean, p999 as f64)
+    }
+}
+
+/// Offsets d that take the plane with unit normal `n` across the scene: from everything
+/// visible to nearly nothing. The ends are the 0.5 and 99.5 percentiles of `n . mu`, so that
+/// a few far floaters do not stretch the sweep over empty space.
+pub fn default_range(scene: &Scene, n: Vec3) -> (f32, f32) {
+    let mut proj: Vec<f32> = scene.means.iter().map(|m| n.dot(*m)).collect();
+    proj.sort_by(f32::total_cmp);
+    let at = |q: f64| proj[((proj.len() - 1) as f64 * q).round() as usize];
+    let (lo, hi) = (at(0.005), at(0.995));
+    (-lo, -hi)
+}
+
+/// Runs the sweep.
+pub fn run(args: &SweepArgs) -> Result<()> {
+    let camera = resolve_camera(&args.camera)?;
+    let scene = load_scene(&args.scene)?;
+    if scene.is_empty() {
+        return Err(Error::InvalidInput(format!("{}: no Gaussians to sweep", args.scene.display())));
+    }
+    let normal = Plane::new(args.plane_normal, 0.0)?.normal;
+    let (d0, d1) = {
+        let (lo, hi) = default_range(&scene, normal);
+        (args.from.unwrap_or(lo), args.to.unwrap_or(hi))
+    };
+    // The configurations rendered per frame: the one asked for, or hard next to it.
+    let base = args.clip.build(&[Plane::new(normal, d0)?])?;
+    let mut configs: Vec<Clip> = Vec::new();
+    if args.side_by_side {
+        let mut hard = base.clone();
+        hard.mode = ClipMode::Hard;
+        let mut rara_clip = base.clone();
+        if rara_clip.mode != ClipMode::Rara {
+            rara_clip.mode = ClipMode::Rara;
+        }
+        configs.push(hard);
+        configs.push(rara_clip);
+    } else {
+        configs.push(base);
+    }
+    std::fs::create_dir_all(&args.output).map_err(|source| Error::Io {
+        path: args.output.clone(),
+        source,
+    })?;
+
+    let ctx = Context::from_env()?;
+    let mut renderer = Renderer::new(&ctx)?;
+    let gpu_scene = renderer.upload(&scene)?;
+    let mut series: Vec<SeriesStats> = configs
+        .iter()
+        .map(|c| SeriesStats {
+            label: describe(c),
+            ..SeriesStats::default()
+        })
+        .collect();
+    let gif_path = args.output.join("sweep.gif");
+    let gif_file = std::fs::File::create(&gif_path).map_err(|source| Error::Io {
+        path: gif_path.clone(),
+        source,
+    })?;
+    let mut gif = image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(gif_file), 10);
+    let gif_error = |source| Error::Image {
+        path: gif_path.clone(),
+        source,
+    };
+    gif.set_repeat(image::codecs::gif::Repeat::Infinite)
+        .map_err(gif_error)?;
+
+    eprintln!(
+        "sweeping {} frames, plane normal ({:.3}, {:.3}, {:.3}), d from {d0} to {d1}: {}",
+        args.frames,
+        normal.x,
+        normal.y,
+        normal.z,
+        series.iter().map(|s| s.label.as_str()).collect::<Vec<_>>().join(" | ")
+    );
+    let bar = ProgressBar::new(args.frames as u64)
+        .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap())
+        .with_message("sweep");
+    for k in 0..args.frames {
+        let d = d0 + (d1 - d0) * k as f32 / (args.frames - 1) as f32;
+        let moving = Plane::new(normal, d)?;
+        let mut panels = Vec::new();
+        for (config, stats) in configs.iter().zip(series.iter_mut()) {
+            let clip = with_moving_plane(config, moving);
+            let options = RenderOptions {
+                background: args.background,
+                clip,
+            };
+            let (img, frame) = renderer.render(&gpu_scene, &camera, &options)?;
+            stats.add(&img, frame.cutoff, frame.gpu_ms);
+            panels.push(img);
+        }
+        let frame_img = concat_horizontally(&panels);
+        save_png(&frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
+        let delay = image::Delay::from_numer_denom_ms(args.delay_ms, 1);
+        gif.encode_frame(image::Frame::from_parts(frame_img, 0, 0, delay))
+            .map_err(gif_error)?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    drop(gif);
+
+    println!(
+        "wrote {} frames and {} ({}x{} per panel, {} on {})",
+        args.frames,
+        gif_path.display(),
+        camera.width,
+        camera.height,
+        args.scene.display(),
+        ctx.info().name
+    );
+    println!(
+        "{:<60} {:>12} {:>12} {:>14} {:>12}",
+        "configuration", "mean change", "p99.9 change", "cutoff/frame", "median GPU"
+    );
+    let mut report = Vec::new();
+    for s in &mut series {
+        let (mean, p999) = s.change_summary();
+        let mean_cutoff =
+            s.cutoff_per_frame.iter().map(|&c| c as f64).sum::<f64>() / s.cutoff_per_frame.len() as f64;
+        let median_ms = crate::median(&mut s.gpu_ms.clone());
+        println!(
+            "{:<60} {:>12.4} {:>12.0} {:>14.0} {:>9.1} ms",
+            s.label, mean, p999, mean_cutoff, median_ms
+        );
+        report.push(serde_json::json!({
+            "configuration": s.label,
+            "mean_change": mean,
+            "p999_change": p999,
+            "cutoff_per_frame": s.cutoff_per_frame,
+            "gpu_ms_per_frame": s.gpu_ms,
+        }));
+    }
+    let json = serde_json::json!({
+        "scene": args.scene.display().to_string(),
+        "width": camera.width,
+        "height": camera.height,
+        "frames": args.frames,
+        "plane_normal": normal.to_array(),
+        "from": d0,
+        "to": d1,
+        "device": ctx.info().name,
+        "series": report,
+    });
+    write_json(&args.output.join("sweep.json"), &json)?;
+    println!("frame-to-frame change is |a - b| per RGB channel in 8-bit units; details in {}", args.output.join("sweep.json").display());
+    Ok(())
+}
+
+/// `config` with its last half-space (the moving plane) replaced by `moving`.
+fn with_moving_plane(config: &Clip, moving: Plane) -> Clip {
+    let mut clip = config.clone();
+    if let Some(rara::clip::ClipRegion {
+        shape: rara::clip::ClipShape::HalfSpaces(planes),
+        ..
+    }) = &mut clip.region
+    {
+        if let Some(last) = planes.last_mut() {
+            *last = moving;
+        }
+    }
+    clip
+}
+
+fn concat_horizontally(panels: &[image::RgbaImage]) -> image::RgbaImage {
+    let width = panels.iter().map(|p| p.width()).sum();
+    let height = panels.iter().map(|p| p.height()).max().unwrap_or(0);
+    let mut out = image::RgbaImage::new(width, height);
+    let mut x = 0;
+    for p in panels {
+        image::imageops::replace(&mut out, p, x as i64, 0);
+        x += p.width();
+    }
+    out
+}
+
+fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
+    std::fs::write(path, serde_json::to_string_pretty(value).unwrap()).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
