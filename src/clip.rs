@@ -208,7 +208,10 @@ fn box_planes(center: Vec3, half_extents: Vec3, rotation: Quat) -> Result<Vec<Pl
     }
     let rotation = rotation / q_len;
     let mut planes = Vec::with_capacity(6);
-    for (axis, h) in [Vec3::X, Vec3::Y, Vec3::Z].into_iter().zip(half_extents.to_array()) {
+    for (axis, h) in [Vec3::X, Vec3::Y, Vec3::Z]
+        .into_iter()
+        .zip(half_extents.to_array())
+    {
         let a = rotation * axis;
         // Inside: -h <= a.(x - c) <= h, i.e. -a.x + a.c + h >= 0 and a.x - a.c + h >= 0.
         planes.push(Plane::new(-a, a.dot(center) + h)?);
@@ -564,7 +567,8 @@ pub fn normal_cdf(x: f64) -> f64 {
     let t = 1.0 / (1.0 + 0.327_591_1 * z);
     let poly = t
         * (0.254_829_592
-            + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
     let tail = 0.5 * poly * (-z * z).exp(); // Phi(-|x|)
     if x >= 0.0 {
         1.0 - tail
@@ -653,7 +657,11 @@ mod tests {
         let r = ClipRegion::oriented_box(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, 0.5), q)
             .unwrap();
         let local = |p: Vec3| q.inverse() * (p - Vec3::new(1.0, 2.0, 3.0));
-        for p in [Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.9, 2.0, 3.0), Vec3::new(3.0, 0.0, 0.0)] {
+        for p in [
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(1.9, 2.0, 3.0),
+            Vec3::new(3.0, 0.0, 0.0),
+        ] {
             let l = local(p);
             let inside = l.x.abs() <= 1.0 && l.y.abs() <= 2.0 && l.z.abs() <= 0.5;
             assert_eq!(r.signed_distance(p) >= 0.0, inside, "{p}");

@@ -163,8 +163,9 @@ fn parse_box(s: &str) -> std::result::Result<Vec<Plane>, String> {
         10 => Quat::from_xyzw(v[7], v[8], v[9], v[6]),
         n => return Err(format!("expected 6 or 10 comma-separated numbers, got {n}")),
     };
-    let region = ClipRegion::oriented_box(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]), q)
-        .map_err(|e| e.to_string())?;
+    let region =
+        ClipRegion::oriented_box(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]), q)
+            .map_err(|e| e.to_string())?;
     match region.shape {
         ClipShape::HalfSpaces(p) => Ok(p),
         ClipShape::Sphere { .. } => unreachable!("a box is half-spaces"),

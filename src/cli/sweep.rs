@@ -113,7 +113,10 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let camera = resolve_camera(&args.camera)?;
     let scene = load_scene(&args.scene)?;
     if scene.is_empty() {
-        return Err(Error::InvalidInput(format!("{}: no Gaussians to sweep", args.scene.display())));
+        return Err(Error::InvalidInput(format!(
+            "{}: no Gaussians to sweep",
+            args.scene.display()
+        )));
     }
     let normal = Plane::new(args.plane_normal, 0.0)?.normal;
     let (d0, d1) = {
@@ -155,7 +158,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         path: gif_path.clone(),
         source,
     })?;
-    let mut gif = image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(gif_file), 10);
+    let mut gif =
+        image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(gif_file), 10);
     let gif_error = |source| Error::Image {
         path: gif_path.clone(),
         source,
@@ -169,10 +173,16 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         normal.x,
         normal.y,
         normal.z,
-        series.iter().map(|s| s.label.as_str()).collect::<Vec<_>>().join(" | ")
+        series
+            .iter()
+            .map(|s| s.label.as_str())
+            .collect::<Vec<_>>()
+            .join(" | ")
     );
     let bar = ProgressBar::new(args.frames as u64)
-        .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap())
+        .with_style(
+            ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap(),
+        )
         .with_message("sweep");
     for k in 0..args.frames {
         let d = d0 + (d1 - d0) * k as f32 / (args.frames - 1) as f32;
@@ -214,8 +224,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let mut report = Vec::new();
     for s in &mut series {
         let (mean, p999) = s.change_summary();
-        let mean_cutoff =
-            s.cutoff_per_frame.iter().map(|&c| c as f64).sum::<f64>() / s.cutoff_per_frame.len() as f64;
+        let mean_cutoff = s.cutoff_per_frame.iter().map(|&c| c as f64).sum::<f64>()
+            / s.cutoff_per_frame.len() as f64;
         let median_ms = crate::median(&mut s.gpu_ms.clone());
         println!(
             "{:<60} {:>12.4} {:>12.0} {:>14.0} {:>9.1} ms",
@@ -241,7 +251,10 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         "series": report,
     });
     write_json(&args.output.join("sweep.json"), &json)?;
-    println!("frame-to-frame change is |a - b| per RGB channel in 8-bit units; details in {}", args.output.join("sweep.json").display());
+    println!(
+        "frame-to-frame change is |a - b| per RGB channel in 8-bit units; details in {}",
+        args.output.join("sweep.json").display()
+    );
     Ok(())
 }
 

@@ -171,9 +171,8 @@ pub fn project_one(
         conic,
         color,
         rect: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
-        cutoff: (class == Classification::Cutoff).then(|| {
-            CutoffRay::new(mu, scene.scales[i], scene.rotations[i], camera.position)
-        }),
+        cutoff: (class == Classification::Cutoff)
+            .then(|| CutoffRay::new(mu, scene.scales[i], scene.rotations[i], camera.position)),
     })
 }
 
