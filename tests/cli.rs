@@ -318,3 +318,167 @@ fn compare_reports_metrics() {
         &["30x20", "3x3"],
     );
 }
+
+#[test]
+fn clip_options_and_clip_files_agree() {
+    let (scene, cams) = good_scene();
+    let (scene, cams) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    let out_flags = dir().join("clip_flags.png");
+    let out_file = dir().join("clip_file.png");
+    let out_plain = dir().join("clip_none.png");
+    let mut args = render_args(scene, cams, out_flags.to_str().unwrap());
+    args.extend([
+        "--clip-plane",
+        "1,0.2,0,0.1",
+        "--clip-box",
+        "0,0,0,0.9,0.9,0.9,1,0,0,0",
+        "--weight",
+        "length",
+        "--band",
+        "2.5",
+    ]);
+    let out = rara(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("cutoff"), "{stdout}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("rara clip by 7 planes (length weight, band 2.5)"),
+        "{stderr}"
+    );
+
+    let json = write(
+        "clip.json",
+        br#"{"planes": [[1, 0.2, 0, 0.1]],
+             "box": {"center": [0, 0, 0], "half_extents": [0.9, 0.9, 0.9]},
+             "weight": "length", "band": 2.5}"#,
+    );
+    let mut args = render_args(scene, cams, out_file.to_str().unwrap());
+    args.extend(["--clip", json.to_str().unwrap()]);
+    assert!(rara(&args).status.success());
+    let a = image::open(&out_flags).unwrap().to_rgba8();
+    let b = image::open(&out_file).unwrap().to_rgba8();
+    assert_eq!(a, b, "--clip FILE and the same flags render the same image");
+
+    let args = render_args(scene, cams, out_plain.to_str().unwrap());
+    assert!(rara(&args).status.success());
+    let plain = image::open(&out_plain).unwrap().to_rgba8();
+    assert_ne!(a, plain, "the clip must remove something");
+
+    // The sphere cutaway and hard mode parse and render.
+    let mut args = render_args(scene, cams, out_plain.to_str().unwrap());
+    args.extend([
+        "--clip-sphere",
+        "0,0,-1,0.7",
+        "--invert",
+        "--clip-mode",
+        "hard",
+    ]);
+    let out = rara(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("hard clip by a sphere, inverted"));
+}
+
+#[test]
+fn bad_clip_options_fail_cleanly() {
+    let (scene, cams) = good_scene();
+    let (scene, cams) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    let out = dir().join("bad_clip.png");
+    let out = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &[&str])> = vec![
+        (vec!["--clip-plane", "0,0,0,1"], &["non-zero normal"]),
+        (vec!["--clip-plane", "1,0,1"], &["expected 4"]),
+        (vec!["--clip-sphere", "0,0,0,-1"], &["positive radius"]),
+        (
+            vec!["--clip-box", "0,0,0,1,0,1"],
+            &["positive half extents"],
+        ),
+        (
+            vec!["--clip-sphere", "0,0,0,1", "--clip-plane", "1,0,0,0"],
+            &["cannot be combined"],
+        ),
+        (vec!["--invert"], &["need a region"]),
+        (
+            vec!["--clip-plane", "1,0,0,0", "--clip-mode", "soft"],
+            &["soft"],
+        ),
+        (
+            vec!["--clip-plane", "1,0,0,0", "--band", "0"],
+            &["band must be positive"],
+        ),
+    ];
+    for (extra, needles) in cases {
+        let mut args = render_args(scene, cams, out);
+        args.extend(extra.iter().copied());
+        assert_error(&rara(&args), needles);
+    }
+    let bad_json = write("bad_clip.json", br#"{"planes": [[1, 0, 0]]}"#);
+    let mut args = render_args(scene, cams, out);
+    args.extend(["--clip", bad_json.to_str().unwrap()]);
+    assert_error(&rara(&args), &["bad_clip.json"]);
+    let unknown = write("unknown_clip.json", br#"{"plane": [[1, 0, 0, 0]]}"#);
+    let mut args = render_args(scene, cams, out);
+    args.extend(["--clip", unknown.to_str().unwrap()]);
+    assert_error(&rara(&args), &["unknown_clip.json", "unknown field"]);
+}
+
+#[test]
+fn sweep_writes_frames_gif_and_stats() {
+    let (scene, cams) = good_scene();
+    let out_dir = dir().join("sweep");
+    let out = rara(&[
+        "sweep",
+        scene.to_str().unwrap(),
+        "--cameras",
+        cams.to_str().unwrap(),
+        "--plane-normal",
+        "1,0,0",
+        "--frames",
+        "4",
+        "--side-by-side",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for k in 0..4 {
+        let frame = image::open(out_dir.join(format!("frame_{k:04}.png"))).unwrap();
+        assert_eq!(
+            (frame.width(), frame.height()),
+            (128, 48),
+            "hard | rara side by side"
+        );
+    }
+    let gif = std::fs::read(out_dir.join("sweep.gif")).unwrap();
+    assert_eq!(&gif[..6], b"GIF89a");
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("sweep.json")).unwrap()).unwrap();
+    let series = stats["series"].as_array().unwrap();
+    assert_eq!(series.len(), 2);
+    assert_eq!(series[1]["cutoff_per_frame"].as_array().unwrap().len(), 4);
+    // The default range starts with the whole scene visible and ends with almost nothing.
+    let first = image::open(out_dir.join("frame_0000.png"))
+        .unwrap()
+        .to_rgba8();
+    let last = image::open(out_dir.join("frame_0003.png"))
+        .unwrap()
+        .to_rgba8();
+    let lit = |img: &image::RgbaImage| img.pixels().filter(|p| p.0[0] > 10).count();
+    assert!(
+        lit(&first) > 2 * lit(&last),
+        "{} vs {}",
+        lit(&first),
+        lit(&last)
+    );
+}

@@ -218,7 +218,7 @@ fn rara_is_continuous_where_hard_clipping_pops() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
     let mut scene = rara::synth::shell(4000, 0, 21);
-    let camera = rara::synth::orbit_cameras(1, 3.2, 240, 180, 50.0).unwrap()[0].clone();
+    let camera = rara::synth::orbit_cameras(1, 3.2, 240, 180, 50.0).unwrap()[0];
     let view = camera.rotation * Vec3::Z;
     // The front-most Gaussian, made white and opaque so that its loss shows.
     let k = (0..scene.len())
@@ -386,7 +386,10 @@ fn needle_behind_a_plane_does_not_leak() {
     let width = 0.004;
     let mut scene = Scene::default();
     // Two needles parallel to the plane z = 0, 6 widths behind it, seen face-on and turned.
-    for rot in [Quat::IDENTITY, Quat::from_rotation_z(0.8) * Quat::from_rotation_x(0.3)] {
+    for rot in [
+        Quat::IDENTITY,
+        Quat::from_rotation_z(0.8) * Quat::from_rotation_x(0.3),
+    ] {
         scene.push(
             Vec3::new(0.0, 0.0, 6.0 * width),
             0.99,
