@@ -2,7 +2,9 @@
 
 use std::mem::offset_of;
 
-use rara::gpu_types::{GpuFrameParams, GpuGaussian, GpuProjectedSplat, GpuSortInfo};
+use rara::gpu_types::{
+    GpuClipParams, GpuCutoffRecord, GpuFrameParams, GpuGaussian, GpuProjectedSplat, GpuSortInfo,
+};
 use rara::shaders;
 
 /// Member offsets of the struct type named `name` in a SPIR-V module (from OpName and
@@ -95,6 +97,29 @@ fn gpu_struct_layouts_match_spirv() {
         member_offsets(shaders::SORT_PREPARE, "SortInfo"),
         sort.map(|o| o as u32),
         "SortInfo"
+    );
+    let clip = [
+        offset_of!(GpuClipParams, config),
+        offset_of!(GpuClipParams, band),
+        offset_of!(GpuClipParams, sphere),
+        offset_of!(GpuClipParams, planes),
+    ];
+    for kernel in [shaders::PROJECT, shaders::RASTERIZE] {
+        assert_eq!(
+            member_offsets(kernel, "ClipParams"),
+            clip.map(|o| o as u32),
+            "ClipParams"
+        );
+    }
+    let cutoff = [
+        offset_of!(GpuCutoffRecord, m0),
+        offset_of!(GpuCutoffRecord, m1),
+        offset_of!(GpuCutoffRecord, m2),
+    ];
+    assert_eq!(
+        member_offsets(shaders::PROJECT, "CutoffRecord"),
+        cutoff.map(|o| o as u32),
+        "CutoffRecord"
     );
 }
 
