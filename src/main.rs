@@ -27,6 +27,9 @@ enum Command {
     /// Move a clip plane across a scene: numbered PNGs, an animated GIF and the frame-to-frame
     /// change (popping) per clip mode.
     Sweep(cli::sweep::SweepArgs),
+    /// Benchmark: the RaRa paper's Table 1 (original / hard / rara while a plane sweeps the
+    /// scene) with per-pass GPU timings, or the radix sort alone (--sort N).
+    Bench(cli::bench::BenchArgs),
     /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
     Info {
         /// The scene (.ply).
@@ -274,11 +277,11 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             let (_, s) = renderer.render(&gpu_scene, &camera, &options)?;
             gpu.push(s.gpu_ms);
             wall.push(s.wall_ms);
-            for (k, (name, ms)) in s.passes.iter().enumerate() {
+            for (k, pass) in s.passes.iter().enumerate() {
                 if passes.len() <= k {
-                    passes.push((name, Vec::new()));
+                    passes.push((pass.name, Vec::new()));
                 }
-                passes[k].1.push(*ms);
+                passes[k].1.push(pass.ms);
             }
             bar.inc(1);
         }
@@ -496,6 +499,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Sweep(args) => cli::sweep::run(args),
+        Command::Bench(args) => cli::bench::run(args),
         Command::Info { scene, json } => cmd_info(scene, *json),
         Command::Compare { a, b, diff, json } => cmd_compare(a, b, diff.as_deref(), *json),
         Command::Synth {

@@ -19,7 +19,7 @@ use crate::stages::project::{Project, ProjectPush};
 use crate::stages::rasterize::{Rasterize, RasterizePush};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
-use crate::timing::PassTimer;
+use crate::timing::{PassTimer, PassTiming};
 use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
 
 /// Byte offset of `scene.x` (the Gaussian count) in `FrameParams`: the prefix sum of tiles
@@ -87,8 +87,8 @@ pub struct FrameStats {
     pub max_tile_len: u32,
     /// How often the frame was rendered again after growing a buffer.
     pub rerenders: u32,
-    /// GPU time per pass in milliseconds, in pass order (empty without timestamps).
-    pub passes: Vec<(&'static str, f64)>,
+    /// GPU time (and compute invocations) per pass, in pass order (empty without timestamps).
+    pub passes: Vec<PassTiming>,
     /// Sum of `passes`.
     pub gpu_ms: f64,
     /// Wall-clock milliseconds of the last render: recording, submission and wait.
@@ -305,7 +305,7 @@ impl Renderer {
                 cutoff: counters[COUNTER_CUTOFF as usize],
                 max_tile_len,
                 rerenders,
-                gpu_ms: passes.iter().map(|p| p.1).sum(),
+                gpu_ms: passes.iter().map(|p| p.ms).sum(),
                 passes,
                 wall_ms,
             };
@@ -384,14 +384,14 @@ impl Renderer {
         let timer = &mut self.timer;
         let image_bytes = w as u64 * h as u64 * 4;
         ctx.run_commands(|cmd| unsafe {
-            timer.begin(cmd);
+            timer.begin_frame(cmd);
             device.cmd_update_buffer(cmd, f.params.raw, 0, bytemuck::bytes_of(&params));
             device.cmd_update_buffer(cmd, f.clip_params.raw, 0, bytemuck::bytes_of(&clip_params));
             device.cmd_fill_buffer(cmd, f.counters.raw, 0, vk::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, f.ranges.raw, 0, vk::WHOLE_SIZE, 0);
             compute_barrier(&ctx, cmd);
 
-            ctx.begin_label(cmd, c"project");
+            timer.begin_pass(cmd, c"project");
             let push = ProjectPush {
                 frame: f.params.address,
                 gaussians: scene.gaussians.address,
@@ -404,10 +404,9 @@ impl Renderer {
             };
             self.project.record(cmd, &push, scene.count);
             compute_barrier(&ctx, cmd);
-            ctx.end_label(cmd);
-            timer.mark(cmd, "project");
+            timer.end_pass(cmd, c"project");
 
-            ctx.begin_label(cmd, c"prefix sum");
+            timer.begin_pass(cmd, c"prefix sum");
             self.prefix_sum.record(
                 &ctx,
                 cmd,
@@ -416,10 +415,9 @@ impl Renderer {
                 Some(counters_at(COUNTER_INTERSECTIONS)),
                 &f.touched_scan,
             );
-            ctx.end_label(cmd);
-            timer.mark(cmd, "prefix sum");
+            timer.end_pass(cmd, c"prefix sum");
 
-            ctx.begin_label(cmd, c"emit");
+            timer.begin_pass(cmd, c"emit");
             let push = EmitPush {
                 frame: f.params.address,
                 splats: f.splats.address,
@@ -429,22 +427,19 @@ impl Renderer {
             };
             self.emit.record(cmd, &push, scene.count);
             compute_barrier(&ctx, cmd);
-            ctx.end_label(cmd);
-            timer.mark(cmd, "emit");
+            timer.end_pass(cmd, c"emit");
 
-            ctx.begin_label(cmd, c"sort");
             let sorted = self.sort.record(
                 &ctx,
                 cmd,
                 &f.sort,
                 counters_at(COUNTER_INTERSECTIONS),
                 key_bits(w, h),
+                Some(&mut *timer),
             );
             debug_assert_eq!(sorted, sorted_index);
-            ctx.end_label(cmd);
-            timer.mark(cmd, "sort");
 
-            ctx.begin_label(cmd, c"tile ranges");
+            timer.begin_pass(cmd, c"tile ranges");
             let push = TileRangesPush {
                 keys: f.sort.keys[sorted].address,
                 info: f.sort.info.address,
@@ -452,10 +447,9 @@ impl Renderer {
             };
             self.tile_ranges.record(cmd, &push, &f.sort.info);
             compute_barrier(&ctx, cmd);
-            ctx.end_label(cmd);
-            timer.mark(cmd, "tile ranges");
+            timer.end_pass(cmd, c"tile ranges");
 
-            ctx.begin_label(cmd, c"rasterize");
+            timer.begin_pass(cmd, c"rasterize");
             let push = RasterizePush {
                 frame: f.params.address,
                 splats: f.splats.address,
@@ -471,8 +465,7 @@ impl Renderer {
             };
             self.rasterize.record(&ctx, cmd, &push, (gx, gy), rounds);
             compute_barrier(&ctx, cmd);
-            ctx.end_label(cmd);
-            timer.mark(cmd, "rasterize");
+            timer.end_pass(cmd, c"rasterize");
 
             let regions = [vk::BufferCopy {
                 src_offset: 0,

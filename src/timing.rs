@@ -1,92 +1,174 @@
-//! Per-pass GPU timestamps.
+//! Per-pass GPU timestamps, compute-invocation counts and debug labels.
+//!
+//! Each pass of a frame is bracketed by [`PassTimer::begin_pass`] / [`PassTimer::end_pass`]:
+//! a `VK_EXT_debug_utils` label (so RenderDoc and Nsight captures show pass names), a
+//! timestamp after the pass, and, where the device has pipeline-statistics queries, the number
+//! of compute-shader invocations the pass ran.
 
 use ash::vk;
 
 use crate::error::{Result, VkContext};
 use crate::vk::Context;
 
-/// Most timestamps one frame writes.
-const MAX_MARKS: u32 = 32;
+/// Most passes one frame times.
+pub const MAX_PASSES: u32 = 31;
 
-/// A timestamp query pool that records a mark after each pass of a frame.
+/// What one pass of the last frame cost.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassTiming {
+    /// Pass name (the debug label).
+    pub name: &'static str,
+    /// GPU milliseconds from the end of the previous pass to the end of this one.
+    pub ms: f64,
+    /// Compute-shader invocations, where the device counts them.
+    pub invocations: Option<u64>,
+}
+
+/// Query pools that time and count the passes of a frame.
 pub struct PassTimer {
-    pool: vk::QueryPool,
+    timestamps: vk::QueryPool,
+    statistics: Option<vk::QueryPool>,
     names: Vec<&'static str>,
+    open: bool,
     enabled: bool,
     ctx: Context,
 }
 
 impl PassTimer {
-    /// Creates the query pool (timestamps are skipped where the queue has none).
+    /// Creates the query pools (timestamps are skipped where the queue has none, statistics
+    /// where the device lacks `pipelineStatisticsQuery`).
     pub fn new(ctx: &Context) -> Result<Self> {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(MAX_MARKS);
-        let pool =
+            .query_count(MAX_PASSES + 1);
+        let timestamps =
             unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        let statistics = if ctx.info().pipeline_statistics {
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::PIPELINE_STATISTICS)
+                .pipeline_statistics(vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS)
+                .query_count(MAX_PASSES);
+            Some(unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?)
+        } else {
+            None
+        };
         Ok(PassTimer {
-            pool,
+            timestamps,
+            statistics,
             names: Vec::new(),
+            open: false,
             enabled: ctx.info().timestamps,
             ctx: ctx.clone(),
         })
     }
 
-    /// Resets the pool and writes the frame's first timestamp.
-    pub fn begin(&mut self, cmd: vk::CommandBuffer) {
+    /// Resets the pools and writes the frame's first timestamp.
+    pub fn begin_frame(&mut self, cmd: vk::CommandBuffer) {
         self.names.clear();
-        if self.enabled {
-            unsafe {
-                self.ctx
-                    .device()
-                    .cmd_reset_query_pool(cmd, self.pool, 0, MAX_MARKS)
-            };
+        self.open = false;
+        let device = self.ctx.device();
+        unsafe {
+            if self.enabled {
+                device.cmd_reset_query_pool(cmd, self.timestamps, 0, MAX_PASSES + 1);
+                device.cmd_write_timestamp(
+                    cmd,
+                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                    self.timestamps,
+                    0,
+                );
+            }
+            if let Some(pool) = self.statistics {
+                device.cmd_reset_query_pool(cmd, pool, 0, MAX_PASSES);
+            }
         }
-        self.mark(cmd, "start");
     }
 
-    /// Writes a timestamp once the work recorded so far is done; `name` is the pass it closes.
-    pub fn mark(&mut self, cmd: vk::CommandBuffer, name: &'static str) {
-        if !self.enabled || self.names.len() as u32 >= MAX_MARKS {
+    /// Opens pass `name`: its debug label and its invocation count start here.
+    pub fn begin_pass(&mut self, cmd: vk::CommandBuffer, name: &'static std::ffi::CStr) {
+        assert!(!self.open, "end_pass before the next begin_pass");
+        self.ctx.begin_label(cmd, name);
+        self.open = true;
+        if self.names.len() as u32 >= MAX_PASSES {
             return;
         }
-        unsafe {
-            self.ctx.device().cmd_write_timestamp(
-                cmd,
-                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                self.pool,
-                self.names.len() as u32,
-            )
-        };
-        self.names.push(name);
+        if let Some(pool) = self.statistics {
+            unsafe {
+                self.ctx.device().cmd_begin_query(
+                    cmd,
+                    pool,
+                    self.names.len() as u32,
+                    vk::QueryControlFlags::empty(),
+                )
+            };
+        }
     }
 
-    /// After the frame completed: milliseconds per pass, in order (empty without timestamps).
-    pub fn read(&self) -> Result<Vec<(&'static str, f64)>> {
-        if !self.enabled || self.names.len() < 2 {
+    /// Closes the open pass: a timestamp once its work is done, the end of its label.
+    pub fn end_pass(&mut self, cmd: vk::CommandBuffer, name: &'static std::ffi::CStr) {
+        assert!(self.open, "end_pass without begin_pass");
+        self.open = false;
+        let index = self.names.len() as u32;
+        if index < MAX_PASSES {
+            let device = self.ctx.device();
+            unsafe {
+                if let Some(pool) = self.statistics {
+                    device.cmd_end_query(cmd, pool, index);
+                }
+                if self.enabled {
+                    device.cmd_write_timestamp(
+                        cmd,
+                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                        self.timestamps,
+                        index + 1,
+                    );
+                }
+            }
+            self.names
+                .push(name.to_str().expect("pass names are ASCII"));
+        }
+        self.ctx.end_label(cmd);
+    }
+
+    /// After the frame completed: each pass in order (empty without timestamps).
+    pub fn read(&self) -> Result<Vec<PassTiming>> {
+        if !self.enabled || self.names.is_empty() {
             return Ok(Vec::new());
         }
-        let mut ticks = vec![0u64; self.names.len()];
-        unsafe {
-            self.ctx.device().get_query_pool_results(
-                self.pool,
-                0,
-                &mut ticks,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
+        let n = self.names.len();
+        let mut ticks = vec![0u64; n + 1];
+        let flags = vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT;
+        let device = self.ctx.device();
+        unsafe { device.get_query_pool_results(self.timestamps, 0, &mut ticks, flags) }
+            .vk("vkGetQueryPoolResults")?;
+        let mut invocations = vec![None; n];
+        if let Some(pool) = self.statistics {
+            let mut counts = vec![0u64; n];
+            unsafe { device.get_query_pool_results(pool, 0, &mut counts, flags) }
+                .vk("vkGetQueryPoolResults")?;
+            invocations = counts.into_iter().map(Some).collect();
         }
-        .vk("vkGetQueryPoolResults")?;
         let period = self.ctx.info().timestamp_period_ns as f64;
-        Ok(self.names[1..]
+        Ok(self
+            .names
             .iter()
             .zip(ticks.windows(2))
-            .map(|(name, w)| (*name, w[1].saturating_sub(w[0]) as f64 * period * 1e-6))
+            .zip(invocations)
+            .map(|((name, w), invocations)| PassTiming {
+                name,
+                ms: w[1].saturating_sub(w[0]) as f64 * period * 1e-6,
+                invocations,
+            })
             .collect())
     }
 }
 
 impl Drop for PassTimer {
     fn drop(&mut self) {
-        unsafe { self.ctx.device().destroy_query_pool(self.pool, None) };
+        unsafe {
+            self.ctx.device().destroy_query_pool(self.timestamps, None);
+            if let Some(pool) = self.statistics {
+                self.ctx.device().destroy_query_pool(pool, None);
+            }
+        }
     }
 }

@@ -16,6 +16,7 @@ use crate::constants::{SORT_BLOCK, SORT_RADIX, SORT_RADIX_BITS};
 use crate::error::Result;
 use crate::gpu_types::SORT_HIST_OFFSET;
 use crate::shaders;
+use crate::timing::PassTimer;
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
 #[repr(C)]
@@ -84,6 +85,26 @@ impl SortBuffers {
     }
 }
 
+/// Debug labels / timing names of the radix passes (64-bit keys need at most 16).
+const SORT_PASS_LABELS: [&std::ffi::CStr; 16] = [
+    c"sort pass 0",
+    c"sort pass 1",
+    c"sort pass 2",
+    c"sort pass 3",
+    c"sort pass 4",
+    c"sort pass 5",
+    c"sort pass 6",
+    c"sort pass 7",
+    c"sort pass 8",
+    c"sort pass 9",
+    c"sort pass 10",
+    c"sort pass 11",
+    c"sort pass 12",
+    c"sort pass 13",
+    c"sort pass 14",
+    c"sort pass 15",
+];
+
 /// Number of radix passes for `key_bits` significant key bits.
 pub fn passes_for(key_bits: u32) -> u32 {
     key_bits.div_ceil(SORT_RADIX_BITS)
@@ -137,7 +158,8 @@ impl RadixSort {
     /// Records the sort of the pairs in `bufs.keys[0]` / `bufs.values[0]`. Their number is the
     /// `u32` at device address `count`, clamped to the capacity. Only the low `key_bits` bits
     /// of the keys are sorted. Returns the index (0 or 1) of the buffers holding the result.
-    /// Ends with a barrier.
+    /// Ends with a barrier. With a `timer`, every radix pass is a timed pass of its own
+    /// ("sort setup", "sort pass 0", ...).
     pub fn record(
         &self,
         ctx: &Context,
@@ -145,7 +167,11 @@ impl RadixSort {
         bufs: &SortBuffers,
         count: u64,
         key_bits: u32,
+        mut timer: Option<&mut PassTimer>,
     ) -> usize {
+        if let Some(t) = timer.as_deref_mut() {
+            t.begin_pass(cmd, c"sort setup");
+        }
         let info = bufs.info.address;
         let hist = info + SORT_HIST_OFFSET;
         let push = PreparePush {
@@ -156,8 +182,15 @@ impl RadixSort {
         };
         self.prepare.dispatch(cmd, &push, [1, 1, 1]);
         compute_barrier(ctx, cmd);
+        if let Some(t) = timer.as_deref_mut() {
+            t.end_pass(cmd, c"sort setup");
+        }
         let mut src = 0;
         for pass in 0..passes_for(key_bits) {
+            let label = SORT_PASS_LABELS[(pass as usize).min(SORT_PASS_LABELS.len() - 1)];
+            if let Some(t) = timer.as_deref_mut() {
+                t.begin_pass(cmd, label);
+            }
             let shift = pass * SORT_RADIX_BITS;
             let push = CountPush {
                 keys: bufs.keys[src].address,
@@ -184,6 +217,9 @@ impl RadixSort {
             self.scatter
                 .dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
+            if let Some(t) = timer.as_deref_mut() {
+                t.end_pass(cmd, label);
+            }
             src = 1 - src;
         }
         src
@@ -203,7 +239,8 @@ impl RadixSort {
         bufs.keys[0].upload(bytemuck::cast_slice(keys))?;
         bufs.values[0].upload(bytemuck::cast_slice(values))?;
         let count = Buffer::from_slice(ctx, "sort count", &[keys.len() as u32])?;
-        let out = ctx.run_commands(|cmd| self.record(ctx, cmd, &bufs, count.address, key_bits))?;
+        let out =
+            ctx.run_commands(|cmd| self.record(ctx, cmd, &bufs, count.address, key_bits, None))?;
         Ok((
             bufs.keys[out].download_as(keys.len())?,
             bufs.values[out].download_as(values.len())?,

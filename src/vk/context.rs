@@ -78,6 +78,8 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u32,
     /// Subgroup size of compute shaders.
     pub subgroup_size: u32,
+    /// Whether pipeline-statistics queries are enabled (compute invocations per pass).
+    pub pipeline_statistics: bool,
 }
 
 pub(crate) struct ContextShared {
@@ -516,5 +518,8 @@ fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
         timestamps: families[family as usize].timestamp_valid_bits > 0,
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
         subgroup_size: subgroup.subgroup_size,
+        pipeline_statistics: unsafe { instance.get_physical_device_features(pd) }
+            .pipeline_statistics_query
+            == vk::TRUE,
     }
 }

@@ -1,0 +1,451 @@
+//! `rara bench`: the RaRa paper's Table 1 protocol (a fixed camera, a plane sweeping across
+//! the scene, original / hard / rara), and the radix sort alone against the CPU's sort.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use rara::clip::{Clip, ClipMode, Plane};
+use rara::stages::sort::RadixSort;
+use rara::timing::PassTimer;
+use rara::vk::Buffer;
+use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
+
+use super::clip_args::ClipArgs;
+use super::sweep::default_range;
+use crate::{load_scene, median, resolve_camera, CameraArgs};
+
+/// `rara bench` options.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// The scene (.ply); not needed with --sort.
+    #[arg(required_unless_present = "sort")]
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Frames per mode (after the warm-up frames).
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    frames: u32,
+    /// Unmeasured frames per mode before the measured ones.
+    #[arg(long, default_value_t = 2)]
+    warmup: u32,
+    /// Normal of the sweeping plane (default: the camera's view direction).
+    #[arg(long, value_parser = crate::parse_vec3)]
+    plane_normal: Option<glam::Vec3>,
+    /// Modes to run, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "original,hard,rara")]
+    modes: Vec<BenchMode>,
+    /// Write the results as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write a Chrome trace-event file (opens in Perfetto) with one event per pass per frame.
+    #[arg(long)]
+    trace: Option<PathBuf>,
+    /// Benchmark the radix sort alone on this many random (key, value) pairs instead.
+    #[arg(long)]
+    sort: Option<u64>,
+    /// Weight, band and fixed clip planes for the rara (and hard) modes.
+    #[command(flatten)]
+    clip: ClipArgs,
+}
+
+/// A benchmark mode of the paper's Table 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchMode {
+    /// No clipping.
+    Original,
+    /// Hard clipping by the sweeping plane.
+    Hard,
+    /// RaRa clipping by the sweeping plane.
+    Rara,
+}
+
+impl BenchMode {
+    fn name(self) -> &'static str {
+        match self {
+            BenchMode::Original => "original",
+            BenchMode::Hard => "hard",
+            BenchMode::Rara => "rara",
+        }
+    }
+}
+
+/// What one mode measured.
+struct ModeResult {
+    mode: BenchMode,
+    frames: Vec<FrameStats>,
+}
+
+impl ModeResult {
+    fn gpu(&self) -> Vec<f64> {
+        self.frames.iter().map(|f| f.gpu_ms).collect()
+    }
+
+    fn wall(&self) -> Vec<f64> {
+        self.frames.iter().map(|f| f.wall_ms).collect()
+    }
+
+    /// Median per pass, in pass order; the sort's passes are also summed into "sort".
+    fn pass_medians(&self) -> Vec<(String, f64)> {
+        let mut names: Vec<&'static str> = Vec::new();
+        for f in &self.frames {
+            for p in &f.passes {
+                if !names.contains(&p.name) {
+                    names.push(p.name);
+                }
+            }
+        }
+        let per_pass = |name: &str| -> f64 {
+            let mut v: Vec<f64> = self
+                .frames
+                .iter()
+                .map(|f| {
+                    f.passes
+                        .iter()
+                        .filter(|p| p.name == name)
+                        .map(|p| p.ms)
+                        .sum()
+                })
+                .collect();
+            median(&mut v)
+        };
+        names.iter().map(|n| (n.to_string(), per_pass(n))).collect()
+    }
+
+    /// Medians of the groups shown in the table: the sort passes are summed.
+    fn group_medians(&self) -> Vec<(String, f64)> {
+        let mut groups: Vec<(String, Vec<f64>)> = Vec::new();
+        for f in &self.frames {
+            let mut sums: Vec<(String, f64)> = Vec::new();
+            for p in &f.passes {
+                let group = if p.name.starts_with("sort") {
+                    "sort"
+                } else {
+                    p.name
+                };
+                match sums.iter_mut().find(|(g, _)| g == group) {
+                    Some((_, ms)) => *ms += p.ms,
+                    None => sums.push((group.to_string(), p.ms)),
+                }
+            }
+            for (g, ms) in sums {
+                match groups.iter_mut().find(|(name, _)| *name == g) {
+                    Some((_, v)) => v.push(ms),
+                    None => groups.push((g, vec![ms])),
+                }
+            }
+        }
+        groups
+            .into_iter()
+            .map(|(g, mut v)| (g, median(&mut v)))
+            .collect()
+    }
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+/// Runs the benchmark.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    if let Some(n) = args.sort {
+        return bench_sort(n);
+    }
+    let path = args.scene.as_ref().expect("clap requires the scene");
+    let camera = resolve_camera(&args.camera)?;
+    let scene = load_scene(path)?;
+    if scene.is_empty() {
+        return Err(Error::InvalidInput(format!(
+            "{}: no Gaussians",
+            path.display()
+        )));
+    }
+    let normal = Plane::new(
+        args.plane_normal.unwrap_or(camera.rotation * glam::Vec3::Z),
+        0.0,
+    )?
+    .normal;
+    let (d0, d1) = default_range(&scene, normal);
+    let base = args.clip.build(&[Plane::new(normal, d0)?])?;
+
+    let ctx = Context::from_env()?;
+    let mut renderer = Renderer::new(&ctx)?;
+    let gpu_scene = renderer.upload(&scene)?;
+    eprintln!(
+        "bench: {} ({} Gaussians, SH {}) at {}x{}, {} frames per mode after {} warm-up, plane normal ({:.3}, {:.3}, {:.3}) d {d0:.4} -> {d1:.4}",
+        path.display(),
+        scene.len(),
+        scene.sh_degree,
+        camera.width,
+        camera.height,
+        args.frames,
+        args.warmup,
+        normal.x,
+        normal.y,
+        normal.z
+    );
+    let total = (args.frames + args.warmup) as u64 * args.modes.len() as u64;
+    let bar = ProgressBar::new(total)
+        .with_style(
+            ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap(),
+        )
+        .with_message("bench");
+    let mut results = Vec::new();
+    for &mode in &args.modes {
+        bar.set_message(mode.name());
+        let mut frames = Vec::new();
+        for k in 0..args.warmup + args.frames {
+            // Warm-up frames use the first plane position; measured frames sweep.
+            let step = k.saturating_sub(args.warmup);
+            let t = if args.frames > 1 {
+                step as f32 / (args.frames - 1) as f32
+            } else {
+                0.0
+            };
+            let clip = clip_for(mode, &base, Plane::new(normal, d0 + (d1 - d0) * t)?);
+            let options = RenderOptions {
+                clip,
+                ..RenderOptions::default()
+            };
+            let (_, stats) = renderer.render(&gpu_scene, &camera, &options)?;
+            if k >= args.warmup {
+                frames.push(stats);
+            }
+            bar.inc(1);
+        }
+        results.push(ModeResult { mode, frames });
+    }
+    bar.finish_and_clear();
+
+    print_table(&ctx, path, &camera, args, &results);
+    if let Some(out) = &args.json {
+        write_json(out, &json_report(&ctx, path, &camera, &results))?;
+        println!("wrote {}", out.display());
+    }
+    if let Some(out) = &args.trace {
+        write_json(out, &trace(&results))?;
+        println!("wrote {} (open in https://ui.perfetto.dev)", out.display());
+    }
+    Ok(())
+}
+
+/// The clip of `mode` with the sweeping plane at `moving`.
+fn clip_for(mode: BenchMode, base: &Clip, moving: Plane) -> Clip {
+    let mut clip = base.clone();
+    if let Some(rara::clip::ClipRegion {
+        shape: rara::clip::ClipShape::HalfSpaces(planes),
+        ..
+    }) = &mut clip.region
+    {
+        if let Some(last) = planes.last_mut() {
+            *last = moving;
+        }
+    }
+    clip.mode = match mode {
+        BenchMode::Original => ClipMode::None,
+        BenchMode::Hard => ClipMode::Hard,
+        BenchMode::Rara => ClipMode::Rara,
+    };
+    clip
+}
+
+fn print_table(
+    ctx: &Context,
+    path: &Path,
+    camera: &rara::Camera,
+    args: &BenchArgs,
+    results: &[ModeResult],
+) {
+    println!(
+        "{} at {}x{}, {} frames per mode, on {} ({})",
+        path.display(),
+        camera.width,
+        camera.height,
+        args.frames,
+        ctx.info().name,
+        ctx.info().driver
+    );
+    let groups: Vec<String> = results
+        .first()
+        .map(|r| r.group_medians().into_iter().map(|g| g.0).collect())
+        .unwrap_or_default();
+    print!(
+        "| {:<8} | {:>10} | {:>10} | {:>10} | {:>6} | {:>9} |",
+        "mode", "median ms", "mean ms", "wall ms", "FPS", "cutoff"
+    );
+    for g in &groups {
+        print!(" {g:>11} |");
+    }
+    println!();
+    print!("|{}|", ["---"; 6].join("|"));
+    for _ in &groups {
+        print!("---|");
+    }
+    println!();
+    let original = results
+        .iter()
+        .find(|r| r.mode == BenchMode::Original)
+        .map(|r| median(&mut r.gpu()));
+    let hard = results
+        .iter()
+        .find(|r| r.mode == BenchMode::Hard)
+        .map(|r| median(&mut r.gpu()));
+    for r in results {
+        let med = median(&mut r.gpu());
+        let wall = median(&mut r.wall());
+        let cutoff = mean(&r.frames.iter().map(|f| f.cutoff as f64).collect::<Vec<_>>());
+        print!(
+            "| {:<8} | {:>10.1} | {:>10.1} | {:>10.1} | {:>6.2} | {:>9.0} |",
+            r.mode.name(),
+            med,
+            mean(&r.gpu()),
+            wall,
+            1000.0 / wall,
+            cutoff
+        );
+        let medians = r.group_medians();
+        for g in &groups {
+            let v = medians.iter().find(|m| &m.0 == g).map_or(f64::NAN, |m| m.1);
+            print!(" {v:>11.1} |");
+        }
+        println!();
+    }
+    if let (Some(o), Some(h)) = (original, hard) {
+        println!("hard / original (median GPU): {:.3}", h / o);
+    }
+    if let (Some(h), Some(r)) = (hard, results.iter().find(|r| r.mode == BenchMode::Rara)) {
+        println!("rara / hard (median GPU): {:.3}", median(&mut r.gpu()) / h);
+    }
+}
+
+fn json_report(
+    ctx: &Context,
+    path: &Path,
+    camera: &rara::Camera,
+    results: &[ModeResult],
+) -> serde_json::Value {
+    let mut modes = serde_json::Map::new();
+    for r in results {
+        let passes: serde_json::Map<String, serde_json::Value> = r
+            .pass_medians()
+            .into_iter()
+            .map(|(k, v)| (k, v.into()))
+            .collect();
+        modes.insert(
+            r.mode.name().into(),
+            serde_json::json!({
+                "median_ms": median(&mut r.gpu()),
+                "mean_ms": mean(&r.gpu()),
+                "wall_median_ms": median(&mut r.wall()),
+                "wall_mean_ms": mean(&r.wall()),
+                "fps": 1000.0 / median(&mut r.wall()),
+                "passes": passes,
+                "cutoff_per_frame": r.frames.iter().map(|f| f.cutoff).collect::<Vec<_>>(),
+                "intersections_per_frame": r.frames.iter().map(|f| f.intersections).collect::<Vec<_>>(),
+            }),
+        );
+    }
+    serde_json::json!({
+        "device": ctx.info().name,
+        "driver": ctx.info().driver,
+        "scene": path.display().to_string(),
+        "width": camera.width,
+        "height": camera.height,
+        "modes": modes,
+    })
+}
+
+/// Chrome trace events: per mode a track, per frame its passes back to back (GPU durations),
+/// frames placed at their wall-clock spacing.
+fn trace(results: &[ModeResult]) -> serde_json::Value {
+    let mut events = Vec::new();
+    let mut ts_us = 0.0;
+    for (tid, r) in results.iter().enumerate() {
+        events.push(serde_json::json!({
+            "name": "thread_name", "ph": "M", "pid": 1, "tid": tid,
+            "args": {"name": r.mode.name()}
+        }));
+        for (k, f) in r.frames.iter().enumerate() {
+            let mut t = ts_us;
+            for p in &f.passes {
+                events.push(serde_json::json!({
+                    "name": p.name, "cat": r.mode.name(), "ph": "X", "pid": 1, "tid": tid,
+                    "ts": t, "dur": p.ms * 1e3,
+                    "args": {"frame": k, "invocations": p.invocations, "cutoff": f.cutoff}
+                }));
+                t += p.ms * 1e3;
+            }
+            ts_us += f.wall_ms.max(f.gpu_ms) * 1e3;
+        }
+    }
+    serde_json::json!({"traceEvents": events, "displayTimeUnit": "ms"})
+}
+
+fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
+    std::fs::write(path, serde_json::to_string_pretty(value).unwrap()).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The radix sort alone on `n` random pairs (keys of 43 bits, as a 640x480 frame uses), GPU
+/// timestamps against `slice::sort_unstable_by_key` on the same data, medians of 5 runs each.
+fn bench_sort(n: u64) -> Result<()> {
+    const RUNS: usize = 5;
+    const KEY_BITS: u32 = 43;
+    let ctx = Context::from_env()?;
+    let sort = RadixSort::new(&ctx)?;
+    let mut rng = rara::synth::Rng::new(1);
+    let keys: Vec<u64> = (0..n)
+        .map(|_| rng.next_u64() & ((1u64 << KEY_BITS) - 1))
+        .collect();
+    let values: Vec<u32> = (0..n as u32).collect();
+    let bufs = sort.buffers(&ctx, n)?;
+    let count = Buffer::from_slice(&ctx, "sort count", &[n as u32])?;
+    let mut timer = PassTimer::new(&ctx)?;
+    let mut gpu_ms = Vec::new();
+    let mut gpu_result = Vec::new();
+    for _ in 0..RUNS + 1 {
+        bufs.keys[0].upload(bytemuck::cast_slice(&keys))?;
+        bufs.values[0].upload(bytemuck::cast_slice(&values))?;
+        let out = ctx.run_commands(|cmd| {
+            timer.begin_frame(cmd);
+            sort.record(&ctx, cmd, &bufs, count.address, KEY_BITS, Some(&mut timer))
+        })?;
+        gpu_ms.push(timer.read()?.iter().map(|p| p.ms).sum::<f64>());
+        gpu_result = bufs.keys[out].download_as::<u64>(n as usize)?;
+    }
+    gpu_ms.remove(0); // warm-up
+    let mut cpu_ms = Vec::new();
+    let mut cpu_result = Vec::new();
+    for _ in 0..RUNS {
+        let mut pairs: Vec<(u64, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
+        let start = std::time::Instant::now();
+        pairs.sort_unstable_by_key(|p| p.0);
+        cpu_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        cpu_result = pairs.into_iter().map(|p| p.0).collect();
+    }
+    if gpu_result != cpu_result {
+        return Err(Error::InvalidInput(
+            "the GPU sort disagrees with the CPU sort".into(),
+        ));
+    }
+    let (g, c) = (median(&mut gpu_ms), median(&mut cpu_ms));
+    let rate = |ms: f64| n as f64 / (ms * 1e-3) / 1e6;
+    println!(
+        "sort of {n} random (43-bit key, u32 value) pairs on {} ({}), medians of {RUNS} runs:",
+        ctx.info().name,
+        ctx.info().driver
+    );
+    println!(
+        "  GPU radix sort (timestamps): {g:9.2} ms  {:8.1} Mkeys/s",
+        rate(g)
+    );
+    println!(
+        "  CPU sort_unstable_by_key:    {c:9.2} ms  {:8.1} Mkeys/s",
+        rate(c)
+    );
+    println!("  GPU / CPU throughput: {:.2}x", c / g);
+    Ok(())
+}
