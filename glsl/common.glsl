@@ -59,4 +59,35 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DispatchArg
 
 uint div_ceil(uint a, uint b) { return (a + b - 1u) / b; }
 
+// Tight per-tile footprints. A splat adds to a pixel only where alpha = o exp(-q/2) >= 1/255,
+// q = A dx^2 + 2B dx dy + C dy^2, i.e. where q <= 2 ln(255 o). A tile of the SPEC's 3-sigma
+// rectangle whose pixels all lie outside that ellipse would skip the splat at every pixel, so
+// leaving it out of the tile's list changes no pixel. The bound has a small margin so that float
+// rounding never drops a tile the rasterizer would draw into. Host twin:
+// reference::project::footprint_touches_tile.
+float footprint_q_max(float opacity) {
+    return 2.0 * log(255.0 * opacity) * 1.0001 + 1e-3;
+}
+
+// Whether the ellipse q(p - uv) <= q_max reaches the pixel centres of tile (tx, ty): the
+// minimum of q over the tile's box of pixel centres, found on its edges when uv is outside.
+bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
+    vec2 lo = vec2(tx * TILE_SIZE, ty * TILE_SIZE) - uv;
+    vec2 hi = lo + float(TILE_SIZE - 1u);
+    if (lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0) {
+        return true;
+    }
+    float q_min = 1e30;
+    // Edges x = lo.x and x = hi.x: q is smallest at dy = -B dx / C, clamped to the edge.
+    for (int e = 0; e < 2; ++e) {
+        float dx = e == 0 ? lo.x : hi.x;
+        float dy = clamp(-conic.y * dx / conic.z, lo.y, hi.y);
+        q_min = min(q_min, conic.x * dx * dx + 2.0 * conic.y * dx * dy + conic.z * dy * dy);
+        float dy2 = e == 0 ? lo.y : hi.y;
+        float dx2 = clamp(-conic.y * dy2 / conic.x, lo.x, hi.x);
+        q_min = min(q_min, conic.x * dx2 * dx2 + 2.0 * conic.y * dx2 * dy2 + conic.z * dy2 * dy2);
+    }
+    return q_min <= q_max;
+}
+
 #endif

@@ -26,11 +26,16 @@ void main() {
     if (rect.z <= rect.x || rect.w <= rect.y) {
         return;
     }
-    uint depth_bits = floatBitsToUint(pc.splats.v[i].depth);
+    ProjectedSplat p = pc.splats.v[i];
+    uint depth_bits = floatBitsToUint(p.depth);
+    float q_max = footprint_q_max(p.opacity);
     uint capacity = f.scene.w;
     uint slot = pc.offsets.v[i];
     for (uint y = rect.y; y < rect.w; ++y) {
         for (uint x = rect.x; x < rect.z; ++x) {
+            if (!footprint_touches_tile(p.uv, p.conic, q_max, x, y)) {
+                continue;
+            }
             if (slot < capacity) {
                 pc.keys.v[slot] = uvec2(depth_bits, y * f.size.z + x);
                 pc.values.v[slot] = i;

@@ -92,7 +92,20 @@ bool project(uint i, out CutoffRecord rec) {
     int x1 = clamp(int((uv.x + radius + float(TILE_SIZE - 1u)) / float(TILE_SIZE)), 0, gx);
     int y0 = clamp(int((uv.y - radius) / float(TILE_SIZE)), 0, gy);
     int y1 = clamp(int((uv.y + radius + float(TILE_SIZE - 1u)) / float(TILE_SIZE)), 0, gy);
-    uint touched = uint(max(x1 - x0, 0) * max(y1 - y0, 0));
+    // Tiles of the 3-sigma rectangle that the splat's visible footprint reaches (common.glsl);
+    // a splat below 1/255 opacity draws nowhere.
+    float opacity = g.pos_opacity.w;
+    uint touched = 0u;
+    if (opacity >= 1.0 / 255.0) {
+        float q_max = footprint_q_max(opacity);
+        for (int ty = y0; ty < y1; ++ty) {
+            for (int tx = x0; tx < x1; ++tx) {
+                if (footprint_touches_tile(uv, conic, q_max, uint(tx), uint(ty))) {
+                    ++touched;
+                }
+            }
+        }
+    }
     if (touched == 0u) {
         skip(i);
         return false;

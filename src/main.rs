@@ -98,13 +98,13 @@ pub struct CameraArgs {
     #[arg(long, default_value_t = 0, requires = "cameras")]
     camera: usize,
     /// Camera centre X,Y,Z (with --target).
-    #[arg(long, value_parser = parse_vec3, requires = "target")]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, requires = "target")]
     eye: Option<Vec3>,
     /// Point looked at X,Y,Z (with --eye).
-    #[arg(long, value_parser = parse_vec3, requires = "eye")]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, requires = "eye")]
     target: Option<Vec3>,
     /// Up direction X,Y,Z (default -Y, the INRIA/COLMAP convention).
-    #[arg(long, value_parser = parse_vec3, default_value = "0,-1,0")]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, default_value = "0,-1,0")]
     up: Vec3,
     /// Vertical field of view in degrees (with --eye).
     #[arg(long, default_value_t = 50.0)]
@@ -124,7 +124,7 @@ struct RenderArgs {
     #[command(flatten)]
     camera: CameraArgs,
     /// Background colour R,G,B in [0, 1].
-    #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, default_value = "0,0,0")]
     background: Vec3,
     /// Output PNG.
     #[arg(short, long)]

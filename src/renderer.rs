@@ -16,7 +16,7 @@ use crate::scene::Scene;
 use crate::stages::emit::{Emit, EmitPush};
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::project::{Project, ProjectPush};
-use crate::stages::rasterize::{Rasterize, RasterizePush};
+use crate::stages::rasterize::{RasterLayout, Rasterize, RasterizePush};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
 use crate::timing::{PassTimer, PassTiming};
@@ -154,8 +154,14 @@ pub fn key_bits(width: u32, height: u32) -> u32 {
 }
 
 impl Renderer {
-    /// Builds every kernel of the pipeline.
+    /// Builds every kernel of the pipeline, with the rasterizer layout that suits the device
+    /// ([`RasterLayout::for_device`]).
     pub fn new(ctx: &Context) -> Result<Self> {
+        Self::with_raster_layout(ctx, RasterLayout::for_device(ctx))
+    }
+
+    /// Builds every kernel of the pipeline with the given rasterizer layout.
+    pub fn with_raster_layout(ctx: &Context, layout: RasterLayout) -> Result<Self> {
         Ok(Renderer {
             ctx: ctx.clone(),
             project: Project::new(ctx)?,
@@ -163,7 +169,7 @@ impl Renderer {
             emit: Emit::new(ctx)?,
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx)?,
-            rasterize: Rasterize::new(ctx)?,
+            rasterize: Rasterize::new(ctx, layout)?,
             timer: PassTimer::new(ctx)?,
             frame: None,
         })

@@ -3,7 +3,8 @@
 mod common;
 
 use glam::{Quat, Vec3};
-use rara::reference::{self, project::project_one, rasterize::tile_lists};
+use rara::reference::project::{footprint_q_max, footprint_touches_tile, project_one};
+use rara::reference::{self, rasterize::tile_lists};
 use rara::{Camera, Clip, RenderOptions, Renderer, Scene};
 
 /// Bounds of the 2nd..98th percentile of the centres, per axis.
@@ -171,11 +172,20 @@ fn each_stage_matches_its_cpu_twin() {
     }
     assert_eq!(visible, stats.visible as usize);
 
-    // prefix sum: offsets of the visible Gaussians' pairs.
+    // prefix sum: offsets of the visible Gaussians' pairs (the tiles of their rectangles that
+    // their visible footprint reaches).
     let mut acc = 0u32;
-    for (i, g) in mid.splats.iter().enumerate() {
+    let mut cpu_iter = cpu_splats.iter().peekable();
+    for i in 0..scene.len() {
         assert_eq!(mid.offsets[i], acc, "offset of Gaussian {i}");
-        acc += (g.rect[2] - g.rect[0]) * (g.rect[3] - g.rect[1]);
+        if let Some(c) = cpu_iter.next_if(|c| c.index as usize == i) {
+            let q_max = footprint_q_max(c.opacity);
+            for ty in c.rect[1]..c.rect[3] {
+                for tx in c.rect[0]..c.rect[2] {
+                    acc += footprint_touches_tile(c.uv, c.conic, q_max, tx, ty) as u32;
+                }
+            }
+        }
     }
     assert_eq!(acc, stats.intersections);
 
@@ -221,15 +231,27 @@ fn tile_with_more_than_100k_splats() {
         sh_degree: 0,
         ..Default::default()
     };
+    // 120,000 tiny splats on pixel (3, 3) of tile (0, 0), in front of an opaque red splat
+    // that covers the image: every pixel of that tile but the few under the tiny splats has to
+    // walk the whole list to reach the red one.
+    let cam = Camera::look_at(
+        Vec3::new(0.0, 0.0, -3.0),
+        Vec3::ZERO,
+        Vec3::NEG_Y,
+        40.0,
+        32,
+        32,
+    )
+    .unwrap();
     let mut rng = rara::synth::Rng::new(1);
     let grey = [rara::scene::rgb_to_sh_dc(1.0); 3];
     for _ in 0..120_000 {
-        let p = Vec3::new(
-            rng.range(-0.05, 0.05),
-            rng.range(-0.05, 0.05),
-            rng.range(-0.5, 0.5),
-        );
-        scene.push(p, 0.003, Vec3::splat(0.5), Quat::IDENTITY, &grey);
+        let depth = 3.0 + rng.range(-0.5, 0.5);
+        // The camera-space point that projects to pixel (3, 3) at this depth.
+        let (cx, cy) = cam.principal_point();
+        let local = Vec3::new((3.0 - cx) / cam.fx, (3.0 - cy) / cam.fy, 1.0) * depth;
+        let p = cam.position + cam.rotation * local;
+        scene.push(p, 0.5, Vec3::splat(0.0005), Quat::IDENTITY, &grey);
     }
     let red = [
         rara::scene::rgb_to_sh_dc(0.9),
@@ -243,15 +265,6 @@ fn tile_with_more_than_100k_splats() {
         Quat::IDENTITY,
         &red,
     );
-    let cam = Camera::look_at(
-        Vec3::new(0.0, 0.0, -3.0),
-        Vec3::ZERO,
-        Vec3::NEG_Y,
-        40.0,
-        32,
-        32,
-    )
-    .unwrap();
     let gpu_scene = renderer.upload(&scene).unwrap();
     let (gpu, stats) = renderer
         .render(&gpu_scene, &cam, &RenderOptions::default())
@@ -267,10 +280,15 @@ fn tile_with_more_than_100k_splats() {
     );
     let cpu = reference::render(&scene, &cam, &RenderOptions::default());
     common::check_images("long_tile_list", &gpu, &cpu, 50.0, 4);
-    let centre = gpu.get_pixel(16, 16);
+    let far = gpu.get_pixel(12, 12);
     assert!(
-        centre[0] > 200 && centre[1] < 60,
-        "the opaque splat behind the list must show, got {centre:?}"
+        far[0] > 150 && far[1] < 60,
+        "the opaque splat behind the list must show, got {far:?}"
+    );
+    let under = gpu.get_pixel(3, 3);
+    assert!(
+        under[1] > 200,
+        "the tiny splats must show at (3, 3), got {under:?}"
     );
     common::assert_no_validation_messages(&ctx);
 }

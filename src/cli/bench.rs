@@ -31,7 +31,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 2)]
     warmup: u32,
     /// Normal of the sweeping plane (default: the camera's view direction).
-    #[arg(long, value_parser = crate::parse_vec3)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_vec3)]
     plane_normal: Option<glam::Vec3>,
     /// Modes to run, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "original,hard,rara")]

@@ -12,13 +12,13 @@ use rara::{Error, Result};
 #[derive(Args, Clone, Debug, Default)]
 pub struct ClipArgs {
     /// Clip plane NX,NY,NZ,D: visible where n.x + d >= 0 (repeatable; planes intersect).
-    #[arg(long = "clip-plane", value_name = "NX,NY,NZ,D", value_parser = parse_plane)]
+    #[arg(long = "clip-plane", allow_hyphen_values = true, value_name = "NX,NY,NZ,D", value_parser = parse_plane)]
     pub planes: Vec<Plane>,
     /// Oriented box CX,CY,CZ,HX,HY,HZ[,QW,QX,QY,QZ]: centre, half extents, rotation.
-    #[arg(long = "clip-box", value_name = "CX,CY,CZ,HX,HY,HZ[,QW,QX,QY,QZ]", value_parser = parse_box)]
+    #[arg(long = "clip-box", allow_hyphen_values = true, value_name = "CX,CY,CZ,HX,HY,HZ[,QW,QX,QY,QZ]", value_parser = parse_box)]
     pub boxes: Vec<Vec<Plane>>,
     /// Sphere CX,CY,CZ,R.
-    #[arg(long = "clip-sphere", value_name = "CX,CY,CZ,R", value_parser = parse_floats::<4>)]
+    #[arg(long = "clip-sphere", allow_hyphen_values = true, value_name = "CX,CY,CZ,R", value_parser = parse_floats::<4>)]
     pub sphere: Option<[f32; 4]>,
     /// Show the complement of the region (a cutaway).
     #[arg(long)]

@@ -21,7 +21,7 @@ pub struct SweepArgs {
     #[command(flatten)]
     camera: CameraArgs,
     /// Normal NX,NY,NZ of the moving plane; visible where n.x + d >= 0.
-    #[arg(long, value_parser = crate::parse_vec3)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_vec3)]
     plane_normal: Vec3,
     /// Plane offset d of the first frame (default: the whole scene visible).
     #[arg(long, allow_hyphen_values = true)]
@@ -36,7 +36,7 @@ pub struct SweepArgs {
     #[arg(long)]
     side_by_side: bool,
     /// Background colour R,G,B in [0, 1].
-    #[arg(long, value_parser = crate::parse_vec3, default_value = "0,0,0")]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_vec3, default_value = "0,0,0")]
     background: Vec3,
     /// GIF frame delay in milliseconds.
     #[arg(long, default_value_t = 100)]

@@ -162,6 +162,16 @@ pub fn project_one(
     if x1 <= x0 || y1 <= y0 {
         return None;
     }
+    // Only tiles the visible footprint reaches (see footprint_touches_tile).
+    let opacity = scene.opacities[i];
+    let q_max = footprint_q_max(opacity);
+    let reaches_a_tile = opacity >= 1.0 / 255.0
+        && (y0..y1).any(|ty| {
+            (x0..x1).any(|tx| footprint_touches_tile(uv, conic, q_max, tx as u32, ty as u32))
+        });
+    if !reaches_a_tile {
+        return None;
+    }
     let color = eval_sh(scene.sh_of(i), scene.sh_degree, rel.normalize());
     Some(ProjectedSplat {
         index: i as u32,
@@ -174,6 +184,33 @@ pub fn project_one(
         cutoff: (class == Classification::Cutoff)
             .then(|| CutoffRay::new(mu, scene.scales[i], scene.rotations[i], camera.position)),
     })
+}
+
+/// Bound on `q = A dx^2 + 2B dx dy + C dy^2` where a splat of opacity `o` still reaches alpha
+/// 1/255: `q <= 2 ln(255 o)`, with a small margin against float rounding. Twin of
+/// `footprint_q_max` in `glsl/common.glsl`.
+pub fn footprint_q_max(opacity: f32) -> f32 {
+    2.0 * (255.0 * opacity).ln() * 1.0001 + 1e-3
+}
+
+/// Whether the splat's visible footprint (`q <= q_max` around `uv`) reaches a pixel centre of
+/// tile `(tx, ty)`. A tile of the SPEC's 3-sigma rectangle that it does not reach would skip
+/// the splat at every pixel (alpha < 1/255), so the tile lists leave it out: fewer pairs to
+/// sort and walk, the same image. Twin of `footprint_touches_tile` in `glsl/common.glsl`.
+pub fn footprint_touches_tile(uv: Vec2, conic: Vec3, q_max: f32, tx: u32, ty: u32) -> bool {
+    let lo = Vec2::new((tx * TILE_SIZE) as f32, (ty * TILE_SIZE) as f32) - uv;
+    let hi = lo + (TILE_SIZE - 1) as f32;
+    if lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 {
+        return true;
+    }
+    let q = |dx: f32, dy: f32| conic.x * dx * dx + 2.0 * conic.y * dx * dy + conic.z * dy * dy;
+    let mut q_min = f32::INFINITY;
+    for (dx, dy) in [(lo.x, lo.y), (hi.x, hi.y)] {
+        // Edge x = dx: q is smallest at -B dx / C; edge y = dy: at -B dy / A.
+        q_min = q_min.min(q(dx, (-conic.y * dx / conic.z).clamp(lo.y, hi.y)));
+        q_min = q_min.min(q((-conic.y * dy / conic.x).clamp(lo.x, hi.x), dy));
+    }
+    q_min <= q_max
 }
 
 /// Projects every Gaussian; the result holds only those that draw something, in index order.

@@ -3,7 +3,7 @@
 
 use glam::{DVec3, Vec2, Vec3};
 
-use super::project::{tile_grid, ProjectedSplat};
+use super::project::{footprint_q_max, footprint_touches_tile, tile_grid, ProjectedSplat};
 use super::Rgba8Image;
 use crate::camera::Camera;
 use crate::clip::{Clip, ClipMode, ClipWeight, Spans};
@@ -45,13 +45,18 @@ impl PixelClip {
     }
 }
 
-/// Per tile, the splats that touch it in compositing order: ascending depth, ties by index.
+/// Per tile, the splats whose visible footprint reaches it, in compositing order: ascending
+/// depth, ties by index.
 pub fn tile_lists(splats: &[ProjectedSplat], camera: &Camera) -> Vec<Vec<u32>> {
     let (gx, gy) = tile_grid(camera);
     let mut lists: Vec<Vec<(u32, u32, u32)>> = vec![Vec::new(); (gx * gy) as usize];
     for (k, s) in splats.iter().enumerate() {
+        let q_max = footprint_q_max(s.opacity);
         for ty in s.rect[1]..s.rect[3] {
             for tx in s.rect[0]..s.rect[2] {
+                if !footprint_touches_tile(s.uv, s.conic, q_max, tx, ty) {
+                    continue;
+                }
                 lists[(ty * gx + tx) as usize].push((s.depth.to_bits(), s.index, k as u32));
             }
         }

@@ -39,17 +39,58 @@ pub struct RasterizePush {
 const ROUND_FIRST: u32 = 1;
 const ROUND_LAST: u32 = 2;
 
+/// How the rasterizer maps pixels to invocations. Both give the same image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RasterLayout {
+    /// One invocation per pixel, 256 per tile (`rasterize.comp`): the layout for GPUs.
+    PixelPerInvocation,
+    /// One invocation per 8-pixel column strip, 32 per tile (`rasterize_strips.comp`): for CPU
+    /// drivers such as lavapipe, where each staged splat is then loaded once for 8 pixels.
+    Strips,
+}
+
+impl RasterLayout {
+    /// The layout for a device: strips on CPU devices, a pixel per invocation elsewhere.
+    /// `RARA_RASTER=pixels|strips` overrides the choice.
+    pub fn for_device(ctx: &Context) -> RasterLayout {
+        match std::env::var("RARA_RASTER").as_deref() {
+            Ok("pixels") => return RasterLayout::PixelPerInvocation,
+            Ok("strips") => return RasterLayout::Strips,
+            _ => {}
+        }
+        if ctx.info().device_type == vk::PhysicalDeviceType::CPU {
+            RasterLayout::Strips
+        } else {
+            RasterLayout::PixelPerInvocation
+        }
+    }
+}
+
 /// The rasterize kernel.
 pub struct Rasterize {
     pipeline: ComputePipeline,
+    layout: RasterLayout,
 }
 
 impl Rasterize {
-    /// Builds the kernel.
-    pub fn new(ctx: &Context) -> Result<Self> {
-        Ok(Rasterize {
-            pipeline: ComputePipeline::new::<RasterizePush>(ctx, c"rasterize", shaders::RASTERIZE)?,
-        })
+    /// Builds the kernel in `layout`.
+    pub fn new(ctx: &Context, layout: RasterLayout) -> Result<Self> {
+        let pipeline = match layout {
+            RasterLayout::PixelPerInvocation => {
+                ComputePipeline::new::<RasterizePush>(ctx, c"rasterize", shaders::RASTERIZE)?
+            }
+            RasterLayout::Strips => ComputePipeline::new::<RasterizePush>(
+                ctx,
+                c"rasterize_strips",
+                shaders::RASTERIZE_STRIPS,
+            )?,
+        };
+        Ok(Rasterize { pipeline, layout })
+    }
+
+    /// The layout the kernel was built in.
+    pub fn layout(&self) -> RasterLayout {
+        self.layout
     }
 
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK

@@ -1,0 +1,199 @@
+// Stage 6, rasterize (SPEC section 4): one workgroup per 16x16 tile. The tile's splats, sorted
+// front to back, are staged through shared memory in batches of RASTER_BATCH; each pixel
+// composites them until its transmittance runs out, and the workgroup stops once every pixel is
+// done.
+//
+// PIXELS_PER_INVOCATION (P) sets how pixels map to invocations: invocation (x, y) owns the P
+// pixels (x, y P + r), r < P, of a column strip. The kernels rasterize.comp (P = 1, for GPUs:
+// 256 threads per tile) and rasterize_strips.comp (P = 8, for CPU drivers such as lavapipe,
+// where every load of a staged splat costs a scalar loop over the SIMD lanes, so sharing it
+// among P pixels pays) include this file.
+//
+// One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
+// invocation after 65,535 loop iterations in total; the loops over r are unrolled). Longer
+// lists take several rounds; between rounds the per-pixel state (colour, transmittance, done)
+// lives in `state`.
+//
+// RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
+// most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
+// ray (clip.glsl), staged with the batch. Splats that are not cutoff take the plain path.
+#extension GL_EXT_control_flow_attributes : require
+#include "common.glsl"
+#include "clip.glsl"
+
+#define P PIXELS_PER_INVOCATION
+#define STRIPS (TILE_SIZE / P)
+#define INVOCATIONS (TILE_SIZE * STRIPS)
+#define TILE_PIXELS (TILE_SIZE * TILE_SIZE)
+#define RASTER_BATCH TILE_PIXELS
+#define LOADS_PER_INVOCATION (RASTER_BATCH / INVOCATIONS)
+
+layout(local_size_x = TILE_SIZE, local_size_y = STRIPS) in;
+
+#define ROUND_FIRST 1u
+#define ROUND_LAST 2u
+
+layout(push_constant) uniform Push {
+    FrameParamsRef frame;
+    ProjectedSplats splats;
+    U32s values;        // splat index of each sorted pair
+    UVec2s ranges;      // [start, end) per tile
+    Vec4s state;        // per pixel (rgb, T), T negated once the pixel is done
+    U32s image;         // rgba8 per pixel
+    U32s counters;
+    ClipParamsRef clip;
+    CutoffRecords cutoffs;
+    uint round_index;
+    uint flags;
+} pc;
+
+shared vec2 batch_uv[RASTER_BATCH];
+shared vec4 batch_conic_opacity[RASTER_BATCH];
+shared vec4 batch_color_cutoff[RASTER_BATCH];   // rgb, w = 1 for a cutoff splat
+shared CutoffRecord batch_cutoff[RASTER_BATCH];
+shared uint pixels_done;
+
+uint pack_rgba8(vec3 c) {
+    uvec3 b = uvec3(floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5));
+    return b.r | (b.g << 8) | (b.b << 16) | (255u << 24);
+}
+
+void main() {
+    FrameParams f = pc.frame.p;
+    uint lid = gl_LocalInvocationIndex;
+    uvec2 tile = gl_WorkGroupID.xy;
+    uvec2 first_pixel = tile * TILE_SIZE + uvec2(gl_LocalInvocationID.x, gl_LocalInvocationID.y * P);
+
+    uvec4 clip_config = pc.clip.p.config;
+    bool rara = clip_config.x == CLIP_MODE_RARA;
+    float band2 = pc.clip.p.band.y;
+
+    // Per pixel of the strip: state, and for rara the ray (SPEC section 2) and its visible
+    // intervals.
+    vec3 color[P];
+    float T[P];
+    bool done[P];
+    vec3 ray_dir[P];
+    vec4 spans[P];
+    uint newly_done = 0u;
+    [[unroll]] for (uint r = 0u; r < P; ++r) {
+        uvec2 pixel = first_pixel + uvec2(0u, r);
+        bool inside = pixel.x < f.size.x && pixel.y < f.size.y;
+        color[r] = vec3(0.0);
+        T[r] = 1.0;
+        done[r] = !inside;
+        if ((pc.flags & ROUND_FIRST) == 0u && inside) {
+            vec4 s = pc.state.v[pixel.y * f.size.x + pixel.x];
+            color[r] = s.rgb;
+            T[r] = abs(s.a);
+            done[r] = s.a < 0.0;
+        }
+        if (done[r]) {
+            newly_done += 1u;
+        }
+        ray_dir[r] = vec3(0.0);
+        spans[r] = vec4(0.0);
+        if (rara) {
+            vec2 c = (vec2(pixel) - f.focal.zw) / f.focal.xy;
+            ray_dir[r] = normalize(c.x * f.world_to_cam0.xyz + c.y * f.world_to_cam1.xyz
+                                   + f.world_to_cam2.xyz);
+            spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, ray_dir[r]);
+        }
+    }
+
+    uvec2 range = pc.ranges.v[tile.y * f.size.z + tile.x];
+    uint start = min(range.x + pc.round_index * RASTER_CHUNK, range.y);
+    uint end = min(start + RASTER_CHUNK, range.y);
+    if (lid == 0u) {
+        pixels_done = 0u;
+        if (pc.round_index == 0u) {
+            atomicMax(pc.counters.v[COUNTER_MAX_TILE_LEN], range.y - range.x);
+        }
+    }
+    barrier();
+    if (newly_done > 0u) {
+        atomicAdd(pixels_done, newly_done);
+    }
+
+    for (uint batch = start; batch < end; batch += RASTER_BATCH) {
+        barrier();
+        if (pixels_done == TILE_PIXELS) {
+            break;
+        }
+        [[unroll]] for (uint j = 0u; j < LOADS_PER_INVOCATION; ++j) {
+            uint slot = j * INVOCATIONS + lid;
+            uint entry = batch + slot;
+            if (entry < end) {
+                uint s = pc.values.v[entry];
+                ProjectedSplat p = pc.splats.v[s];
+                batch_uv[slot] = p.uv;
+                batch_conic_opacity[slot] = vec4(p.conic, p.opacity);
+                bool cutoff = p.cutoff != NO_CUTOFF;
+                batch_color_cutoff[slot] = vec4(p.color, cutoff ? 1.0 : 0.0);
+                if (cutoff) {
+                    batch_cutoff[slot] = pc.cutoffs.v[p.cutoff];
+                }
+            }
+        }
+        barrier();
+        uint count = min(RASTER_BATCH, end - batch);
+        newly_done = 0u;
+        for (uint k = 0u; k < count; ++k) {
+            vec2 uv = batch_uv[k];
+            vec4 co = batch_conic_opacity[k];
+            vec4 color_cutoff = batch_color_cutoff[k];
+            bool cutoff = color_cutoff.w != 0.0;
+            bool all_done = true;
+            [[unroll]] for (uint r = 0u; r < P; ++r) {
+                if (done[r]) {
+                    continue;
+                }
+                all_done = false;
+                vec2 d = uv - vec2(first_pixel + uvec2(0u, r));
+                float power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
+                if (power > 0.0) {
+                    continue;
+                }
+                float alpha = co.w * exp(power);
+                if (alpha < 1.0 / 255.0) {
+                    continue; // w <= 1 cannot lift it over the threshold
+                }
+                if (cutoff) {
+                    alpha *= cutoff_weight(batch_cutoff[k], ray_dir[r], spans[r], clip_config.y,
+                                           band2);
+                }
+                alpha = min(0.99, alpha);
+                if (alpha < 1.0 / 255.0) {
+                    continue;
+                }
+                float next_T = T[r] * (1.0 - alpha);
+                if (next_T < 1e-4) {
+                    done[r] = true;
+                    newly_done += 1u;
+                    continue;
+                }
+                color[r] += alpha * T[r] * color_cutoff.rgb;
+                T[r] = next_T;
+            }
+            if (all_done) {
+                break;
+            }
+        }
+        if (newly_done > 0u) {
+            atomicAdd(pixels_done, newly_done);
+        }
+    }
+
+    [[unroll]] for (uint r = 0u; r < P; ++r) {
+        uvec2 pixel = first_pixel + uvec2(0u, r);
+        if (pixel.x >= f.size.x || pixel.y >= f.size.y) {
+            continue;
+        }
+        uint pixel_index = pixel.y * f.size.x + pixel.x;
+        if ((pc.flags & ROUND_LAST) != 0u) {
+            pc.image.v[pixel_index] = pack_rgba8(color[r] + T[r] * f.background.rgb);
+        } else {
+            pc.state.v[pixel_index] = vec4(color[r], done[r] ? -T[r] : T[r]);
+        }
+    }
+}
