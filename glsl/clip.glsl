@@ -123,6 +123,17 @@ float normal_cdf(float x) {
     return x >= 0.0 ? 1.0 - tail : tail;
 }
 
+// Mass of the normal density N(t_star, 1/sqrt_a^2) on the interval span = (lo, hi); unbounded
+// ends contribute exactly 0 and 1, and an empty interval nothing.
+float span_mass(vec2 span, float t_star, float sqrt_a) {
+    if (span.x >= span.y) {
+        return 0.0;
+    }
+    float upper = span.y >= UNBOUNDED ? 1.0 : normal_cdf((span.y - t_star) * sqrt_a);
+    float lower = span.x <= -UNBOUNDED ? 0.0 : normal_cdf((span.x - t_star) * sqrt_a);
+    return upper - lower;
+}
+
 // The weight of a cutoff Gaussian along the unit ray direction dir whose visible part is
 // spans (from clip_ray_spans).
 float cutoff_weight(CutoffRecord rec, vec3 dir, vec4 spans, uint weight, float band2) {
@@ -132,8 +143,10 @@ float cutoff_weight(CutoffRecord rec, vec3 dir, vec4 spans, uint weight, float b
     float t_star = -dot(o, d) / a;
     if (weight == CLIP_WEIGHT_MASS) {
         float sqrt_a = sqrt(a);
-        float w = normal_cdf((spans.y - t_star) * sqrt_a) - normal_cdf((spans.x - t_star) * sqrt_a)
-                + normal_cdf((spans.w - t_star) * sqrt_a) - normal_cdf((spans.z - t_star) * sqrt_a);
+        float w = span_mass(spans.xy, t_star, sqrt_a);
+        if (spans.z < spans.w) {
+            w += span_mass(spans.zw, t_star, sqrt_a);
+        }
         return clamp(w, 0.0, 1.0);
     }
     vec3 c = cross(o, d);

@@ -609,11 +609,24 @@ impl CutoffRay {
         match kind {
             ClipWeight::Mass => {
                 let sqrt_a = a.sqrt();
+                // Unbounded ends contribute exactly 0 and 1, empty intervals nothing (as on
+                // the GPU: span_mass in glsl/clip.glsl).
                 let w: f64 = visible
                     .0
                     .iter()
+                    .filter(|(lo, hi)| lo < hi)
                     .map(|&(lo, hi)| {
-                        normal_cdf((hi - t_star) * sqrt_a) - normal_cdf((lo - t_star) * sqrt_a)
+                        let upper = if hi >= UNBOUNDED {
+                            1.0
+                        } else {
+                            normal_cdf((hi - t_star) * sqrt_a)
+                        };
+                        let lower = if lo <= -UNBOUNDED {
+                            0.0
+                        } else {
+                            normal_cdf((lo - t_star) * sqrt_a)
+                        };
+                        upper - lower
                     })
                     .sum();
                 w.clamp(0.0, 1.0)

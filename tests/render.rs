@@ -379,3 +379,88 @@ fn intersection_overflow_grows_and_rerenders() {
     assert_eq!(again.rerenders, 0);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The two rasterizer layouts (a pixel per invocation for GPUs, column strips for CPU drivers)
+/// give the same image, clipped or not, on an image whose size is not a multiple of the tile.
+#[test]
+fn raster_layouts_agree() {
+    use rara::stages::rasterize::RasterLayout;
+    let ctx = common::context();
+    let scene = rara::synth::layers(15000, 1, 8);
+    let cam = &rara::synth::orbit_cameras(3, 3.0, 203, 149, 50.0).unwrap()[2];
+    let region = rara::ClipRegion::sphere(Vec3::new(0.3, 0.0, 0.2), 0.7).unwrap();
+    for clip in [Clip::default(), Clip::rara(region.inverted())] {
+        let options = RenderOptions {
+            clip,
+            ..RenderOptions::default()
+        };
+        let mut images = Vec::new();
+        for layout in [RasterLayout::PixelPerInvocation, RasterLayout::Strips] {
+            let mut renderer = Renderer::with_raster_layout(&ctx, layout).unwrap();
+            let gpu_scene = renderer.upload(&scene).unwrap();
+            images.push(renderer.render(&gpu_scene, cam, &options).unwrap().0);
+        }
+        let d = rara::metrics::compare(&images[0], &images[1]);
+        assert_eq!(
+            d.max_diff, 0,
+            "layouts differ in {} pixels",
+            d.differing_pixels
+        );
+        let cpu = reference::render(&scene, cam, &options);
+        common::check_images("raster_layouts", &images[1], &cpu, 50.0, 4);
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Leaving out the tiles a splat's visible footprint does not reach changes no pixel: the CPU
+/// reference composited over the SPEC's full 3-sigma rectangles gives the same image.
+#[test]
+fn tight_footprints_change_no_pixel() {
+    let scene = rara::synth::demo_scene();
+    let cam = &rara::synth::orbit_cameras(4, 3.2, 160, 120, 50.0).unwrap()[1];
+    let splats = reference::project::project_all(&scene, cam, &Clip::default());
+    let tight = tile_lists(&splats, cam);
+    let (gx, gy) = rara::camera::tile_grid(cam.width, cam.height);
+    let mut full: Vec<Vec<(u32, u32, u32)>> = vec![Vec::new(); (gx * gy) as usize];
+    for (k, s) in splats.iter().enumerate() {
+        for ty in s.rect[1]..s.rect[3] {
+            for tx in s.rect[0]..s.rect[2] {
+                full[(ty * gx + tx) as usize].push((s.depth.to_bits(), s.index, k as u32));
+            }
+        }
+    }
+    let full: Vec<Vec<u32>> = full
+        .into_iter()
+        .map(|mut l| {
+            l.sort_unstable_by_key(|&(d, i, _)| (d, i));
+            l.into_iter().map(|(_, _, k)| k).collect()
+        })
+        .collect();
+    let (n_tight, n_full): (usize, usize) = (
+        tight.iter().map(Vec::len).sum(),
+        full.iter().map(Vec::len).sum(),
+    );
+    eprintln!("tile pairs: {n_tight} tight vs {n_full} over full rectangles");
+    assert!(n_tight < n_full);
+    for j in 0..cam.height {
+        for i in 0..cam.width {
+            let tile = ((j / 16) * gx + i / 16) as usize;
+            let pixel = glam::Vec2::new(i as f32, j as f32);
+            let a = reference::rasterize::composite_pixel(
+                &splats,
+                &tight[tile],
+                pixel,
+                Vec3::ZERO,
+                None,
+            );
+            let b = reference::rasterize::composite_pixel(
+                &splats,
+                &full[tile],
+                pixel,
+                Vec3::ZERO,
+                None,
+            );
+            assert_eq!(a, b, "pixel ({i}, {j})");
+        }
+    }
+}
