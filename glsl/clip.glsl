@@ -134,25 +134,38 @@ float span_mass(vec2 span, float t_star, float sqrt_a) {
     return upper - lower;
 }
 
-// The weight of a cutoff Gaussian along the unit ray direction dir whose visible part is
-// spans (from clip_ray_spans).
-float cutoff_weight(CutoffRecord rec, vec3 dir, vec4 spans, uint weight, float band2) {
-    vec3 d = vec3(dot(rec.m0.xyz, dir), dot(rec.m1.xyz, dir), dot(rec.m2.xyz, dir));
-    vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
-    float a = dot(d, d);
-    float t_star = -dot(o, d) / a;
-    if (weight == CLIP_WEIGHT_MASS) {
-        float sqrt_a = sqrt(a);
-        float w = span_mass(spans.xy, t_star, sqrt_a);
-        if (spans.z < spans.w) {
-            w += span_mass(spans.zw, t_star, sqrt_a);
-        }
-        return clamp(w, 0.0, 1.0);
+// Ray in the whitened frame of a cutoff Gaussian: d' = M dir, o' = M (eye - mu), a = |d'|^2 and
+// t* = -(o'.d')/a (see src/clip.rs).
+void whitened_ray(CutoffRecord rec, vec3 dir, out vec3 d, out vec3 o, out float a, out float t_star) {
+    d = vec3(dot(rec.m0.xyz, dir), dot(rec.m1.xyz, dir), dot(rec.m2.xyz, dir));
+    o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
+    a = dot(d, d);
+    t_star = -dot(o, d) / a;
+}
+
+// Weight `mass`: the probability mass of the Gaussian along the unit ray direction dir that
+// lies in the visible intervals spans (from clip_ray_spans).
+float cutoff_weight_mass(CutoffRecord rec, vec3 dir, vec4 spans) {
+    vec3 d, o;
+    float a, t_star;
+    whitened_ray(rec, dir, d, o, a, t_star);
+    float sqrt_a = sqrt(a);
+    float w = span_mass(spans.xy, t_star, sqrt_a);
+    if (spans.z < spans.w) {
+        w += span_mass(spans.zw, t_star, sqrt_a);
     }
+    return clamp(w, 0.0, 1.0);
+}
+
+// Weight `length`: the visible fraction of the chord through the band ellipsoid (q <= band2);
+// for a ray that misses it, whether the ray's closest point is visible.
+float cutoff_weight_length(CutoffRecord rec, vec3 dir, vec4 spans, float band2) {
+    vec3 d, o;
+    float a, t_star;
+    whitened_ray(rec, dir, d, o, a, t_star);
     vec3 c = cross(o, d);
     float q_min = dot(c, c) / a;
     if (q_min >= band2) {
-        // The ray misses the band ellipsoid: visible or not where it passes closest.
         bool seen = (spans.x <= t_star && t_star <= spans.y && spans.x < spans.y)
                  || (spans.z <= t_star && t_star <= spans.w && spans.z < spans.w);
         return seen ? 1.0 : 0.0;

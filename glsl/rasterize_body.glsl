@@ -4,19 +4,23 @@
 // done.
 //
 // PIXELS_PER_INVOCATION (P) sets how pixels map to invocations: invocation (x, y) owns the P
-// pixels (x, y P + r), r < P, of a column strip. The kernels rasterize.comp (P = 1, for GPUs:
-// 256 threads per tile) and rasterize_strips.comp (P = 8, for CPU drivers such as lavapipe,
+// pixels (x, y P + r), r < P, of a column strip. The kernels rasterize*.comp (P = 1, for GPUs:
+// 256 threads per tile) and rasterize_strips*.comp (P = 16, for CPU drivers such as lavapipe,
 // where every load of a staged splat costs a scalar loop over the SIMD lanes, so sharing it
-// among P pixels pays) include this file.
+// among P pixels pays; on plant 16 measured fastest of 1, 2, 4, 8, 16) include this file.
 //
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
-// invocation after 65,535 loop iterations in total; the loops over r are unrolled). Longer
+// invocation after 65,535 loop iterations in total; the loops over r are unrolled, and the rara
+// variants take at most three iterations per entry). Longer
 // lists take several rounds; between rounds the per-pixel state (colour, transmittance, done)
 // lives in `state`.
 //
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
 // ray (clip.glsl), staged with the batch. Splats that are not cutoff take the plain path.
+// CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
+// + 1 or CLIP_WEIGHT_LENGTH + 1. CPU drivers run both sides of every branch under a mask, so
+// code that a frame does not need must not be in its kernel at all.
 #extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
 #include "clip.glsl"
@@ -50,7 +54,9 @@ layout(push_constant) uniform Push {
 shared vec2 batch_uv[RASTER_BATCH];
 shared vec4 batch_conic_opacity[RASTER_BATCH];
 shared vec4 batch_color_cutoff[RASTER_BATCH];   // rgb, w = 1 for a cutoff splat
+#if CUTOFF_WEIGHT != 0
 shared CutoffRecord batch_cutoff[RASTER_BATCH];
+#endif
 shared uint pixels_done;
 
 uint pack_rgba8(vec3 c) {
@@ -58,47 +64,96 @@ uint pack_rgba8(vec3 c) {
     return b.r | (b.g << 8) | (b.b << 16) | (255u << 24);
 }
 
+// The invocation's strip: first pixel, and per pixel the compositing state and, for rara,
+// the ray (SPEC section 2) and its visible intervals.
+uvec2 first_pixel;
+vec3 px_color[P];
+float px_T[P];
+bool px_done[P];
+uint newly_done;
+#if CUTOFF_WEIGHT != 0
+vec3 px_ray[P];
+vec4 px_spans[P];
+float band2;
+#endif
+
+// Composites staged splat k over the strip (SPEC section 4); `cutoff` applies its clip weight.
+// Returns whether any pixel of the strip was still open.
+bool composite(uint k, bool cutoff) {
+    vec2 uv = batch_uv[k];
+    vec4 co = batch_conic_opacity[k];
+    vec3 rgb = batch_color_cutoff[k].rgb;
+    bool any_open = false;
+    [[unroll]] for (uint r = 0u; r < P; ++r) {
+        if (px_done[r]) {
+            continue;
+        }
+        any_open = true;
+        vec2 d = uv - vec2(first_pixel + uvec2(0u, r));
+        float power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
+        if (power > 0.0) {
+            continue;
+        }
+        float alpha = co.w * exp(power);
+        if (alpha < 1.0 / 255.0) {
+            continue; // w <= 1 cannot lift it over the threshold
+        }
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
+        if (cutoff) {
+            alpha *= cutoff_weight_mass(batch_cutoff[k], px_ray[r], px_spans[r]);
+        }
+#elif CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
+        if (cutoff) {
+            alpha *= cutoff_weight_length(batch_cutoff[k], px_ray[r], px_spans[r], band2);
+        }
+#endif
+        alpha = min(0.99, alpha);
+        if (alpha < 1.0 / 255.0) {
+            continue;
+        }
+        float next_T = px_T[r] * (1.0 - alpha);
+        if (next_T < 1e-4) {
+            px_done[r] = true;
+            newly_done += 1u;
+            continue;
+        }
+        px_color[r] += alpha * px_T[r] * rgb;
+        px_T[r] = next_T;
+    }
+    return any_open;
+}
+
 void main() {
     FrameParams f = pc.frame.p;
     uint lid = gl_LocalInvocationIndex;
     uvec2 tile = gl_WorkGroupID.xy;
-    uvec2 first_pixel = tile * TILE_SIZE + uvec2(gl_LocalInvocationID.x, gl_LocalInvocationID.y * P);
+    first_pixel = tile * TILE_SIZE + uvec2(gl_LocalInvocationID.x, gl_LocalInvocationID.y * P);
+#if CUTOFF_WEIGHT != 0
+    band2 = pc.clip.p.band.y;
+#endif
 
-    uvec4 clip_config = pc.clip.p.config;
-    bool rara = clip_config.x == CLIP_MODE_RARA;
-    float band2 = pc.clip.p.band.y;
-
-    // Per pixel of the strip: state, and for rara the ray (SPEC section 2) and its visible
-    // intervals.
-    vec3 color[P];
-    float T[P];
-    bool done[P];
-    vec3 ray_dir[P];
-    vec4 spans[P];
-    uint newly_done = 0u;
+    newly_done = 0u;
     [[unroll]] for (uint r = 0u; r < P; ++r) {
         uvec2 pixel = first_pixel + uvec2(0u, r);
         bool inside = pixel.x < f.size.x && pixel.y < f.size.y;
-        color[r] = vec3(0.0);
-        T[r] = 1.0;
-        done[r] = !inside;
+        px_color[r] = vec3(0.0);
+        px_T[r] = 1.0;
+        px_done[r] = !inside;
         if ((pc.flags & ROUND_FIRST) == 0u && inside) {
             vec4 s = pc.state.v[pixel.y * f.size.x + pixel.x];
-            color[r] = s.rgb;
-            T[r] = abs(s.a);
-            done[r] = s.a < 0.0;
+            px_color[r] = s.rgb;
+            px_T[r] = abs(s.a);
+            px_done[r] = s.a < 0.0;
         }
-        if (done[r]) {
+        if (px_done[r]) {
             newly_done += 1u;
         }
-        ray_dir[r] = vec3(0.0);
-        spans[r] = vec4(0.0);
-        if (rara) {
-            vec2 c = (vec2(pixel) - f.focal.zw) / f.focal.xy;
-            ray_dir[r] = normalize(c.x * f.world_to_cam0.xyz + c.y * f.world_to_cam1.xyz
-                                   + f.world_to_cam2.xyz);
-            spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, ray_dir[r]);
-        }
+#if CUTOFF_WEIGHT != 0
+        vec2 c = (vec2(pixel) - f.focal.zw) / f.focal.xy;
+        px_ray[r] = normalize(c.x * f.world_to_cam0.xyz + c.y * f.world_to_cam1.xyz
+                              + f.world_to_cam2.xyz);
+        px_spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, px_ray[r]);
+#endif
     }
 
     uvec2 range = pc.ranges.v[tile.y * f.size.z + tile.x];
@@ -128,57 +183,43 @@ void main() {
                 ProjectedSplat p = pc.splats.v[s];
                 batch_uv[slot] = p.uv;
                 batch_conic_opacity[slot] = vec4(p.conic, p.opacity);
+#if CUTOFF_WEIGHT != 0
                 bool cutoff = p.cutoff != NO_CUTOFF;
                 batch_color_cutoff[slot] = vec4(p.color, cutoff ? 1.0 : 0.0);
                 if (cutoff) {
                     batch_cutoff[slot] = pc.cutoffs.v[p.cutoff];
                 }
+#else
+                batch_color_cutoff[slot] = vec4(p.color, 0.0);
+#endif
             }
         }
         barrier();
         uint count = min(RASTER_BATCH, end - batch);
         newly_done = 0u;
+#if CUTOFF_WEIGHT == 0
         for (uint k = 0u; k < count; ++k) {
-            vec2 uv = batch_uv[k];
-            vec4 co = batch_conic_opacity[k];
-            vec4 color_cutoff = batch_color_cutoff[k];
-            bool cutoff = color_cutoff.w != 0.0;
-            bool all_done = true;
-            [[unroll]] for (uint r = 0u; r < P; ++r) {
-                if (done[r]) {
-                    continue;
-                }
-                all_done = false;
-                vec2 d = uv - vec2(first_pixel + uvec2(0u, r));
-                float power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
-                if (power > 0.0) {
-                    continue;
-                }
-                float alpha = co.w * exp(power);
-                if (alpha < 1.0 / 255.0) {
-                    continue; // w <= 1 cannot lift it over the threshold
-                }
-                if (cutoff) {
-                    alpha *= cutoff_weight(batch_cutoff[k], ray_dir[r], spans[r], clip_config.y,
-                                           band2);
-                }
-                alpha = min(0.99, alpha);
-                if (alpha < 1.0 / 255.0) {
-                    continue;
-                }
-                float next_T = T[r] * (1.0 - alpha);
-                if (next_T < 1e-4) {
-                    done[r] = true;
-                    newly_done += 1u;
-                    continue;
-                }
-                color[r] += alpha * T[r] * color_cutoff.rgb;
-                T[r] = next_T;
-            }
-            if (all_done) {
+            if (!composite(k, false)) {
                 break;
             }
         }
+#else
+        // Runs of plain splats go through a loop of their own, so that the weight code runs
+        // once per cutoff splat rather than for every splat: CPU drivers execute an if's body
+        // under a mask whatever the condition, but leave a loop once no lane continues it.
+        uint k = 0u;
+        bool open = true;
+        while (k < count && open) {
+            while (k < count && open && batch_color_cutoff[k].w == 0.0) {
+                open = composite(k, false);
+                ++k;
+            }
+            if (k < count && open) {
+                open = composite(k, true);
+                ++k;
+            }
+        }
+#endif
         if (newly_done > 0u) {
             atomicAdd(pixels_done, newly_done);
         }
@@ -191,9 +232,9 @@ void main() {
         }
         uint pixel_index = pixel.y * f.size.x + pixel.x;
         if ((pc.flags & ROUND_LAST) != 0u) {
-            pc.image.v[pixel_index] = pack_rgba8(color[r] + T[r] * f.background.rgb);
+            pc.image.v[pixel_index] = pack_rgba8(px_color[r] + px_T[r] * f.background.rgb);
         } else {
-            pc.state.v[pixel_index] = vec4(color[r], done[r] ? -T[r] : T[r]);
+            pc.state.v[pixel_index] = vec4(px_color[r], px_done[r] ? -px_T[r] : px_T[r]);
         }
     }
 }

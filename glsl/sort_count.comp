@@ -2,6 +2,9 @@
 // digit-major (hist[digit * num_blocks + block]) so that one exclusive scan of the whole
 // histogram gives every (digit, block) its first output position.
 #version 460
+#extension GL_EXT_control_flow_attributes : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_basic : require
 #include "common.glsl"
 #include "sort_common.glsl"
 
@@ -24,11 +27,26 @@ void main() {
     barrier();
     uint n = pc.info.s.num_keys;
     uint base = gl_WorkGroupID.x * SORT_BLOCK;
-    // Counting does not depend on order, so read coalesced and count with shared atomics.
-    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+    // Count in registers (one counter per digit, unrolled compares: no per-key memory traffic
+    // beyond the key), then add the subgroup's sums into shared memory, one atomic per digit
+    // and subgroup. Counting does not depend on order, so the reads are coalesced.
+    uint counts[SORT_RADIX];
+    [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+        counts[d] = 0u;
+    }
+    [[unroll]] for (uint k = 0u; k < SORT_ITEMS; ++k) {
         uint i = base + k * SORT_WORKGROUP + lid;
         if (i < n) {
-            atomicAdd(block_hist[key_digit(pc.keys.v[i], pc.shift)], 1u);
+            uint digit = key_digit(pc.keys.v[i], pc.shift);
+            [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+                counts[d] += digit == d ? 1u : 0u;
+            }
+        }
+    }
+    [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+        uint sum = subgroupAdd(counts[d]);
+        if (subgroupElect() && sum > 0u) {
+            atomicAdd(block_hist[d], sum);
         }
     }
     barrier();

@@ -3,6 +3,7 @@
 // then invocation order) ranks every key among the block's keys of its digit without atomics,
 // so keys of equal digit keep their order and the sort is stable at any subgroup size.
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
 #include "sort_common.glsl"
 #define WG_SCAN_SIZE SORT_WORKGROUP
@@ -33,13 +34,22 @@ void main() {
     uint num_blocks = pc.info.s.num_blocks;
     uint base = gl_WorkGroupID.x * SORT_BLOCK + lid * SORT_ITEMS;
 
-    for (uint d = 0u; d < SORT_RADIX; ++d) {
-        rank[d * SORT_WORKGROUP + lid] = 0u;
+    // The invocation's keys and per-digit counters live in registers (unrolled loops, compares
+    // instead of indexed memory), which suits CPU drivers and costs GPUs nothing.
+    uvec2 keys[SORT_ITEMS];
+    uint counts[SORT_RADIX];
+    [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+        counts[d] = 0u;
     }
-    for (uint k = 0u; k < SORT_ITEMS; ++k) {
-        if (base + k < n) {
-            rank[key_digit(pc.keys_in.v[base + k], pc.shift) * SORT_WORKGROUP + lid] += 1u;
+    [[unroll]] for (uint k = 0u; k < SORT_ITEMS; ++k) {
+        keys[k] = base + k < n ? pc.keys_in.v[base + k] : uvec2(0u);
+        uint digit = key_digit(keys[k], pc.shift);
+        [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+            counts[d] += (digit == d && base + k < n) ? 1u : 0u;
         }
+    }
+    [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+        rank[d * SORT_WORKGROUP + lid] = counts[d];
     }
     barrier();
 
@@ -63,16 +73,23 @@ void main() {
         digit_base[lid] = pc.hist.v[lid * num_blocks + gl_WorkGroupID.x] - rank[lid * SORT_WORKGROUP];
     }
     barrier();
+    // Next output position of each digit for this invocation.
+    [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+        counts[d] = digit_base[d] + rank[d * SORT_WORKGROUP + lid];
+    }
 
-    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+    [[unroll]] for (uint k = 0u; k < SORT_ITEMS; ++k) {
         uint i = base + k;
         if (i < n) {
-            uvec2 key = pc.keys_in.v[i];
-            uint d = key_digit(key, pc.shift);
-            uint slot = d * SORT_WORKGROUP + lid;
-            uint dst = digit_base[d] + rank[slot];
-            rank[slot] += 1u;
-            pc.keys_out.v[dst] = key;
+            uint digit = key_digit(keys[k], pc.shift);
+            uint dst = 0u;
+            [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+                if (digit == d) {
+                    dst = counts[d];
+                    counts[d] += 1u;
+                }
+            }
+            pc.keys_out.v[dst] = keys[k];
             pc.values_out.v[dst] = pc.values_in.v[i];
         }
     }

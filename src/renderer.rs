@@ -469,7 +469,9 @@ impl Renderer {
                 round_index: 0,
                 flags: 0,
             };
-            self.rasterize.record(&ctx, cmd, &push, (gx, gy), rounds);
+            let cutoff_weight = rara.then_some(options.clip.weight);
+            self.rasterize
+                .record(&ctx, cmd, &push, (gx, gy), rounds, cutoff_weight);
             compute_barrier(&ctx, cmd);
             timer.end_pass(cmd, c"rasterize");
 

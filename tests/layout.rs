@@ -104,7 +104,11 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuClipParams, sphere),
         offset_of!(GpuClipParams, planes),
     ];
-    for kernel in [shaders::PROJECT, shaders::RASTERIZE] {
+    for kernel in [
+        shaders::PROJECT,
+        shaders::RASTERIZE_MASS,
+        shaders::RASTERIZE_STRIPS_LENGTH,
+    ] {
         assert_eq!(
             member_offsets(kernel, "ClipParams"),
             clip.map(|o| o as u32),

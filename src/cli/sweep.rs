@@ -73,10 +73,10 @@ impl SeriesStats {
         self.gpu_ms.push(gpu_ms);
     }
 
-    /// Mean and 99.9th percentile of the frame-to-frame change, 8-bit units.
-    fn change_summary(&self) -> (f64, f64) {
+    /// Mean, 99.9th percentile and maximum of the frame-to-frame change, 8-bit units.
+    fn change_summary(&self) -> (f64, f64, f64) {
         if self.changes.is_empty() {
-            return (0.0, 0.0);
+            return (0.0, 0.0, 0.0);
         }
         let mean = self.changes.iter().map(|&c| c as f64).sum::<f64>() / self.changes.len() as f64;
         let mut histogram = [0usize; 256];
@@ -93,7 +93,8 @@ impl SeriesStats {
                 break;
             }
         }
-        (mean, p999 as f64)
+        let max = self.changes.iter().copied().max().unwrap_or(0);
+        (mean, p999 as f64, max as f64)
     }
 }
 
@@ -218,23 +219,24 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         ctx.info().name
     );
     println!(
-        "{:<60} {:>12} {:>12} {:>14} {:>12}",
-        "configuration", "mean change", "p99.9 change", "cutoff/frame", "median GPU"
+        "{:<60} {:>12} {:>12} {:>10} {:>14} {:>12}",
+        "configuration", "mean change", "p99.9 change", "max change", "cutoff/frame", "median GPU"
     );
     let mut report = Vec::new();
     for s in &mut series {
-        let (mean, p999) = s.change_summary();
+        let (mean, p999, max) = s.change_summary();
         let mean_cutoff = s.cutoff_per_frame.iter().map(|&c| c as f64).sum::<f64>()
             / s.cutoff_per_frame.len() as f64;
         let median_ms = crate::median(&mut s.gpu_ms.clone());
         println!(
-            "{:<60} {:>12.4} {:>12.0} {:>14.0} {:>9.1} ms",
-            s.label, mean, p999, mean_cutoff, median_ms
+            "{:<60} {:>12.4} {:>12.0} {:>10.0} {:>14.0} {:>9.1} ms",
+            s.label, mean, p999, max, mean_cutoff, median_ms
         );
         report.push(serde_json::json!({
             "configuration": s.label,
             "mean_change": mean,
             "p999_change": p999,
+            "max_change": max,
             "cutoff_per_frame": s.cutoff_per_frame,
             "gpu_ms_per_frame": s.gpu_ms,
         }));

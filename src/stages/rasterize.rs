@@ -4,6 +4,9 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
+use std::ffi::CStr;
+
+use crate::clip::ClipWeight;
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{compute_barrier, ComputePipeline, Context};
@@ -44,8 +47,8 @@ const ROUND_LAST: u32 = 2;
 pub enum RasterLayout {
     /// One invocation per pixel, 256 per tile (`rasterize.comp`): the layout for GPUs.
     PixelPerInvocation,
-    /// One invocation per 8-pixel column strip, 32 per tile (`rasterize_strips.comp`): for CPU
-    /// drivers such as lavapipe, where each staged splat is then loaded once for 8 pixels.
+    /// One invocation per 16-pixel column strip, 16 per tile (`rasterize_strips*.comp`): for
+    /// CPU drivers such as lavapipe, where each staged splat is then loaded once for 16 pixels.
     Strips,
 }
 
@@ -66,35 +69,46 @@ impl RasterLayout {
     }
 }
 
-/// The rasterize kernel.
+/// The rasterize kernels of one layout: without rara clipping, and with each cutoff weight.
+/// CPU drivers execute both sides of every branch, so each frame runs the kernel that holds
+/// only the code it needs.
 pub struct Rasterize {
-    pipeline: ComputePipeline,
+    plain: ComputePipeline,
+    mass: ComputePipeline,
+    length: ComputePipeline,
     layout: RasterLayout,
 }
 
 impl Rasterize {
-    /// Builds the kernel in `layout`.
+    /// Builds the kernels in `layout`.
     pub fn new(ctx: &Context, layout: RasterLayout) -> Result<Self> {
-        let pipeline = match layout {
-            RasterLayout::PixelPerInvocation => {
-                ComputePipeline::new::<RasterizePush>(ctx, c"rasterize", shaders::RASTERIZE)?
-            }
-            RasterLayout::Strips => ComputePipeline::new::<RasterizePush>(
-                ctx,
-                c"rasterize_strips",
-                shaders::RASTERIZE_STRIPS,
-            )?,
+        let build = |name: &'static CStr, spirv: &[u32]| {
+            ComputePipeline::new::<RasterizePush>(ctx, name, spirv)
         };
-        Ok(Rasterize { pipeline, layout })
+        Ok(match layout {
+            RasterLayout::PixelPerInvocation => Rasterize {
+                plain: build(c"rasterize", shaders::RASTERIZE)?,
+                mass: build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
+                length: build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
+                layout,
+            },
+            RasterLayout::Strips => Rasterize {
+                plain: build(c"rasterize_strips", shaders::RASTERIZE_STRIPS)?,
+                mass: build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS)?,
+                length: build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH)?,
+                layout,
+            },
+        })
     }
 
-    /// The layout the kernel was built in.
+    /// The layout the kernels were built in.
     pub fn layout(&self) -> RasterLayout {
         self.layout
     }
 
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
-    /// entries of every tile list.
+    /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping,
+    /// `None` when no splat is cutoff.
     pub fn record(
         &self,
         ctx: &Context,
@@ -102,13 +116,19 @@ impl Rasterize {
         push: &RasterizePush,
         tiles: (u32, u32),
         rounds: u32,
+        cutoff_weight: Option<ClipWeight>,
     ) {
+        let pipeline = match cutoff_weight {
+            None => &self.plain,
+            Some(ClipWeight::Mass) => &self.mass,
+            Some(ClipWeight::Length) => &self.length,
+        };
         for round in 0..rounds {
             let mut p = *push;
             p.round_index = round;
             p.flags = if round == 0 { ROUND_FIRST } else { 0 }
                 | if round + 1 == rounds { ROUND_LAST } else { 0 };
-            self.pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]);
+            pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]);
             if round + 1 < rounds {
                 compute_barrier(ctx, cmd);
             }
