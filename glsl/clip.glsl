@@ -24,6 +24,12 @@ struct CutoffRecord {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer CutoffRecords { CutoffRecord v[]; };
 
+// Intervals the visible part of a ray can have: 1 for a region, 2 for an inverted one. The
+// rasterizer variants set it; project does not use the weights.
+#ifndef CUTOFF_SPANS
+#define CUTOFF_SPANS 2
+#endif
+
 #define CLASS_DROPPED 0u
 #define CLASS_DRAWN 1u
 #define CLASS_CUTOFF 2u
@@ -70,19 +76,22 @@ uint clip_classify(ClipParamsRef clip, vec3 mu, vec3 scale) {
 }
 
 // The visible part of the ray eye + t dir (all real t) as two intervals (lo0, hi0, lo1, hi1);
-// an unused or empty interval is (0, 0).
+// an unused or empty interval is (0, 0). dir need not be of unit length: the weights depend
+// only on the ray, not on how t is scaled along it.
 vec4 clip_ray_spans(ClipParamsRef clip, vec3 eye, vec3 dir) {
     uvec4 config = clip.p.config;
     float lo, hi;
     if ((config.z & CLIP_FLAG_SPHERE) != 0u) {
         vec4 sphere = clip.p.sphere;
+        // |oc + t dir|^2 = r^2; dir need not be of unit length.
         vec3 oc = eye - sphere.xyz;
+        float a = dot(dir, dir);
         float b = dot(oc, dir);
-        float disc = b * b - (dot(oc, oc) - sphere.w * sphere.w);
+        float disc = b * b - a * (dot(oc, oc) - sphere.w * sphere.w);
         if (disc > 0.0) {
             float h = sqrt(disc);
-            lo = -b - h;
-            hi = -b + h;
+            lo = (-b - h) / a;
+            hi = (-b + h) / a;
         } else {
             lo = 0.0;
             hi = 0.0;
@@ -151,9 +160,13 @@ float cutoff_weight_mass(CutoffRecord rec, vec3 dir, vec4 spans) {
     whitened_ray(rec, dir, d, o, a, t_star);
     float sqrt_a = sqrt(a);
     float w = span_mass(spans.xy, t_star, sqrt_a);
+#if CUTOFF_SPANS > 1
+    // Only inverted regions have a second interval; the other kernels leave this out, since a
+    // CPU driver would evaluate it under a mask even when it is empty.
     if (spans.z < spans.w) {
         w += span_mass(spans.zw, t_star, sqrt_a);
     }
+#endif
     return clamp(w, 0.0, 1.0);
 }
 

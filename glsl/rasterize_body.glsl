@@ -52,10 +52,17 @@ layout(push_constant) uniform Push {
 } pc;
 
 shared vec2 batch_uv[RASTER_BATCH];
-shared vec4 batch_conic_opacity[RASTER_BATCH];
-shared vec4 batch_color_cutoff[RASTER_BATCH];   // rgb, w = 1 for a cutoff splat
+shared vec4 batch_conic_opacity[RASTER_BATCH];   // opacity negated for a cutoff splat
+shared vec3 batch_color[RASTER_BATCH];
 #if CUTOFF_WEIGHT != 0
 shared CutoffRecord batch_cutoff[RASTER_BATCH];
+#endif
+
+// The weights take (lo0, hi0, lo1, hi1); kernels for regions that are not inverted keep one.
+#if CUTOFF_SPANS > 1
+#define SPANS_OF(s) (s)
+#else
+#define SPANS_OF(s) vec4((s), 0.0, 0.0)
 #endif
 shared uint pixels_done;
 
@@ -72,17 +79,23 @@ float px_T[P];
 bool px_done[P];
 uint newly_done;
 #if CUTOFF_WEIGHT != 0
-vec3 px_ray[P];
+// The ray of pixel r of the strip is eye + t (ray0 + r ray_step), not normalised (the weights do
+// not depend on the scale of t): two vectors instead of P keep the strip's state in registers.
+vec3 ray0;
+vec3 ray_step;
+#if CUTOFF_SPANS > 1
 vec4 px_spans[P];
+#else
+vec2 px_spans[P];
+#endif
 float band2;
 #endif
 
-// Composites staged splat k over the strip (SPEC section 4); `cutoff` applies its clip weight.
-// Returns whether any pixel of the strip was still open.
-bool composite(uint k, bool cutoff) {
+// Composites staged splat k, with conic and opacity co, over the strip (SPEC section 4);
+// `cutoff` applies its clip weight. Returns whether any pixel of the strip was still open.
+bool composite(uint k, vec4 co, bool cutoff) {
     vec2 uv = batch_uv[k];
-    vec4 co = batch_conic_opacity[k];
-    vec3 rgb = batch_color_cutoff[k].rgb;
+    vec3 rgb = batch_color[k];
     bool any_open = false;
     [[unroll]] for (uint r = 0u; r < P; ++r) {
         if (px_done[r]) {
@@ -100,11 +113,13 @@ bool composite(uint k, bool cutoff) {
         }
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
         if (cutoff) {
-            alpha *= cutoff_weight_mass(batch_cutoff[k], px_ray[r], px_spans[r]);
+            alpha *= cutoff_weight_mass(batch_cutoff[k], ray0 + float(r) * ray_step,
+                                        SPANS_OF(px_spans[r]));
         }
 #elif CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
         if (cutoff) {
-            alpha *= cutoff_weight_length(batch_cutoff[k], px_ray[r], px_spans[r], band2);
+            alpha *= cutoff_weight_length(batch_cutoff[k], ray0 + float(r) * ray_step,
+                                          SPANS_OF(px_spans[r]), band2);
         }
 #endif
         alpha = min(0.99, alpha);
@@ -132,6 +147,12 @@ void main() {
     band2 = pc.clip.p.band.y;
 #endif
 
+#if CUTOFF_WEIGHT != 0
+    // Camera-space direction ((i - cx)/fx, (j - cy)/fy, 1) turned to world (SPEC section 2).
+    vec2 c0 = (vec2(first_pixel) - f.focal.zw) / f.focal.xy;
+    ray0 = c0.x * f.world_to_cam0.xyz + c0.y * f.world_to_cam1.xyz + f.world_to_cam2.xyz;
+    ray_step = f.world_to_cam1.xyz / f.focal.y;
+#endif
     newly_done = 0u;
     [[unroll]] for (uint r = 0u; r < P; ++r) {
         uvec2 pixel = first_pixel + uvec2(0u, r);
@@ -149,10 +170,12 @@ void main() {
             newly_done += 1u;
         }
 #if CUTOFF_WEIGHT != 0
-        vec2 c = (vec2(pixel) - f.focal.zw) / f.focal.xy;
-        px_ray[r] = normalize(c.x * f.world_to_cam0.xyz + c.y * f.world_to_cam1.xyz
-                              + f.world_to_cam2.xyz);
-        px_spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, px_ray[r]);
+        vec3 ray = ray0 + float(r) * ray_step;
+#if CUTOFF_SPANS > 1
+        px_spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, ray);
+#else
+        px_spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, ray).xy;
+#endif
 #endif
     }
 
@@ -182,15 +205,17 @@ void main() {
                 uint s = pc.values.v[entry];
                 ProjectedSplat p = pc.splats.v[s];
                 batch_uv[slot] = p.uv;
-                batch_conic_opacity[slot] = vec4(p.conic, p.opacity);
+                batch_color[slot] = p.color;
 #if CUTOFF_WEIGHT != 0
+                // The sign of the staged opacity marks a cutoff splat, so the loop that walks
+                // the plain ones learns it from a load it makes anyway.
                 bool cutoff = p.cutoff != NO_CUTOFF;
-                batch_color_cutoff[slot] = vec4(p.color, cutoff ? 1.0 : 0.0);
+                batch_conic_opacity[slot] = vec4(p.conic, cutoff ? -p.opacity : p.opacity);
                 if (cutoff) {
                     batch_cutoff[slot] = pc.cutoffs.v[p.cutoff];
                 }
 #else
-                batch_color_cutoff[slot] = vec4(p.color, 0.0);
+                batch_conic_opacity[slot] = vec4(p.conic, p.opacity);
 #endif
             }
         }
@@ -199,7 +224,7 @@ void main() {
         newly_done = 0u;
 #if CUTOFF_WEIGHT == 0
         for (uint k = 0u; k < count; ++k) {
-            if (!composite(k, false)) {
+            if (!composite(k, batch_conic_opacity[k], false)) {
                 break;
             }
         }
@@ -210,12 +235,17 @@ void main() {
         uint k = 0u;
         bool open = true;
         while (k < count && open) {
-            while (k < count && open && batch_color_cutoff[k].w == 0.0) {
-                open = composite(k, false);
+            vec4 co = batch_conic_opacity[k];
+            while (k < count && open) {
+                co = batch_conic_opacity[k];
+                if (co.w < 0.0) {
+                    break;
+                }
+                open = composite(k, co, false);
                 ++k;
             }
             if (k < count && open) {
-                open = composite(k, true);
+                open = composite(k, vec4(co.xyz, -co.w), true);
                 ++k;
             }
         }

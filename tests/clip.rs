@@ -14,21 +14,9 @@ use rara::reference;
 use rara::synth::Rng;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
-/// 2nd and 98th percentile of the centres per axis.
-fn percentile_box(scene: &Scene) -> (Vec3, Vec3) {
-    let (mut lo, mut hi) = (Vec3::ZERO, Vec3::ZERO);
-    for axis in 0..3 {
-        let mut v: Vec<f32> = scene.means.iter().map(|m| m[axis]).collect();
-        v.sort_by(f32::total_cmp);
-        lo[axis] = v[v.len() * 2 / 100];
-        hi[axis] = v[v.len() * 98 / 100];
-    }
-    (lo, hi)
-}
-
 /// One region of each kind, placed through the middle of the scene.
 fn regions(scene: &Scene) -> Vec<(&'static str, ClipRegion)> {
-    let (lo, hi) = percentile_box(scene);
+    let (lo, hi) = common::percentile_box(scene);
     let c = 0.5 * (lo + hi);
     let ext = hi - lo;
     let n1 = Vec3::new(1.0, 0.3, -0.2).normalize();
@@ -120,7 +108,7 @@ fn gpu_matches_cpu(name: &str, scene: &Scene, camera: &Camera) {
 }
 
 fn orbit_camera(scene: &Scene, width: u32) -> Camera {
-    let (lo, hi) = percentile_box(scene);
+    let (lo, hi) = common::percentile_box(scene);
     let c = 0.5 * (lo + hi);
     let r = (hi - lo).length();
     let eye = c + r * Vec3::new(0.8, -0.35, 0.6);

@@ -7,19 +7,6 @@ use rara::reference::project::{footprint_q_max, footprint_touches_tile, project_
 use rara::reference::{self, rasterize::tile_lists};
 use rara::{Camera, Clip, RenderOptions, Renderer, Scene};
 
-/// Bounds of the 2nd..98th percentile of the centres, per axis.
-fn percentile_box(scene: &Scene) -> (Vec3, Vec3) {
-    let mut lo = Vec3::ZERO;
-    let mut hi = Vec3::ZERO;
-    for axis in 0..3 {
-        let mut v: Vec<f32> = scene.means.iter().map(|m| m[axis]).collect();
-        v.sort_by(f32::total_cmp);
-        lo[axis] = v[v.len() * 2 / 100];
-        hi[axis] = v[v.len() * 98 / 100];
-    }
-    (lo, hi)
-}
-
 /// Two views of `scene` at `width` pixels: from its orbit cameras, or around its percentile box.
 fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec<Camera> {
     match cams {
@@ -31,7 +18,7 @@ fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec
                 .collect()
         }
         None => {
-            let (lo, hi) = percentile_box(scene);
+            let (lo, hi) = common::percentile_box(scene);
             let centre = 0.5 * (lo + hi);
             let r = (hi - lo).length();
             [0.3f32, 2.2]

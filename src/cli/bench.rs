@@ -13,7 +13,7 @@ use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
 
 use super::clip_args::ClipArgs;
-use super::sweep::default_range;
+use super::sweep::{default_range, with_moving_plane};
 use crate::{load_scene, median, resolve_camera, CameraArgs};
 
 /// `rara bench` options.
@@ -232,16 +232,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
 /// The clip of `mode` with the sweeping plane at `moving`.
 fn clip_for(mode: BenchMode, base: &Clip, moving: Plane) -> Clip {
-    let mut clip = base.clone();
-    if let Some(rara::clip::ClipRegion {
-        shape: rara::clip::ClipShape::HalfSpaces(planes),
-        ..
-    }) = &mut clip.region
-    {
-        if let Some(last) = planes.last_mut() {
-            *last = moving;
-        }
-    }
+    let mut clip = with_moving_plane(base, moving);
     clip.mode = match mode {
         BenchMode::Original => ClipMode::None,
         BenchMode::Hard => ClipMode::Hard,

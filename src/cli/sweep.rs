@@ -261,7 +261,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
 }
 
 /// `config` with its last half-space (the moving plane) replaced by `moving`.
-fn with_moving_plane(config: &Clip, moving: Plane) -> Clip {
+pub fn with_moving_plane(config: &Clip, moving: Plane) -> Clip {
     let mut clip = config.clone();
     if let Some(rara::clip::ClipRegion {
         shape: rara::clip::ClipShape::HalfSpaces(planes),

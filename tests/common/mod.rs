@@ -95,3 +95,15 @@ pub fn check_images(
     }
     d
 }
+
+/// Bounds of the 2nd..98th percentile of the centres, per axis (robust to floaters).
+pub fn percentile_box(scene: &rara::Scene) -> (glam::Vec3, glam::Vec3) {
+    let (mut lo, mut hi) = (glam::Vec3::ZERO, glam::Vec3::ZERO);
+    for axis in 0..3 {
+        let mut v: Vec<f32> = scene.means.iter().map(|m| m[axis]).collect();
+        v.sort_by(f32::total_cmp);
+        lo[axis] = v[v.len() * 2 / 100];
+        hi[axis] = v[v.len() * 98 / 100];
+    }
+    (lo, hi)
+}
