@@ -369,6 +369,16 @@ fn clip_options_and_clip_files_agree() {
     let plain = image::open(&out_plain).unwrap().to_rgba8();
     assert_ne!(a, plain, "the clip must remove something");
 
+    // Vector options whose first number is negative are values, not flags.
+    let mut args = render_args(scene, cams, out_plain.to_str().unwrap());
+    args.extend(["--clip-plane", "-1,0.2,0,0.1", "--background", "-0,0,0.5"]);
+    let out = rara(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
     // The sphere cutaway and hard mode parse and render.
     let mut args = render_args(scene, cams, out_plain.to_str().unwrap());
     args.extend([
