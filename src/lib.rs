@@ -4,15 +4,20 @@
 //! kernel `glsl/<stage>.comp`, the host side that records it in [`stages`], and the CPU twin in
 //! [`reference`](mod@reference) that the tests use as the oracle:
 //!
-//! 1. `project`: cull, 2D conic, radius, tiles touched, SH colour per Gaussian;
+//! 1. `project`: clip classification, cull, 2D conic, radius, tiles touched, SH colour per
+//!    Gaussian, and the side record of each cutoff Gaussian;
 //! 2. `prefix_sum`: offsets of each Gaussian's tile pairs;
-//! 3. `emit`: one (tile, depth) key and splat index per touched tile;
+//! 3. `emit`: one (tile, depth) key and splat index per tile its visible footprint reaches;
 //! 4. `sort`: stable GPU radix sort of the pairs ([`stages::sort::RadixSort`]);
 //! 5. `tile_ranges`: each tile's run of pairs;
-//! 6. `rasterize`: per-pixel front-to-back compositing, one workgroup per 16x16 tile.
+//! 6. `rasterize`: per-pixel front-to-back compositing, one workgroup per 16x16 tile, with the
+//!    per-pixel clip weight of cutoff splats.
+//!
+//! Clipping (SPEC section 5) is described by [`clip::Clip`] in [`RenderOptions`]; the same
+//! description drives the kernels and the CPU reference.
 //!
 //! Entry points: [`ply::load_ply`], [`camera::Camera`], [`vk::Context`],
-//! [`renderer::Renderer`], [`reference::render`].
+//! [`renderer::Renderer`], [`reference::render`], [`clip::Clip`].
 
 #![warn(missing_docs)]
 

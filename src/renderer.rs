@@ -349,10 +349,20 @@ impl Renderer {
         let (gx, gy) = tile_grid(w, h);
         self.frame_resources(w, h, scene.count, capacity, rounds)?;
         let rara = options.clip.effective_mode() == ClipMode::Rara;
-        if rara && self.frame.as_ref().unwrap().cutoffs.is_none() {
-            let bytes = scene.count.max(1) as u64 * std::mem::size_of::<GpuCutoffRecord>() as u64;
-            let buffer = Buffer::new(&self.ctx, "cutoff records", bytes, MemoryLocation::GpuOnly)?;
-            self.frame.as_mut().unwrap().cutoffs = Some(buffer);
+        // One side-record slot per Gaussian of this scene: (re)allocated when a rara frame needs
+        // more than the last one did.
+        let cutoff_bytes =
+            scene.count.max(1) as u64 * std::mem::size_of::<GpuCutoffRecord>() as u64;
+        let frame = self.frame.as_mut().unwrap();
+        if rara && frame.cutoffs.as_ref().is_none_or(|b| b.size < cutoff_bytes) {
+            frame.cutoffs = None; // free the old buffer first
+            let buffer = Buffer::new(
+                &self.ctx,
+                "cutoff records",
+                cutoff_bytes,
+                MemoryLocation::GpuOnly,
+            )?;
+            frame.cutoffs = Some(buffer);
         }
         let clip_params = options.clip.to_gpu();
         let sorted_index = crate::stages::sort::passes_for(key_bits(w, h)) as usize % 2;
