@@ -354,7 +354,12 @@ impl Renderer {
         let cutoff_bytes =
             scene.count.max(1) as u64 * std::mem::size_of::<GpuCutoffRecord>() as u64;
         let frame = self.frame.as_mut().unwrap();
-        if rara && frame.cutoffs.as_ref().is_none_or(|b| b.size < cutoff_bytes) {
+        if rara
+            && !frame
+                .cutoffs
+                .as_ref()
+                .is_some_and(|b| b.size >= cutoff_bytes)
+        {
             frame.cutoffs = None; // free the old buffer first
             let buffer = Buffer::new(
                 &self.ctx,
