@@ -23,13 +23,16 @@ fn write(name: &str, bytes: &[u8]) -> PathBuf {
     p
 }
 
-/// A valid binary scene and a cameras file for it.
+/// A valid binary scene and a cameras file for it, under names of their own: tests run in
+/// parallel, and one must not read the files while another writes them.
 fn good_scene() -> (PathBuf, PathBuf) {
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let scene = rara::synth::shell(500, 1, 3);
-    let p = dir().join("good.ply");
+    let p = dir().join(format!("good{n}.ply"));
     rara::ply::write_ply(&scene, &p, rara::ply::PlyEncoding::BinaryLittleEndian).unwrap();
     let cams = rara::synth::orbit_cameras(2, 3.0, 64, 48, 50.0).unwrap();
-    let c = dir().join("good.cameras.json");
+    let c = dir().join(format!("good{n}.cameras.json"));
     rara::Camera::save_all(&cams, &c).unwrap();
     (p, c)
 }
