@@ -11,16 +11,16 @@
 //
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
 // invocation after 65,535 loop iterations in total; the loops over r are unrolled, and the rara
-// variants take at most three iterations per entry). Longer
-// lists take several rounds; between rounds the per-pixel state (colour, transmittance, done)
-// lives in `state`.
+// variants take at most three iterations per entry). Longer lists take several rounds; between
+// rounds the per-pixel state (colour, transmittance, done) lives in `state`.
 //
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
 // ray (clip.glsl), staged with the batch. Splats that are not cutoff take the plain path.
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
-// + 1 or CLIP_WEIGHT_LENGTH + 1. CPU drivers run both sides of every branch under a mask, so
-// code that a frame does not need must not be in its kernel at all.
+// + 1 or CLIP_WEIGHT_LENGTH + 1; CUTOFF_SPANS (1 or 2) the visible intervals a ray can have.
+// CPU drivers run both sides of every branch under a mask, so code that a frame does not need
+// must not be in its kernel at all.
 #extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
 #include "clip.glsl"
