@@ -175,6 +175,12 @@ impl Renderer {
         })
     }
 
+    /// Replaces the renderer's pass timer, e.g. with one that writes into an engine's query
+    /// pool ([`PassTimer::with_engine_pool`]). Returns the old one.
+    pub fn set_timer(&mut self, timer: PassTimer) -> PassTimer {
+        std::mem::replace(&mut self.timer, timer)
+    }
+
     /// The context the renderer was made with.
     pub fn context(&self) -> &Context {
         &self.ctx

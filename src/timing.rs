@@ -3,7 +3,8 @@
 //! Each pass of a frame is bracketed by [`PassTimer::begin_pass`] / [`PassTimer::end_pass`]:
 //! a `VK_EXT_debug_utils` label (so RenderDoc and Nsight captures show pass names), a
 //! timestamp after the pass, and, where the device has pipeline-statistics queries, the number
-//! of compute-shader invocations the pass ran.
+//! of compute-shader invocations the pass ran. The timestamps can go into a query pool of the
+//! caller's ([`PassTimer::with_engine_pool`], installed with `Renderer::set_timer`).
 
 use ash::vk;
 
@@ -27,6 +28,10 @@ pub struct PassTiming {
 /// Query pools that time and count the passes of a frame.
 pub struct PassTimer {
     timestamps: vk::QueryPool,
+    /// First query of `timestamps` this timer uses (0 unless the pool is an engine's).
+    first: u32,
+    /// Whether the timer created `timestamps` (and so destroys it).
+    owns_timestamps: bool,
     statistics: Option<vk::QueryPool>,
     names: Vec<&'static str>,
     open: bool,
@@ -54,12 +59,35 @@ impl PassTimer {
         };
         Ok(PassTimer {
             timestamps,
+            first: 0,
+            owns_timestamps: true,
             statistics,
             names: Vec::new(),
             open: false,
             enabled: ctx.info().timestamps,
             ctx: ctx.clone(),
         })
+    }
+
+    /// A timer that writes its timestamps into queries `first .. first + MAX_PASSES + 1` of an
+    /// engine's timestamp pool (no pipeline statistics). The timer resets those queries at the
+    /// start of each frame and never destroys the pool.
+    ///
+    /// # Safety
+    /// `pool` must be a `VK_QUERY_TYPE_TIMESTAMP` pool of `ctx`'s device with at least
+    /// `first + MAX_PASSES + 1` queries, must outlive the timer, and those queries must not be
+    /// used by anything else while frames recorded with the timer are pending.
+    pub unsafe fn with_engine_pool(ctx: &Context, pool: vk::QueryPool, first: u32) -> PassTimer {
+        PassTimer {
+            timestamps: pool,
+            first,
+            owns_timestamps: false,
+            statistics: None,
+            names: Vec::new(),
+            open: false,
+            enabled: ctx.info().timestamps,
+            ctx: ctx.clone(),
+        }
     }
 
     /// Resets the pools and writes the frame's first timestamp.
@@ -69,12 +97,12 @@ impl PassTimer {
         let device = self.ctx.device();
         unsafe {
             if self.enabled {
-                device.cmd_reset_query_pool(cmd, self.timestamps, 0, MAX_PASSES + 1);
+                device.cmd_reset_query_pool(cmd, self.timestamps, self.first, MAX_PASSES + 1);
                 device.cmd_write_timestamp(
                     cmd,
                     vk::PipelineStageFlags::BOTTOM_OF_PIPE,
                     self.timestamps,
-                    0,
+                    self.first,
                 );
             }
             if let Some(pool) = self.statistics {
@@ -119,7 +147,7 @@ impl PassTimer {
                         cmd,
                         vk::PipelineStageFlags::BOTTOM_OF_PIPE,
                         self.timestamps,
-                        index + 1,
+                        self.first + index + 1,
                     );
                 }
             }
@@ -138,7 +166,7 @@ impl PassTimer {
         let mut ticks = vec![0u64; n + 1];
         let flags = vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT;
         let device = self.ctx.device();
-        unsafe { device.get_query_pool_results(self.timestamps, 0, &mut ticks, flags) }
+        unsafe { device.get_query_pool_results(self.timestamps, self.first, &mut ticks, flags) }
             .vk("vkGetQueryPoolResults")?;
         let mut invocations = vec![None; n];
         if let Some(pool) = self.statistics {
@@ -165,7 +193,9 @@ impl PassTimer {
 impl Drop for PassTimer {
     fn drop(&mut self) {
         unsafe {
-            self.ctx.device().destroy_query_pool(self.timestamps, None);
+            if self.owns_timestamps {
+                self.ctx.device().destroy_query_pool(self.timestamps, None);
+            }
             if let Some(pool) = self.statistics {
                 self.ctx.device().destroy_query_pool(pool, None);
             }

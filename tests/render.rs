@@ -451,3 +451,44 @@ fn tight_footprints_change_no_pixel() {
         }
     }
 }
+
+/// The pass timestamps can live in a query pool the caller owns: the renderer writes its queries
+/// there, reads them back, and leaves the pool to its owner.
+#[test]
+fn pass_timings_into_a_callers_query_pool() {
+    use ash::vk;
+    use rara::timing::{PassTimer, MAX_PASSES};
+    let ctx = common::context();
+    if !ctx.info().timestamps {
+        eprintln!("the queue has no timestamps: nothing to time");
+        return;
+    }
+    let first = 5;
+    let info = vk::QueryPoolCreateInfo::default()
+        .query_type(vk::QueryType::TIMESTAMP)
+        .query_count(first + MAX_PASSES + 1);
+    let pool = unsafe { ctx.device().create_query_pool(&info, None) }.unwrap();
+    {
+        let mut renderer = Renderer::new(&ctx).unwrap();
+        // SAFETY: the pool is a timestamp pool of this device with enough queries, it outlives
+        // the renderer (destroyed below), and nothing else uses those queries.
+        renderer.set_timer(unsafe { PassTimer::with_engine_pool(&ctx, pool, first) });
+        let scene = rara::synth::shell(2000, 0, 1);
+        let gpu_scene = renderer.upload(&scene).unwrap();
+        let cam = &rara::synth::orbit_cameras(1, 3.0, 96, 72, 50.0).unwrap()[0];
+        let (_, stats) = renderer
+            .render(&gpu_scene, cam, &RenderOptions::default())
+            .unwrap();
+        let names: Vec<&str> = stats.passes.iter().map(|p| p.name).collect();
+        assert_eq!(names.first(), Some(&"project"));
+        assert_eq!(names.last(), Some(&"rasterize"));
+        assert!(stats
+            .passes
+            .iter()
+            .all(|p| p.ms >= 0.0 && p.invocations.is_none()));
+        assert!(stats.gpu_ms > 0.0);
+    }
+    // The renderer is gone; the pool is still the caller's to destroy.
+    unsafe { ctx.device().destroy_query_pool(pool, None) };
+    common::assert_no_validation_messages(&ctx);
+}
