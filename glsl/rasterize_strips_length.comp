@@ -1,4 +1,5 @@
-// Stage 6, rasterize, CPU-driver layout, rara clipping with the length weight (see rasterize_body.glsl).
+// Stage 6, rasterize, CPU-driver layout, rara clipping with the length weight
+// (see rasterize_body.glsl).
 #version 460
 #define PIXELS_PER_INVOCATION 16
 #define CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1
