@@ -52,8 +52,9 @@ pub struct SweepArgs {
 #[derive(Default)]
 struct SeriesStats {
     label: String,
-    /// |a - b| of every RGB channel of every pixel, over all consecutive frame pairs.
-    changes: Vec<u8>,
+    /// Histogram of |a - b| over every RGB channel of every pixel of consecutive frame pairs
+    /// (exact percentiles in constant memory, whatever the size and length of the sweep).
+    changes: Vec<u64>,
     cutoff_per_frame: Vec<u32>,
     gpu_ms: Vec<f64>,
     previous: Option<image::RgbaImage>,
@@ -61,10 +62,13 @@ struct SeriesStats {
 
 impl SeriesStats {
     fn add(&mut self, img: &image::RgbaImage, cutoff: u32, gpu_ms: f64) {
+        if self.changes.is_empty() {
+            self.changes = vec![0; 256];
+        }
         if let Some(prev) = &self.previous {
             for (a, b) in prev.pixels().zip(img.pixels()) {
                 for c in 0..3 {
-                    self.changes.push(a.0[c].abs_diff(b.0[c]));
+                    self.changes[a.0[c].abs_diff(b.0[c]) as usize] += 1;
                 }
             }
         }
@@ -75,26 +79,28 @@ impl SeriesStats {
 
     /// Mean, 99.9th percentile and maximum of the frame-to-frame change, 8-bit units.
     fn change_summary(&self) -> (f64, f64, f64) {
-        if self.changes.is_empty() {
+        let total: u64 = self.changes.iter().sum();
+        if total == 0 {
             return (0.0, 0.0, 0.0);
         }
-        let mean = self.changes.iter().map(|&c| c as f64).sum::<f64>() / self.changes.len() as f64;
-        let mut histogram = [0usize; 256];
-        for &c in &self.changes {
-            histogram[c as usize] += 1;
-        }
-        let rank = ((self.changes.len() as f64) * 0.999).ceil() as usize;
+        let sum: u64 = self
+            .changes
+            .iter()
+            .enumerate()
+            .map(|(v, &n)| v as u64 * n)
+            .sum();
+        let rank = ((total as f64) * 0.999).ceil() as u64;
         let mut seen = 0;
-        let mut p999 = 255;
-        for (value, &n) in histogram.iter().enumerate() {
+        let mut p999 = 0;
+        for (value, &n) in self.changes.iter().enumerate() {
             seen += n;
             if seen >= rank {
                 p999 = value;
                 break;
             }
         }
-        let max = self.changes.iter().copied().max().unwrap_or(0);
-        (mean, p999 as f64, max as f64)
+        let max = self.changes.iter().rposition(|&n| n > 0).unwrap_or(0);
+        (sum as f64 / total as f64, p999 as f64, max as f64)
     }
 }
 
