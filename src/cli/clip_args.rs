@@ -57,7 +57,7 @@ impl ClipArgs {
         let mut sphere = None;
         let mut invert = self.invert;
         if let Some(region) = clip.region.take() {
-            invert ^= region.invert;
+            invert |= region.invert;
             match region.shape {
                 ClipShape::HalfSpaces(p) => planes = p,
                 ClipShape::Sphere { center, radius } => sphere = Some((center, radius)),
