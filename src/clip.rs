@@ -89,12 +89,7 @@ pub struct ClipRegion {
 impl ClipRegion {
     /// The intersection of `planes` (at least one, at most [`MAX_CLIP_PLANES`]).
     pub fn planes(planes: Vec<Plane>) -> Result<ClipRegion> {
-        if planes.is_empty() || planes.len() > MAX_CLIP_PLANES as usize {
-            return Err(Error::InvalidInput(format!(
-                "a clip region takes 1 to {MAX_CLIP_PLANES} planes, got {}",
-                planes.len()
-            )));
-        }
+        check_plane_count(planes.len())?;
         Ok(ClipRegion {
             shape: ClipShape::HalfSpaces(planes),
             invert: false,
@@ -121,6 +116,26 @@ impl ClipRegion {
             shape: ClipShape::Sphere { center, radius },
             invert: false,
         })
+    }
+
+    /// The region made of half-spaces (planes and boxes, intersected) or a sphere, inverted
+    /// when `invert`; `None` when there is neither. A sphere cannot be combined with planes.
+    pub fn from_parts(
+        planes: Vec<Plane>,
+        sphere: Option<(Vec3, f32)>,
+        invert: bool,
+    ) -> Result<Option<ClipRegion>> {
+        let region = match (sphere, planes.is_empty()) {
+            (Some(_), false) => {
+                return Err(Error::InvalidInput(
+                    "a clip sphere cannot be combined with planes or boxes".into(),
+                ))
+            }
+            (Some((center, radius)), true) => Some(ClipRegion::sphere(center, radius)?),
+            (None, false) => Some(ClipRegion::planes(planes)?),
+            (None, true) => None,
+        };
+        Ok(region.map(|r| if invert { r.inverted() } else { r }))
     }
 
     /// The same region with the visible set complemented.
@@ -189,6 +204,16 @@ impl ClipRegion {
             (true, false) => Spans([(-UNBOUNDED, lo), (hi, UNBOUNDED)]),
         }
     }
+}
+
+/// Checks that a region has 1 to [`MAX_CLIP_PLANES`] half-spaces.
+fn check_plane_count(n: usize) -> Result<()> {
+    if n == 0 || n > MAX_CLIP_PLANES as usize {
+        return Err(Error::InvalidInput(format!(
+            "a clip region takes 1 to {MAX_CLIP_PLANES} planes, got {n}"
+        )));
+    }
+    Ok(())
 }
 
 /// The six half-spaces of an oriented box.
@@ -362,12 +387,7 @@ impl Clip {
             ..
         }) = &self.region
         {
-            if planes.is_empty() || planes.len() > MAX_CLIP_PLANES as usize {
-                return Err(Error::InvalidInput(format!(
-                    "a clip region takes 1 to {MAX_CLIP_PLANES} planes, got {}",
-                    planes.len()
-                )));
-            }
+            check_plane_count(planes.len())?;
         }
         Ok(())
     }
@@ -529,17 +549,11 @@ impl ClipFile {
                 Quat::from_xyzw(q[1], q[2], q[3], q[0]),
             )?);
         }
-        let region = match (&self.sphere, planes.is_empty()) {
-            (Some(_), false) => {
-                return Err(Error::InvalidInput(
-                    "a sphere cannot be combined with planes or a box".into(),
-                ))
-            }
-            (Some(s), true) => Some(ClipRegion::sphere(Vec3::from(s.center), s.radius)?),
-            (None, false) => Some(ClipRegion::planes(planes)?),
-            (None, true) => None,
-        };
-        let region = region.map(|r| if self.invert { r.inverted() } else { r });
+        let sphere = self
+            .sphere
+            .as_ref()
+            .map(|s| (Vec3::from(s.center), s.radius));
+        let region = ClipRegion::from_parts(planes, sphere, self.invert)?;
         let mode = match &self.mode {
             Some(m) => m.parse()?,
             None if region.is_some() => ClipMode::Rara,

@@ -86,60 +86,49 @@ impl ModeResult {
         self.frames.iter().map(|f| f.wall_ms).collect()
     }
 
-    /// Median per pass, in pass order; the sort's passes are also summed into "sort".
-    fn pass_medians(&self) -> Vec<(String, f64)> {
+    /// Median over the frames of each group's milliseconds, groups in pass order; `group`
+    /// maps a pass name to its group, and a frame's passes of one group are summed.
+    fn medians_by(&self, group: impl Fn(&'static str) -> &'static str) -> Vec<(String, f64)> {
         let mut names: Vec<&'static str> = Vec::new();
-        for f in &self.frames {
-            for p in &f.passes {
-                if !names.contains(&p.name) {
-                    names.push(p.name);
-                }
+        for p in self.frames.iter().flat_map(|f| &f.passes) {
+            if !names.contains(&group(p.name)) {
+                names.push(group(p.name));
             }
         }
-        let per_pass = |name: &str| -> f64 {
+        let per_group = |name: &str| -> f64 {
             let mut v: Vec<f64> = self
                 .frames
                 .iter()
                 .map(|f| {
                     f.passes
                         .iter()
-                        .filter(|p| p.name == name)
+                        .filter(|p| group(p.name) == name)
                         .map(|p| p.ms)
                         .sum()
                 })
                 .collect();
             median(&mut v)
         };
-        names.iter().map(|n| (n.to_string(), per_pass(n))).collect()
+        names
+            .iter()
+            .map(|n| (n.to_string(), per_group(n)))
+            .collect()
     }
 
-    /// Medians of the groups shown in the table: the sort passes are summed.
+    /// Median per pass, in pass order.
+    fn pass_medians(&self) -> Vec<(String, f64)> {
+        self.medians_by(|name| name)
+    }
+
+    /// Medians of the groups shown in the table: the sort passes are summed into "sort".
     fn group_medians(&self) -> Vec<(String, f64)> {
-        let mut groups: Vec<(String, Vec<f64>)> = Vec::new();
-        for f in &self.frames {
-            let mut sums: Vec<(String, f64)> = Vec::new();
-            for p in &f.passes {
-                let group = if p.name.starts_with("sort") {
-                    "sort"
-                } else {
-                    p.name
-                };
-                match sums.iter_mut().find(|(g, _)| g == group) {
-                    Some((_, ms)) => *ms += p.ms,
-                    None => sums.push((group.to_string(), p.ms)),
-                }
+        self.medians_by(|name| {
+            if name.starts_with("sort") {
+                "sort"
+            } else {
+                name
             }
-            for (g, ms) in sums {
-                match groups.iter_mut().find(|(name, _)| *name == g) {
-                    Some((_, v)) => v.push(ms),
-                    None => groups.push((g, vec![ms])),
-                }
-            }
-        }
-        groups
-            .into_iter()
-            .map(|(g, mut v)| (g, median(&mut v)))
-            .collect()
+        })
     }
 }
 

@@ -69,17 +69,7 @@ impl ClipArgs {
         if let Some(s) = self.sphere {
             sphere = Some((Vec3::new(s[0], s[1], s[2]), s[3]));
         }
-        let region = match (sphere, planes.is_empty()) {
-            (Some(_), false) => {
-                return Err(Error::InvalidInput(
-                    "a clip sphere cannot be combined with planes or boxes".into(),
-                ))
-            }
-            (Some((c, r)), true) => Some(ClipRegion::sphere(c, r)?),
-            (None, false) => Some(ClipRegion::planes(planes)?),
-            (None, true) => None,
-        };
-        clip.region = region.map(|r| if invert { r.inverted() } else { r });
+        clip.region = ClipRegion::from_parts(planes, sphere, invert)?;
         clip.mode = match (self.mode, file_mode) {
             (Some(mode), _) => mode,
             (None, Some(mode)) => mode.parse()?,
