@@ -46,6 +46,12 @@ fn member_offsets(words: &[u32], name: &str) -> Vec<u32> {
     members.into_iter().map(|m| m.1).collect()
 }
 
+/// Asserts that struct `name` in `kernel` has its members at the host's `offsets`.
+fn assert_layout(kernel: &[u32], name: &str, offsets: &[usize]) {
+    let host: Vec<u32> = offsets.iter().map(|&o| o as u32).collect();
+    assert_eq!(member_offsets(kernel, name), host, "{name}");
+}
+
 #[test]
 fn gpu_struct_layouts_match_spirv() {
     let projected = [
@@ -58,18 +64,13 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuProjectedSplat, pad),
         offset_of!(GpuProjectedSplat, rect),
     ];
-    let got = member_offsets(shaders::PROJECT, "ProjectedSplat");
-    assert_eq!(got, projected.map(|o| o as u32), "ProjectedSplat");
+    assert_layout(shaders::PROJECT, "ProjectedSplat", &projected);
     let gaussian = [
         offset_of!(GpuGaussian, pos_opacity),
         offset_of!(GpuGaussian, rot),
         offset_of!(GpuGaussian, scale),
     ];
-    assert_eq!(
-        member_offsets(shaders::PROJECT, "Gaussian"),
-        gaussian.map(|o| o as u32),
-        "Gaussian"
-    );
+    assert_layout(shaders::PROJECT, "Gaussian", &gaussian);
     let frame = [
         offset_of!(GpuFrameParams, world_to_cam),
         offset_of!(GpuFrameParams, world_to_cam) + 16,
@@ -80,11 +81,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuFrameParams, size),
         offset_of!(GpuFrameParams, scene),
     ];
-    assert_eq!(
-        member_offsets(shaders::PROJECT, "FrameParams"),
-        frame.map(|o| o as u32),
-        "FrameParams"
-    );
+    assert_layout(shaders::PROJECT, "FrameParams", &frame);
     let sort = [
         offset_of!(GpuSortInfo, num_keys),
         offset_of!(GpuSortInfo, num_blocks),
@@ -93,11 +90,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuSortInfo, block_args),
         offset_of!(GpuSortInfo, linear_args),
     ];
-    assert_eq!(
-        member_offsets(shaders::SORT_PREPARE, "SortInfo"),
-        sort.map(|o| o as u32),
-        "SortInfo"
-    );
+    assert_layout(shaders::SORT_PREPARE, "SortInfo", &sort);
     let clip = [
         offset_of!(GpuClipParams, config),
         offset_of!(GpuClipParams, band),
@@ -109,22 +102,14 @@ fn gpu_struct_layouts_match_spirv() {
         shaders::RASTERIZE_MASS,
         shaders::RASTERIZE_STRIPS_LENGTH,
     ] {
-        assert_eq!(
-            member_offsets(kernel, "ClipParams"),
-            clip.map(|o| o as u32),
-            "ClipParams"
-        );
+        assert_layout(kernel, "ClipParams", &clip);
     }
     let cutoff = [
         offset_of!(GpuCutoffRecord, m0),
         offset_of!(GpuCutoffRecord, m1),
         offset_of!(GpuCutoffRecord, m2),
     ];
-    assert_eq!(
-        member_offsets(shaders::PROJECT, "CutoffRecord"),
-        cutoff.map(|o| o as u32),
-        "CutoffRecord"
-    );
+    assert_layout(shaders::PROJECT, "CutoffRecord", &cutoff);
 }
 
 #[test]
