@@ -12,7 +12,8 @@
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
 // invocation after 65,535 loop iterations in total; the loops over r are unrolled, and the rara
 // variants take at most three iterations per entry). Longer lists take several rounds; between
-// rounds the per-pixel state (colour, transmittance, done) lives in `state`.
+// rounds, and for the write-target stage after the last, the per-pixel state (colour,
+// transmittance, done) lives in `state`.
 //
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
@@ -35,7 +36,6 @@
 layout(local_size_x = TILE_SIZE, local_size_y = STRIPS) in;
 
 #define ROUND_FIRST 1u
-#define ROUND_LAST 2u
 
 layout(push_constant) uniform Push {
     FrameParamsRef frame;
@@ -43,7 +43,6 @@ layout(push_constant) uniform Push {
     U32s values;        // splat index of each sorted pair
     UVec2s ranges;      // [start, end) per tile
     Vec4s state;        // per pixel (rgb, T), T negated once the pixel is done
-    U32s image;         // rgba8 per pixel
     U32s counters;
     ClipParamsRef clip;
     CutoffRecords cutoffs;
@@ -65,11 +64,6 @@ shared CutoffRecord batch_cutoff[RASTER_BATCH];
 #define SPANS_OF(s) vec4((s), 0.0, 0.0)
 #endif
 shared uint pixels_done;
-
-uint pack_rgba8(vec3 c) {
-    uvec3 b = uvec3(floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5));
-    return b.r | (b.g << 8) | (b.b << 16) | (255u << 24);
-}
 
 // The invocation's strip: first pixel, and per pixel the compositing state and, for rara,
 // the ray (SPEC section 2) and its visible intervals.
@@ -260,11 +254,6 @@ void main() {
         if (pixel.x >= f.size.x || pixel.y >= f.size.y) {
             continue;
         }
-        uint pixel_index = pixel.y * f.size.x + pixel.x;
-        if ((pc.flags & ROUND_LAST) != 0u) {
-            pc.image.v[pixel_index] = pack_rgba8(px_color[r] + px_T[r] * f.background.rgb);
-        } else {
-            pc.state.v[pixel_index] = vec4(px_color[r], px_done[r] ? -px_T[r] : px_T[r]);
-        }
+        pc.state.v[pixel.y * f.size.x + pixel.x] = vec4(px_color[r], px_done[r] ? -px_T[r] : px_T[r]);
     }
 }

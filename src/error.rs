@@ -41,6 +41,10 @@ pub enum Error {
     /// No Vulkan device, or none that has what rara needs.
     #[error("{0}")]
     NoSuitableDevice(String),
+    /// A device (or an engine's lent device) lacks a version, feature or property rara needs
+    /// ([`crate::requirements()`]); the message names each missing piece.
+    #[error("{0}")]
+    MissingRequirement(String),
     /// A Vulkan call failed.
     #[error("{call} failed: {result}")]
     Vulkan {

@@ -11,13 +11,22 @@
 //! 4. `sort`: stable GPU radix sort of the pairs ([`stages::sort::RadixSort`]);
 //! 5. `tile_ranges`: each tile's run of pairs;
 //! 6. `rasterize`: per-pixel front-to-back compositing, one workgroup per 16x16 tile, with the
-//!    per-pixel clip weight of cutoff splats.
+//!    per-pixel clip weight of cutoff splats;
+//! 7. `write_target`: the composited pixels over a background or over the caller's target, into
+//!    a storage image or a buffer.
 //!
 //! Clipping (SPEC section 5) is described by [`clip::Clip`] in [`RenderOptions`]; the same
 //! description drives the kernels and the CPU reference.
 //!
 //! Entry points: [`ply::load_ply`], [`camera::Camera`], [`vk::Context`],
 //! [`renderer::Renderer`], [`reference::render`], [`clip::Clip`].
+//!
+//! # Use from an engine
+//! An engine lends its instance, device and queue with [`Context::borrowed`] (after merging
+//! [`requirements()`] into its device creation), uploads scenes as [`GpuScene`]s, keeps one
+//! [`FrameSlot`] per frame in flight, and calls [`Renderer::record`] to record a frame into its
+//! own command buffer, writing its storage image or buffer ([`Target`]). `record`'s rustdoc is
+//! the synchronisation contract; `examples/engine.rs` is a complete engine loop.
 
 #![warn(missing_docs)]
 
@@ -27,6 +36,7 @@ pub mod clip;
 /// counter slots). `build.rs` passes them to the shader compiler as macros.
 pub mod constants;
 pub mod error;
+pub mod frame;
 pub mod gpu_types;
 pub mod metrics;
 pub mod ply;
@@ -35,6 +45,7 @@ pub mod renderer;
 pub mod scene;
 pub mod stages;
 pub mod synth;
+pub mod target;
 pub mod timing;
 pub mod vk;
 
@@ -46,6 +57,9 @@ pub mod shaders {
 pub use camera::Camera;
 pub use clip::{Clip, ClipMode, ClipRegion, ClipWeight, Plane};
 pub use error::{Error, Result};
+pub use frame::FrameSlot;
 pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer};
 pub use scene::Scene;
-pub use vk::Context;
+pub use target::{Composite, Target, TargetFormat};
+pub use timing::PassTimer;
+pub use vk::{requirements, BorrowedDevice, Context, EnabledFeatures, Requirements};

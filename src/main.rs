@@ -235,6 +235,7 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     let options = RenderOptions {
         background: args.background,
         clip: args.clip.build(&[])?,
+        ..RenderOptions::default()
     };
     if options.clip.region.is_some() {
         eprintln!("{}", describe(&options.clip));

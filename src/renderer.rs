@@ -1,24 +1,27 @@
-//! The frame: project -> prefix sum -> emit -> sort -> tile ranges -> rasterize, recorded
-//! into one command buffer with no host round trip inside it.
+//! The frame: project -> prefix sum -> emit -> sort -> tile ranges -> rasterize -> write
+//! target, recorded into one command buffer with no host round trip inside it.
+//!
+//! [`Renderer::record`] is the engine-facing entry point: it only records into the caller's
+//! command buffer. [`Renderer::render`] is the headless one the CLI uses, built on `record`.
 
 use ash::vk;
 use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
-use crate::constants::{
-    COUNTER_CUTOFF, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE,
-    RASTER_CHUNK,
-};
+use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS};
 use crate::error::{Error, Result};
-use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams, GpuGaussian};
+use crate::frame::FrameSlot;
+use crate::gpu_types::{GpuFrameParams, GpuGaussian};
 use crate::scene::Scene;
 use crate::stages::emit::{Emit, EmitPush};
-use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
+use crate::stages::prefix_sum::PrefixSum;
 use crate::stages::project::{Project, ProjectPush};
 use crate::stages::rasterize::{RasterLayout, Rasterize, RasterizePush};
-use crate::stages::sort::{RadixSort, SortBuffers};
+use crate::stages::sort::RadixSort;
 use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
+use crate::stages::write_target::{WriteTarget, WriteTargetPush};
+use crate::target::{Composite, Target, TargetFormat};
 use crate::timing::{PassTimer, PassTiming};
 use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
 
@@ -26,7 +29,24 @@ use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
 /// touched reads its length there.
 const PARAMS_COUNT_OFFSET: u64 = 112;
 
-/// A scene uploaded to the GPU.
+/// The Gaussians as the kernels read them (activated values, SPEC section 1).
+fn gpu_gaussians(scene: &Scene) -> Vec<GpuGaussian> {
+    (0..scene.len())
+        .map(|i| {
+            let m = scene.means[i];
+            let q = scene.rotations[i];
+            let s = scene.scales[i];
+            GpuGaussian {
+                pos_opacity: [m.x, m.y, m.z, scene.opacities[i]],
+                rot: [q.w, q.x, q.y, q.z],
+                scale: [s.x, s.y, s.z, 0.0],
+            }
+        })
+        .collect()
+}
+
+/// A scene uploaded to the GPU: a resource of its own, which any number of renderers of the
+/// same device can draw. Dropping it frees its memory; frames that read it must have completed.
 pub struct GpuScene {
     gaussians: Buffer,
     sh: Buffer,
@@ -35,6 +55,39 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// Uploads `scene` to the device of `ctx` (through a staging buffer, on the context's
+    /// queue; returns once the copy is done).
+    pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
+        let count = u32::try_from(scene.len()).map_err(|_| {
+            Error::InvalidInput(format!("{} Gaussians exceed the 2^32 limit", scene.len()))
+        })?;
+        Ok(GpuScene {
+            gaussians: Buffer::from_slice(ctx, "scene gaussians", &gpu_gaussians(scene))?,
+            sh: Buffer::from_slice(ctx, "scene SH", &scene.sh)?,
+            count,
+            sh_degree: scene.sh_degree,
+        })
+    }
+
+    /// Replaces the contents with `scene`, reusing the device buffers when they are large
+    /// enough. Frames recorded with the old contents must have completed.
+    pub fn replace(&mut self, scene: &Scene) -> Result<()> {
+        let ctx = self.gaussians.context().clone();
+        let gaussians = gpu_gaussians(scene);
+        let gaussian_bytes: &[u8] = bytemuck::cast_slice(&gaussians);
+        let sh_bytes: &[u8] = bytemuck::cast_slice(&scene.sh);
+        if gaussian_bytes.len() as u64 > self.gaussians.size || sh_bytes.len() as u64 > self.sh.size
+        {
+            *self = GpuScene::new(&ctx, scene)?;
+            return Ok(());
+        }
+        self.gaussians.upload(gaussian_bytes)?;
+        self.sh.upload(sh_bytes)?;
+        self.count = scene.len() as u32;
+        self.sh_degree = scene.sh_degree;
+        Ok(())
+    }
+
     /// Number of Gaussians.
     pub fn len(&self) -> u32 {
         self.count
@@ -59,8 +112,10 @@ impl GpuScene {
 /// How to render a frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
-    /// Colour behind the splats.
+    /// Colour behind the splats (with [`Composite::Background`]).
     pub background: Vec3,
+    /// Over the background or over what the target holds ([`Renderer::record`]).
+    pub composite: Composite,
     /// Clipping (SPEC section 5); the default clips nothing.
     pub clip: Clip,
 }
@@ -69,6 +124,7 @@ impl Default for RenderOptions {
     fn default() -> Self {
         RenderOptions {
             background: Vec3::ZERO,
+            composite: Composite::Background,
             clip: Clip::default(),
         }
     }
@@ -85,6 +141,10 @@ pub struct FrameStats {
     pub cutoff: u32,
     /// Longest tile list.
     pub max_tile_len: u32,
+    /// Whether every tile pair and tile-list entry fitted the frame slot's buffers. `false`
+    /// means splats are missing from the image; the slot grows for its next frame (and
+    /// [`Renderer::render`] renders again).
+    pub complete: bool,
     /// How often the frame was rendered again after growing a buffer.
     pub rerenders: u32,
     /// GPU time (and compute invocations) per pass, in pass order (empty without timestamps).
@@ -93,30 +153,6 @@ pub struct FrameStats {
     pub gpu_ms: f64,
     /// Wall-clock milliseconds of the last render: recording, submission and wait.
     pub wall_ms: f64,
-}
-
-/// Buffers of one frame size, reused while the sizes fit.
-struct FrameResources {
-    width: u32,
-    height: u32,
-    gaussians: u32,
-    capacity: u64,
-    rounds: u32,
-    params: Buffer,
-    clip_params: Buffer,
-    counters: Buffer,
-    /// Cutoff side records, one slot per Gaussian; allocated on the first rara frame.
-    cutoffs: Option<Buffer>,
-    splats: Buffer,
-    tiles_touched: Buffer,
-    touched_scan: PrefixSumScratch,
-    sort: SortBuffers,
-    ranges: Buffer,
-    state: Option<Buffer>,
-    image: Buffer,
-    readback: Buffer,
-    /// Which sort buffer holds the sorted pairs of the last frame.
-    sorted: usize,
 }
 
 /// The intermediate buffers of the last rendered frame, read back for tests and debugging.
@@ -134,7 +170,9 @@ pub struct Intermediates {
     pub ranges: Vec<[u32; 2]>,
 }
 
-/// Renders scenes with the GPU pipeline.
+/// Renders scenes with the GPU pipeline: holds the kernels of every stage and nothing of any
+/// one frame, so one renderer draws any scene of its device into any number of
+/// [`FrameSlot`]s.
 pub struct Renderer {
     ctx: Context,
     project: Project,
@@ -143,8 +181,17 @@ pub struct Renderer {
     sort: RadixSort,
     tile_ranges: TileRanges,
     rasterize: Rasterize,
+    write_target: WriteTarget,
     timer: PassTimer,
-    frame: Option<FrameResources>,
+    /// The slot and rgba8 image (+ host copy) of the headless path, [`Renderer::render`].
+    headless: Option<HeadlessFrame>,
+}
+
+/// What [`Renderer::render`] renders into and reads back from.
+struct HeadlessFrame {
+    slot: FrameSlot,
+    /// Image of `width` x `height` rgba8 pixels, and its host-visible copy.
+    image: Option<(u32, u32, Buffer, Buffer)>,
 }
 
 /// Sort key bits: 32 depth bits + enough bits for the tile id.
@@ -170,13 +217,14 @@ impl Renderer {
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx)?,
             rasterize: Rasterize::new(ctx, layout)?,
+            write_target: WriteTarget::new(ctx)?,
             timer: PassTimer::new(ctx)?,
-            frame: None,
+            headless: None,
         })
     }
 
-    /// Replaces the renderer's pass timer, e.g. with one that writes into an engine's query
-    /// pool ([`PassTimer::with_engine_pool`]). Returns the old one.
+    /// Replaces the pass timer of [`Renderer::render`], e.g. with one that writes into an
+    /// engine's query pool ([`PassTimer::with_engine_pool`]). Returns the old one.
     pub fn set_timer(&mut self, timer: PassTimer) -> PassTimer {
         std::mem::replace(&mut self.timer, timer)
     }
@@ -186,98 +234,14 @@ impl Renderer {
         &self.ctx
     }
 
-    /// Uploads a scene.
+    /// Uploads a scene ([`GpuScene::new`]).
     pub fn upload(&self, scene: &Scene) -> Result<GpuScene> {
-        let count = u32::try_from(scene.len()).map_err(|_| {
-            Error::InvalidInput(format!("{} Gaussians exceed the 2^32 limit", scene.len()))
-        })?;
-        let gaussians: Vec<GpuGaussian> = (0..scene.len())
-            .map(|i| {
-                let m = scene.means[i];
-                let q = scene.rotations[i];
-                let s = scene.scales[i];
-                GpuGaussian {
-                    pos_opacity: [m.x, m.y, m.z, scene.opacities[i]],
-                    rot: [q.w, q.x, q.y, q.z],
-                    scale: [s.x, s.y, s.z, 0.0],
-                }
-            })
-            .collect();
-        Ok(GpuScene {
-            gaussians: Buffer::from_slice(&self.ctx, "scene gaussians", &gaussians)?,
-            sh: Buffer::from_slice(&self.ctx, "scene SH", &scene.sh)?,
-            count,
-            sh_degree: scene.sh_degree,
-        })
+        GpuScene::new(&self.ctx, scene)
     }
 
-    fn frame_resources(
-        &mut self,
-        width: u32,
-        height: u32,
-        gaussians: u32,
-        capacity: u64,
-        rounds: u32,
-    ) -> Result<&FrameResources> {
-        let fits = self.frame.as_ref().is_some_and(|f| {
-            f.width == width
-                && f.height == height
-                && f.gaussians >= gaussians
-                && f.capacity >= capacity
-                && f.rounds >= rounds
-        });
-        if !fits {
-            self.frame = None; // free the old buffers first
-            let ctx = &self.ctx;
-            let gpu = MemoryLocation::GpuOnly;
-            let (gx, gy) = tile_grid(width, height);
-            let pixels = width as u64 * height as u64;
-            let n = gaussians.max(1) as u64;
-            self.frame = Some(FrameResources {
-                width,
-                height,
-                gaussians,
-                capacity,
-                rounds,
-                params: Buffer::new(
-                    ctx,
-                    "frame params",
-                    std::mem::size_of::<GpuFrameParams>() as u64,
-                    gpu,
-                )?,
-                clip_params: Buffer::new(
-                    ctx,
-                    "clip params",
-                    std::mem::size_of::<GpuClipParams>() as u64,
-                    gpu,
-                )?,
-                counters: Buffer::new(ctx, "frame counters", COUNTER_SLOTS as u64 * 4, gpu)?,
-                cutoffs: None,
-                splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
-                tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
-                touched_scan: self.prefix_sum.scratch(ctx, n)?,
-                sort: self.sort.buffers(ctx, capacity)?,
-                ranges: Buffer::new(ctx, "tile ranges", (gx * gy) as u64 * 8, gpu)?,
-                state: if rounds > 1 {
-                    Some(Buffer::new(ctx, "raster state", pixels * 16, gpu)?)
-                } else {
-                    None
-                },
-                image: Buffer::new(ctx, "image rgba8", pixels * 4, gpu)?,
-                readback: Buffer::new(
-                    ctx,
-                    "frame readback",
-                    pixels * 4 + COUNTER_SLOTS as u64 * 4,
-                    MemoryLocation::GpuToCpu,
-                )?,
-                sorted: 0,
-            });
-        }
-        Ok(self.frame.as_ref().unwrap())
-    }
-
-    /// Renders `scene` from `camera`; grows the intersection buffers (and the rasterizer's
-    /// rounds) and renders again when a frame did not fit.
+    /// Renders `scene` from `camera` on the context's queue and waits: the headless path (CLI,
+    /// tests). It records with [`Renderer::record`] into a buffer target of its own and reads
+    /// the image back; a frame that did not fit its slot grows the slot and is rendered again.
     pub fn render(
         &mut self,
         scene: &GpuScene,
@@ -285,52 +249,111 @@ impl Renderer {
         options: &RenderOptions,
     ) -> Result<(image::RgbaImage, FrameStats)> {
         crate::camera::check_size(camera.width, camera.height)?;
-        options.clip.validate()?;
-        let mut capacity = self
-            .frame
-            .as_ref()
-            .map_or(0, |f| f.capacity)
-            .max(scene.count as u64 * 4)
-            .max(1 << 16);
-        let mut rounds = self.frame.as_ref().map_or(1, |f| f.rounds);
-        let mut rerenders = 0;
-        loop {
-            let start = std::time::Instant::now();
-            let (pixels, counters) = self.render_once(scene, camera, options, capacity, rounds)?;
-            let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-            let intersections = counters[COUNTER_INTERSECTIONS as usize];
-            let max_tile_len = counters[COUNTER_MAX_TILE_LEN as usize];
-            if intersections as u64 > capacity {
-                capacity = (intersections as u64 * 5 / 4).next_power_of_two();
-                rerenders += 1;
-                continue;
-            }
-            if max_tile_len > rounds * RASTER_CHUNK {
-                rounds = max_tile_len.div_ceil(RASTER_CHUNK);
-                rerenders += 1;
-                continue;
-            }
-            let passes = self.timer.read()?;
-            let stats = FrameStats {
-                intersections,
-                visible: counters[COUNTER_VISIBLE as usize],
-                cutoff: counters[COUNTER_CUTOFF as usize],
-                max_tile_len,
-                rerenders,
-                gpu_ms: passes.iter().map(|p| p.ms).sum(),
-                passes,
-                wall_ms,
-            };
-            let image = image::RgbaImage::from_raw(camera.width, camera.height, pixels)
-                .expect("image size");
-            return Ok((image, stats));
-        }
+        let (w, h) = (camera.width, camera.height);
+        let mut headless = match self.headless.take() {
+            Some(h) => h,
+            None => HeadlessFrame {
+                slot: FrameSlot::new(&self.ctx)?,
+                image: None,
+            },
+        };
+        let result = self.render_headless(&mut headless, scene, camera, options, w, h);
+        self.headless = Some(headless);
+        result
     }
 
-    /// Reads back the intermediate buffers of the last frame rendered (of `scene`, which has
-    /// `stats.intersections` pairs). Slow; for tests and debugging.
+    fn render_headless(
+        &mut self,
+        headless: &mut HeadlessFrame,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        w: u32,
+        h: u32,
+    ) -> Result<(image::RgbaImage, FrameStats)> {
+        let image_bytes = w as u64 * h as u64 * 4;
+        if !headless
+            .image
+            .as_ref()
+            .is_some_and(|i| i.0 == w && i.1 == h)
+        {
+            headless.image = None; // free the old buffers first
+            let image = Buffer::new(
+                &self.ctx,
+                "image rgba8",
+                image_bytes,
+                MemoryLocation::GpuOnly,
+            )?;
+            let readback = Buffer::new(
+                &self.ctx,
+                "image readback",
+                image_bytes,
+                MemoryLocation::GpuToCpu,
+            )?;
+            headless.image = Some((w, h, image, readback));
+        }
+        let (_, _, image, readback) = headless.image.as_ref().unwrap();
+        let target = Target::Buffer {
+            buffer: image.raw,
+            offset: 0,
+            format: TargetFormat::Rgba8Unorm,
+            width: w,
+            height: h,
+        };
+        let mut options = options.clone();
+        options.composite = Composite::Background;
+        let mut timer = std::mem::replace(&mut self.timer, PassTimer::labels_only(&self.ctx));
+        let mut rerenders = 0;
+        let result = loop {
+            let start = std::time::Instant::now();
+            let recorded = self.ctx.run_commands(|cmd| -> Result<()> {
+                self.record(
+                    cmd,
+                    &mut headless.slot,
+                    scene,
+                    camera,
+                    &options,
+                    &target,
+                    Some(&mut timer),
+                )?;
+                copy_to_host(&self.ctx, cmd, image, readback, image_bytes);
+                Ok(())
+            });
+            if let Err(e) = recorded.and_then(|r| r) {
+                break Err(e);
+            }
+            let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+            let mut stats = match headless.slot.stats() {
+                Ok(s) => s,
+                Err(e) => break Err(e),
+            };
+            if !stats.complete {
+                rerenders += 1;
+                continue;
+            }
+            stats.passes = match timer.read() {
+                Ok(p) => p,
+                Err(e) => break Err(e),
+            };
+            stats.gpu_ms = stats.passes.iter().map(|p| p.ms).sum();
+            stats.wall_ms = wall_ms;
+            stats.rerenders = rerenders;
+            let pixels = readback.mapped()[..image_bytes as usize].to_vec();
+            let image = image::RgbaImage::from_raw(w, h, pixels).expect("image size");
+            break Ok((image, stats));
+        };
+        self.timer = timer;
+        result
+    }
+
+    /// Reads back the intermediate buffers of the last frame [`Renderer::render`] rendered
+    /// (of `scene`, which has `stats.intersections` pairs). Slow; for tests and debugging.
     pub fn intermediates(&self, scene: &GpuScene, stats: &FrameStats) -> Result<Intermediates> {
-        let f = self.frame.as_ref().expect("render a frame first");
+        let f = self
+            .headless
+            .as_ref()
+            .and_then(|h| h.slot.resources.as_ref())
+            .expect("render a frame first");
         let n = scene.count as usize;
         let m = stats.intersections as usize;
         let (gx, gy) = tile_grid(f.width, f.height);
@@ -343,42 +366,90 @@ impl Renderer {
         })
     }
 
-    fn render_once(
-        &mut self,
+    /// Records one frame of `scene` seen by `camera` into the caller's command buffer `cmd`,
+    /// writing `target`; submits nothing and waits for nothing. The frame's working buffers
+    /// are `slot`'s ([`FrameSlot`]); pass timings go to `timings` when given (read them with
+    /// [`PassTimer::read`] after the submission completed), and every pass gets a
+    /// `VK_EXT_debug_utils` label when the instance has the extension.
+    ///
+    /// # Synchronisation contract
+    /// - `cmd` is in the recording state, outside a render pass, from a pool of a queue family
+    ///   with compute support. Compute pipelines and descriptor sets bound by the caller are
+    ///   not preserved; the caller rebinds its own afterwards.
+    /// - **First access to the target**: the write-target pass, stage
+    ///   `VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT`, access `VK_ACCESS_SHADER_WRITE_BIT`, plus
+    ///   `VK_ACCESS_SHADER_READ_BIT` with [`Composite::Over`]. **Last access**: the same pass
+    ///   and accesses. The target is not touched before that pass.
+    /// - **Image layout**: an image target must be in `VK_IMAGE_LAYOUT_GENERAL` when the
+    ///   commands execute, and is left in it.
+    /// - **The caller's barriers**: before, one that makes the caller's earlier writes to the
+    ///   target (a clear, a draw) available to `COMPUTE_SHADER` reads/writes and transitions an
+    ///   image to `GENERAL`; after, one from `COMPUTE_SHADER` / `SHADER_WRITE` to whatever
+    ///   next uses the target (a blit, a fragment shader, a present). rara's barriers between its
+    ///   own passes are global memory barriers from compute/transfer to compute, transfer
+    ///   and indirect reads; they order nothing of the caller's that is not compute or transfer.
+    /// - **Frames in flight**: `slot`'s previous frame must have completed on the GPU before
+    ///   this call (the caller waits on the fence of the submission that used it), and a slot
+    ///   is recorded at most once per submission. Several slots, renderers and scenes may be in
+    ///   flight at once; `scene` must stay alive until the frames that read it completed.
+    /// - After completion, [`FrameSlot::stats`] gives the frame's counters.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        slot: &mut FrameSlot,
         scene: &GpuScene,
         camera: &Camera,
         options: &RenderOptions,
-        capacity: u64,
-        rounds: u32,
-    ) -> Result<(Vec<u8>, Vec<u32>)> {
+        target: &Target,
+        timings: Option<&mut PassTimer>,
+    ) -> Result<()> {
+        crate::camera::check_size(camera.width, camera.height)?;
+        options.clip.validate()?;
         let (w, h) = (camera.width, camera.height);
-        let (gx, gy) = tile_grid(w, h);
-        self.frame_resources(w, h, scene.count, capacity, rounds)?;
-        let rara = options.clip.effective_mode() == ClipMode::Rara;
-        // One side-record slot per Gaussian of this scene: (re)allocated when a rara frame needs
-        // more than the last one did.
-        let cutoff_bytes =
-            scene.count.max(1) as u64 * std::mem::size_of::<GpuCutoffRecord>() as u64;
-        let frame = self.frame.as_mut().unwrap();
-        if rara
-            && !frame
-                .cutoffs
-                .as_ref()
-                .is_some_and(|b| b.size >= cutoff_bytes)
-        {
-            frame.cutoffs = None; // free the old buffer first
-            let buffer = Buffer::new(
-                &self.ctx,
-                "cutoff records",
-                cutoff_bytes,
-                MemoryLocation::GpuOnly,
-            )?;
-            frame.cutoffs = Some(buffer);
+        if target.size() != (w, h) {
+            return Err(Error::InvalidInput(format!(
+                "the target is {}x{} but the camera renders {w}x{h}",
+                target.size().0,
+                target.size().1
+            )));
         }
-        let clip_params = options.clip.to_gpu();
+        let buffer_target = match *target {
+            Target::Buffer {
+                buffer,
+                offset,
+                format,
+                ..
+            } => {
+                if offset % 4 != 0 {
+                    return Err(Error::InvalidInput(format!(
+                        "a buffer target's offset must be a multiple of 4, not {offset}"
+                    )));
+                }
+                let base = unsafe {
+                    self.ctx.device().get_buffer_device_address(
+                        &vk::BufferDeviceAddressInfo::default().buffer(buffer),
+                    )
+                };
+                let _ = format;
+                base + offset
+            }
+            Target::Image { .. } => 0,
+        };
+        let (gx, gy) = tile_grid(w, h);
+        let rara = options.clip.effective_mode() == ClipMode::Rara;
+        let (_capacity, rounds) =
+            slot.prepare(&self.prefix_sum, &self.sort, w, h, scene.count, rara)?;
+        let image_set = match *target {
+            Target::Image { view, format, .. } => Some((slot.image_target_set(view)?, format)),
+            Target::Buffer { .. } => None,
+        };
         let sorted_index = crate::stages::sort::passes_for(key_bits(w, h)) as usize % 2;
-        self.frame.as_mut().unwrap().sorted = sorted_index;
-        let f = self.frame.as_ref().unwrap();
+        slot.resources.as_mut().unwrap().sorted = sorted_index;
+        let f = slot.resources.as_ref().unwrap();
+        let counters_readback = slot.counters_readback();
+
+        let clip_params = options.clip.to_gpu();
         let w2c = camera.world_to_camera();
         let (cx, cy) = camera.principal_point();
         let row = |r: usize| {
@@ -404,114 +475,147 @@ impl Renderer {
             ],
         };
         // Only rara frames write or read side records; other frames pass a null address.
-        let cutoffs_address = f.cutoffs.as_ref().map_or(0, |b| b.address);
-        let ctx = self.ctx.clone();
-        let device = ctx.device().clone();
+        let cutoffs_address = if rara {
+            f.cutoffs.as_ref().map_or(0, |b| b.address)
+        } else {
+            0
+        };
+        let ctx = &self.ctx;
+        let device = ctx.device();
         let counters_at = |slot: u32| f.counters.address + 4 * slot as u64;
-        let timer = &mut self.timer;
-        let image_bytes = w as u64 * h as u64 * 4;
-        ctx.run_commands(|cmd| unsafe {
+        let mut labels_only;
+        let timer: &mut PassTimer = match timings {
+            Some(t) => t,
+            None => {
+                labels_only = PassTimer::labels_only(ctx);
+                &mut labels_only
+            }
+        };
+        unsafe {
             timer.begin_frame(cmd);
             device.cmd_update_buffer(cmd, f.params.raw, 0, bytemuck::bytes_of(&params));
             device.cmd_update_buffer(cmd, f.clip_params.raw, 0, bytemuck::bytes_of(&clip_params));
             device.cmd_fill_buffer(cmd, f.counters.raw, 0, vk::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, f.ranges.raw, 0, vk::WHOLE_SIZE, 0);
-            compute_barrier(&ctx, cmd);
+        }
+        compute_barrier(ctx, cmd);
 
-            timer.begin_pass(cmd, c"project");
-            let push = ProjectPush {
-                frame: f.params.address,
-                gaussians: scene.gaussians.address,
-                sh: scene.sh.address,
-                splats: f.splats.address,
-                tiles_touched: f.tiles_touched.address,
-                counters: f.counters.address,
-                clip: f.clip_params.address,
-                cutoffs: cutoffs_address,
-            };
-            self.project.record(cmd, &push, scene.count);
-            compute_barrier(&ctx, cmd);
-            timer.end_pass(cmd, c"project");
+        timer.begin_pass(cmd, c"project");
+        let push = ProjectPush {
+            frame: f.params.address,
+            gaussians: scene.gaussians.address,
+            sh: scene.sh.address,
+            splats: f.splats.address,
+            tiles_touched: f.tiles_touched.address,
+            counters: f.counters.address,
+            clip: f.clip_params.address,
+            cutoffs: cutoffs_address,
+        };
+        self.project.record(cmd, &push, scene.count);
+        compute_barrier(ctx, cmd);
+        timer.end_pass(cmd, c"project");
 
-            timer.begin_pass(cmd, c"prefix sum");
-            self.prefix_sum.record(
-                &ctx,
+        timer.begin_pass(cmd, c"prefix sum");
+        self.prefix_sum.record(
+            ctx,
+            cmd,
+            f.tiles_touched.address,
+            f.params.address + PARAMS_COUNT_OFFSET,
+            Some(counters_at(COUNTER_INTERSECTIONS)),
+            &f.touched_scan,
+        );
+        timer.end_pass(cmd, c"prefix sum");
+
+        timer.begin_pass(cmd, c"emit");
+        let push = EmitPush {
+            frame: f.params.address,
+            splats: f.splats.address,
+            offsets: f.tiles_touched.address,
+            keys: f.sort.keys[0].address,
+            values: f.sort.values[0].address,
+        };
+        self.emit.record(cmd, &push, scene.count);
+        compute_barrier(ctx, cmd);
+        timer.end_pass(cmd, c"emit");
+
+        let sorted = self.sort.record(
+            ctx,
+            cmd,
+            &f.sort,
+            counters_at(COUNTER_INTERSECTIONS),
+            key_bits(w, h),
+            Some(&mut *timer),
+        );
+        debug_assert_eq!(sorted, sorted_index);
+
+        timer.begin_pass(cmd, c"tile ranges");
+        let push = TileRangesPush {
+            keys: f.sort.keys[sorted].address,
+            info: f.sort.info.address,
+            ranges: f.ranges.address,
+        };
+        self.tile_ranges.record(cmd, &push, &f.sort.info);
+        compute_barrier(ctx, cmd);
+        timer.end_pass(cmd, c"tile ranges");
+
+        timer.begin_pass(cmd, c"rasterize");
+        let push = RasterizePush {
+            frame: f.params.address,
+            splats: f.splats.address,
+            values: f.sort.values[sorted].address,
+            ranges: f.ranges.address,
+            state: f.state.address,
+            counters: f.counters.address,
+            clip: f.clip_params.address,
+            cutoffs: cutoffs_address,
+            round_index: 0,
+            flags: 0,
+        };
+        let inverted = options.clip.region.as_ref().is_some_and(|r| r.invert);
+        let cutoff_weight = rara.then_some((options.clip.weight, inverted));
+        self.rasterize
+            .record(ctx, cmd, &push, (gx, gy), rounds, cutoff_weight);
+        compute_barrier(ctx, cmd);
+        timer.end_pass(cmd, c"rasterize");
+
+        timer.begin_pass(cmd, c"write target");
+        let bg = options.background;
+        let push = WriteTargetPush {
+            state: f.state.address,
+            buffer_target,
+            background: [bg.x, bg.y, bg.z, 1.0],
+            size: [w, h],
+            flags: WriteTargetPush::flags_for(options.composite),
+            buffer_format: WriteTargetPush::buffer_format_for(target.format()),
+        };
+        self.write_target.record(cmd, &push, image_set);
+        timer.end_pass(cmd, c"write target");
+
+        // The counters, for FrameSlot::stats once the frame completed. Only rara's own buffers
+        // are named here: the barrier orders compute writes before the copy, then the copy
+        // before host reads.
+        let to_transfer = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
+        let to_host = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::HOST_READ);
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: COUNTER_SLOTS as u64 * 4,
+        }];
+        unsafe {
+            device.cmd_pipeline_barrier(
                 cmd,
-                f.tiles_touched.address,
-                f.params.address + PARAMS_COUNT_OFFSET,
-                Some(counters_at(COUNTER_INTERSECTIONS)),
-                &f.touched_scan,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[to_transfer],
+                &[],
+                &[],
             );
-            timer.end_pass(cmd, c"prefix sum");
-
-            timer.begin_pass(cmd, c"emit");
-            let push = EmitPush {
-                frame: f.params.address,
-                splats: f.splats.address,
-                offsets: f.tiles_touched.address,
-                keys: f.sort.keys[0].address,
-                values: f.sort.values[0].address,
-            };
-            self.emit.record(cmd, &push, scene.count);
-            compute_barrier(&ctx, cmd);
-            timer.end_pass(cmd, c"emit");
-
-            let sorted = self.sort.record(
-                &ctx,
-                cmd,
-                &f.sort,
-                counters_at(COUNTER_INTERSECTIONS),
-                key_bits(w, h),
-                Some(&mut *timer),
-            );
-            debug_assert_eq!(sorted, sorted_index);
-
-            timer.begin_pass(cmd, c"tile ranges");
-            let push = TileRangesPush {
-                keys: f.sort.keys[sorted].address,
-                info: f.sort.info.address,
-                ranges: f.ranges.address,
-            };
-            self.tile_ranges.record(cmd, &push, &f.sort.info);
-            compute_barrier(&ctx, cmd);
-            timer.end_pass(cmd, c"tile ranges");
-
-            timer.begin_pass(cmd, c"rasterize");
-            let push = RasterizePush {
-                frame: f.params.address,
-                splats: f.splats.address,
-                values: f.sort.values[sorted].address,
-                ranges: f.ranges.address,
-                state: f.state.as_ref().map_or(0, |s| s.address),
-                image: f.image.address,
-                counters: f.counters.address,
-                clip: f.clip_params.address,
-                cutoffs: cutoffs_address,
-                round_index: 0,
-                flags: 0,
-            };
-            let inverted = options.clip.region.as_ref().is_some_and(|r| r.invert);
-            let cutoff_weight = rara.then_some((options.clip.weight, inverted));
-            self.rasterize
-                .record(&ctx, cmd, &push, (gx, gy), rounds, cutoff_weight);
-            compute_barrier(&ctx, cmd);
-            timer.end_pass(cmd, c"rasterize");
-
-            let regions = [vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: 0,
-                size: image_bytes,
-            }];
-            device.cmd_copy_buffer(cmd, f.image.raw, f.readback.raw, &regions);
-            let regions = [vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: image_bytes,
-                size: COUNTER_SLOTS as u64 * 4,
-            }];
-            device.cmd_copy_buffer(cmd, f.counters.raw, f.readback.raw, &regions);
-            let to_host = vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ);
+            device.cmd_copy_buffer(cmd, f.counters.raw, counters_readback.raw, &region);
             device.cmd_pipeline_barrier(
                 cmd,
                 vk::PipelineStageFlags::TRANSFER,
@@ -521,12 +625,50 @@ impl Renderer {
                 &[],
                 &[],
             );
-        })?;
-        let mapped = f.readback.mapped();
-        let pixels = mapped[..image_bytes as usize].to_vec();
-        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(
-            &mapped[image_bytes as usize..image_bytes as usize + COUNTER_SLOTS as usize * 4],
+        }
+        Ok(())
+    }
+}
+
+/// Copies `bytes` of `image` into the host-visible `readback` after the write-target pass.
+fn copy_to_host(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    image: &Buffer,
+    readback: &Buffer,
+    bytes: u64,
+) {
+    let device = ctx.device();
+    let to_transfer = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+        .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
+    let to_host = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ);
+    let region = [vk::BufferCopy {
+        src_offset: 0,
+        dst_offset: 0,
+        size: bytes,
+    }];
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::DependencyFlags::empty(),
+            &[to_transfer],
+            &[],
+            &[],
         );
-        Ok((pixels, counters))
+        device.cmd_copy_buffer(cmd, image.raw, readback.raw, &region);
+        device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[to_host],
+            &[],
+            &[],
+        );
     }
 }

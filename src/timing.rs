@@ -69,6 +69,21 @@ impl PassTimer {
         })
     }
 
+    /// A timer with no queries: it only opens and closes the debug labels of the passes. Used
+    /// by [`crate::Renderer::record`] when the caller passes no timer.
+    pub fn labels_only(ctx: &Context) -> PassTimer {
+        PassTimer {
+            timestamps: vk::QueryPool::null(),
+            first: 0,
+            owns_timestamps: false,
+            statistics: None,
+            names: Vec::new(),
+            open: false,
+            enabled: false,
+            ctx: ctx.clone(),
+        }
+    }
+
     /// A timer that writes its timestamps into queries `first .. first + MAX_PASSES + 1` of an
     /// engine's timestamp pool (no pipeline statistics). The timer resets those queries at the
     /// start of each frame and never destroys the pool.

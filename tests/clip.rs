@@ -78,6 +78,7 @@ fn gpu_matches_cpu(name: &str, scene: &Scene, camera: &Camera) {
             let options = RenderOptions {
                 background: Vec3::new(0.1, 0.1, 0.15),
                 clip,
+                ..RenderOptions::default()
             };
             let (gpu, stats) = renderer.render(&gpu_scene, camera, &options).unwrap();
             let cpu = reference::render(scene, camera, &options);

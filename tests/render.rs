@@ -481,7 +481,7 @@ fn pass_timings_into_a_callers_query_pool() {
             .unwrap();
         let names: Vec<&str> = stats.passes.iter().map(|p| p.name).collect();
         assert_eq!(names.first(), Some(&"project"));
-        assert_eq!(names.last(), Some(&"rasterize"));
+        assert_eq!(names.last(), Some(&"write target"));
         assert!(stats
             .passes
             .iter()

@@ -200,6 +200,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             let options = RenderOptions {
                 background: args.background,
                 clip,
+                ..RenderOptions::default()
             };
             let (img, frame) = renderer.render(&gpu_scene, &camera, &options)?;
             stats.add(&img, frame.cutoff, frame.gpu_ms);

@@ -8,3 +8,4 @@ pub mod project;
 pub mod rasterize;
 pub mod sort;
 pub mod tile_ranges;
+pub mod write_target;

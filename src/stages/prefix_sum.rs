@@ -66,6 +66,11 @@ impl PrefixSumScratch {
     pub fn capacity(&self) -> u64 {
         self.capacity
     }
+
+    /// Device bytes held.
+    pub fn device_bytes(&self) -> u64 {
+        self.buffer.size
+    }
 }
 
 impl PrefixSum {

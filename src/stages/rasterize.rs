@@ -23,10 +23,9 @@ pub struct RasterizePush {
     pub values: u64,
     /// Tile ranges.
     pub ranges: u64,
-    /// Per-pixel state between rounds (unused with one round).
+    /// Per-pixel state (premultiplied colour, transmittance): carried between rounds and
+    /// left for the write-target stage.
     pub state: u64,
-    /// Out: rgba8 pixels.
-    pub image: u64,
     /// Frame counters (longest tile list).
     pub counters: u64,
     /// `ClipParams`.
@@ -35,12 +34,11 @@ pub struct RasterizePush {
     pub cutoffs: u64,
     /// Which RASTER_CHUNK of every tile list this dispatch walks.
     pub round_index: u32,
-    /// ROUND_FIRST | ROUND_LAST.
+    /// ROUND_FIRST on the first round.
     pub flags: u32,
 }
 
 const ROUND_FIRST: u32 = 1;
-const ROUND_LAST: u32 = 2;
 
 /// How the rasterizer maps pixels to invocations. Both give the same image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -133,8 +131,7 @@ impl Rasterize {
         for round in 0..rounds {
             let mut p = *push;
             p.round_index = round;
-            p.flags = if round == 0 { ROUND_FIRST } else { 0 }
-                | if round + 1 == rounds { ROUND_LAST } else { 0 };
+            p.flags = if round == 0 { ROUND_FIRST } else { 0 };
             pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]);
             if round + 1 < rounds {
                 compute_barrier(ctx, cmd);

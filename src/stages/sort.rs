@@ -79,6 +79,17 @@ pub struct SortBuffers {
 }
 
 impl SortBuffers {
+    /// Device bytes held (keys, values, histograms, scan scratch).
+    pub fn device_bytes(&self) -> u64 {
+        self.keys
+            .iter()
+            .chain(&self.values)
+            .map(|b| b.size)
+            .sum::<u64>()
+            + self.info.size
+            + self.scan.device_bytes()
+    }
+
     /// Most pairs these buffers hold.
     pub fn capacity(&self) -> u64 {
         self.capacity

@@ -87,6 +87,11 @@ impl Buffer {
         })
     }
 
+    /// The context the buffer was made with.
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
     /// A device-local buffer holding `data`, uploaded through a staging buffer.
     pub fn from_slice<T: bytemuck::Pod>(ctx: &Context, name: &str, data: &[T]) -> Result<Self> {
         let bytes: &[u8] = bytemuck::cast_slice(data);

@@ -82,31 +82,60 @@ pub struct DeviceInfo {
     pub pipeline_statistics: bool,
 }
 
-pub(crate) struct ContextShared {
+/// The instance-level objects of a context that rara created itself (headless).
+struct OwnedInstance {
     _entry: ash::Entry,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+}
+
+pub(crate) struct ContextShared {
+    /// `None` when the instance and device are borrowed from an engine: then rara destroys only
+    /// what it made (its allocator's memory, its command pool), never the engine's objects.
+    owned: Option<OwnedInstance>,
     pub(crate) instance: ash::Instance,
-    /// Kept for the engine-facing API (requirements checks, borrowed contexts).
-    #[allow(dead_code)]
     pub(crate) physical_device: vk::PhysicalDevice,
     pub(crate) device: ash::Device,
     pub(crate) queue: vk::Queue,
     pub(crate) queue_family: u32,
     pub(crate) info: DeviceInfo,
     allocator: ManuallyDrop<Mutex<Allocator>>,
-    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     pub(crate) debug_device: Option<ash::ext::debug_utils::Device>,
     // Boxed so the pointer handed to the debug callback stays valid.
     messages: Box<Mutex<Vec<String>>>,
     upload_pool: Mutex<vk::CommandPool>,
 }
 
-/// A Vulkan device with its queue and memory allocator, owned by rara (headless).
+/// A Vulkan device with its queue and rara's memory allocator.
 ///
-/// Cheap to clone: clones share the device. Resources made from it keep it alive, and it is
-/// torn down in reverse order of creation once the last of them is dropped.
+/// Either **owned** ([`Context::headless`]: rara creates the instance and device, as the CLI
+/// does) or **borrowed** ([`Context::borrowed`]: an engine lends its instance, device and queue
+/// and keeps ownership of them).
+///
+/// Cheap to clone: clones share the device. Resources made from it (renderers, scenes, frame
+/// slots, buffers) keep it alive; once the last of them is dropped, an owned context destroys
+/// its device and instance, a borrowed one only what rara created on the engine's device.
 #[derive(Clone)]
 pub struct Context {
     pub(crate) shared: Arc<ContextShared>,
+}
+
+/// An engine's Vulkan objects, lent to [`Context::borrowed`].
+#[derive(Clone)]
+pub struct BorrowedDevice {
+    /// The engine's instance (function table and handle; rara never destroys it).
+    pub instance: ash::Instance,
+    /// The physical device the engine's device was created from.
+    pub physical_device: vk::PhysicalDevice,
+    /// The engine's device (rara never destroys it).
+    pub device: ash::Device,
+    /// A queue family with compute support; rara's command buffers are recorded for it.
+    pub queue_family: u32,
+    /// A queue of that family. rara submits to it only inside calls that upload or read back
+    /// (scene upload, [`Context::run_commands`], the headless [`crate::Renderer::render`]);
+    /// [`crate::Renderer::record`] never submits.
+    pub queue: vk::Queue,
+    /// What the engine enabled at instance and device creation.
+    pub enabled: super::EnabledFeatures,
 }
 
 unsafe extern "system" fn debug_callback(
@@ -228,6 +257,87 @@ impl Context {
         Self::create_device(entry, instance, debug, messages, desc, has_debug_utils)
     }
 
+    /// Wraps an engine's instance, device and queue. rara then allocates its memory with an
+    /// allocator of its own on that device, records into the engine's command buffers
+    /// ([`crate::Renderer::record`]) and, when the context and everything made from it are
+    /// dropped, destroys what it created and nothing of the engine's.
+    ///
+    /// Fails with [`Error::MissingRequirement`] when the physical device cannot meet
+    /// [`crate::requirements()`] or `enabled` says the engine did not enable a required feature.
+    ///
+    /// # Safety
+    /// - `instance`, `physical_device`, `device` and `queue` are valid, the device was created
+    ///   from that physical device of that instance, and `queue` belongs to `queue_family` of
+    ///   that device, a family with compute support;
+    /// - `enabled` tells the truth about what the instance and device were created with;
+    /// - the instance and device outlive this context and everything made from it (the
+    ///   engine destroys them only after dropping every rara object and after the GPU finished
+    ///   the work rara recorded);
+    /// - while a rara call that submits runs (see [`BorrowedDevice::queue`]), no other thread
+    ///   uses `queue` (Vulkan requires host synchronisation of a queue).
+    pub unsafe fn borrowed(lent: BorrowedDevice) -> Result<Self> {
+        let requirements = super::requirements();
+        requirements.check_physical_device(&lent.instance, lent.physical_device)?;
+        requirements.check_enabled(&lent.enabled)?;
+        let families = lent
+            .instance
+            .get_physical_device_queue_family_properties(lent.physical_device);
+        let family = families.get(lent.queue_family as usize).ok_or_else(|| {
+            Error::InvalidInput(format!(
+                "queue family {} does not exist ({} families)",
+                lent.queue_family,
+                families.len()
+            ))
+        })?;
+        if !family.queue_flags.contains(vk::QueueFlags::COMPUTE) {
+            return Err(Error::MissingRequirement(format!(
+                "queue family {} has no compute support",
+                lent.queue_family
+            )));
+        }
+        let mut info = device_info_of(&lent.instance, lent.physical_device, lent.queue_family);
+        info.pipeline_statistics &= lent.enabled.optional.pipeline_statistics_query;
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: lent.instance.clone(),
+            device: lent.device.clone(),
+            physical_device: lent.physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: true,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|e| Error::Allocation {
+            what: "the allocator".into(),
+            source: e,
+        })?;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(lent.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let upload_pool = lent
+            .device
+            .create_command_pool(&pool_info, None)
+            .vk("vkCreateCommandPool")?;
+        let debug_device = lent
+            .enabled
+            .optional
+            .debug_utils
+            .then(|| ash::ext::debug_utils::Device::new(&lent.instance, &lent.device));
+        Ok(Context {
+            shared: Arc::new(ContextShared {
+                owned: None,
+                instance: lent.instance,
+                physical_device: lent.physical_device,
+                device: lent.device,
+                queue: lent.queue,
+                queue_family: lent.queue_family,
+                info,
+                allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                debug_device,
+                messages: Box::default(),
+                upload_pool: Mutex::new(upload_pool),
+            }),
+        })
+    }
+
     fn create_device(
         entry: ash::Entry,
         instance: ash::Instance,
@@ -258,9 +368,8 @@ impl Context {
         let queue_info = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
-        let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
-            .buffer_device_address(true)
-            .host_query_reset(true);
+        let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+        super::requirements().enable_vulkan12_features(&mut features12);
         let features = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(
             unsafe { instance.get_physical_device_features(physical_device) }
                 .pipeline_statistics_query
@@ -311,7 +420,10 @@ impl Context {
 
         Ok(Context {
             shared: Arc::new(ContextShared {
-                _entry: entry,
+                owned: Some(OwnedInstance {
+                    _entry: entry,
+                    debug,
+                }),
                 instance,
                 physical_device,
                 device,
@@ -319,7 +431,6 @@ impl Context {
                 queue_family,
                 info,
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
-                debug,
                 debug_device,
                 messages,
                 upload_pool: Mutex::new(upload_pool),
@@ -347,12 +458,43 @@ impl Context {
         &self.shared.info
     }
 
-    /// Whether the validation layer is reporting to this context.
-    pub fn validation_enabled(&self) -> bool {
-        self.shared.debug.is_some()
+    /// The instance (the engine's when borrowed).
+    pub fn instance(&self) -> &ash::Instance {
+        &self.shared.instance
     }
 
-    /// Takes the validation warnings and errors reported so far.
+    /// The physical device.
+    pub fn physical_device(&self) -> vk::PhysicalDevice {
+        self.shared.physical_device
+    }
+
+    /// Whether the instance and device are an engine's ([`Context::borrowed`]).
+    pub fn is_borrowed(&self) -> bool {
+        self.shared.owned.is_none()
+    }
+
+    /// Whether the validation layer is reporting to this context (owned contexts only; a
+    /// borrowed context's messages go to the engine's messenger).
+    pub fn validation_enabled(&self) -> bool {
+        self.shared
+            .owned
+            .as_ref()
+            .is_some_and(|o| o.debug.is_some())
+    }
+
+    /// Live allocations of rara's allocator, as (name, bytes): empty once every scene,
+    /// renderer, frame slot and buffer made from this context is dropped. Use it to check for
+    /// leaks before tearing down.
+    pub fn live_allocations(&self) -> Vec<(String, u64)> {
+        self.allocator()
+            .generate_report()
+            .allocations
+            .into_iter()
+            .map(|a| (a.name, a.size))
+            .collect()
+    }
+
+    /// Takes the validation warnings and errors reported so far (owned contexts).
     pub fn take_validation_messages(&self) -> Vec<String> {
         std::mem::take(&mut *self.shared.messages.lock().unwrap())
     }
@@ -423,11 +565,14 @@ impl Drop for ContextShared {
             self.device
                 .destroy_command_pool(*self.upload_pool.get_mut().unwrap(), None);
             ManuallyDrop::drop(&mut self.allocator);
-            self.device.destroy_device(None);
-            if let Some((loader, messenger)) = &self.debug {
-                loader.destroy_debug_utils_messenger(*messenger, None);
+            // A borrowed device and instance stay the engine's to destroy.
+            if let Some(owned) = &self.owned {
+                self.device.destroy_device(None);
+                if let Some((loader, messenger)) = &owned.debug {
+                    loader.destroy_debug_utils_messenger(*messenger, None);
+                }
+                self.instance.destroy_instance(None);
             }
-            self.instance.destroy_instance(None);
         }
     }
 }
@@ -452,21 +597,8 @@ fn choose_physical_device(
                 continue;
             }
         }
-        if props.api_version < vk::API_VERSION_1_2 {
-            rejected.push(format!(
-                "{name} (Vulkan {}.{} < 1.2)",
-                vk::api_version_major(props.api_version),
-                vk::api_version_minor(props.api_version)
-            ));
-            continue;
-        }
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
-        unsafe { instance.get_physical_device_features2(pd, &mut f2) };
-        if f12.buffer_device_address != vk::TRUE || f12.host_query_reset != vk::TRUE {
-            rejected.push(format!(
-                "{name} (lacks bufferDeviceAddress or hostQueryReset)"
-            ));
+        if let Err(e) = unsafe { super::requirements().check_physical_device(instance, pd) } {
+            rejected.push(format!("({e})"));
             continue;
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };

@@ -1,9 +1,12 @@
-//! Vulkan plumbing: context, buffers, compute pipelines.
+//! Vulkan plumbing: context (owned or borrowed from an engine), requirements, buffers,
+//! compute pipelines.
 
 pub mod buffer;
 pub mod context;
 pub mod pipeline;
+pub mod requirements;
 
 pub use buffer::{Buffer, MemoryLocation};
-pub use context::{Context, ContextDesc, DeviceInfo, Validation};
+pub use context::{BorrowedDevice, Context, ContextDesc, DeviceInfo, Validation};
 pub use pipeline::{compute_barrier, ComputePipeline};
+pub use requirements::{requirements, EnabledFeatures, Optional, Requirements};

@@ -1,4 +1,5 @@
-//! Compute pipelines whose only interface is a push-constant block of buffer addresses.
+//! Compute pipelines whose interface is a push-constant block of buffer addresses (and, for the
+//! kernels that write an engine's storage image, one descriptor set).
 
 use std::ffi::CStr;
 
@@ -11,7 +12,7 @@ use crate::error::{Result, VkContext};
 pub struct ComputePipeline {
     /// The pipeline handle.
     pub raw: vk::Pipeline,
-    /// Its layout (push constants only, no descriptor sets).
+    /// Its layout (push constants, and at most one descriptor set).
     pub layout: vk::PipelineLayout,
     /// Kernel name, used for debug labels.
     pub name: &'static CStr,
@@ -25,6 +26,16 @@ impl ComputePipeline {
         name: &'static CStr,
         spirv: &[u32],
     ) -> Result<Self> {
+        Self::with_set_layout::<P>(ctx, name, spirv, None)
+    }
+
+    /// Like [`ComputePipeline::new`], with descriptor set 0 of layout `set_layout` when given.
+    pub fn with_set_layout<P: bytemuck::Pod>(
+        ctx: &Context,
+        name: &'static CStr,
+        spirv: &[u32],
+        set_layout: Option<vk::DescriptorSetLayout>,
+    ) -> Result<Self> {
         let device = ctx.device();
         let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
         let module = unsafe { device.create_shader_module(&module_info, None) }
@@ -33,7 +44,10 @@ impl ComputePipeline {
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .offset(0)
             .size(std::mem::size_of::<P>() as u32)];
-        let layout_info = vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges);
+        let set_layouts: Vec<vk::DescriptorSetLayout> = set_layout.into_iter().collect();
+        let layout_info = vk::PipelineLayoutCreateInfo::default()
+            .push_constant_ranges(&ranges)
+            .set_layouts(&set_layouts);
         let layout = match unsafe { device.create_pipeline_layout(&layout_info, None) } {
             Ok(l) => l,
             Err(e) => {
@@ -72,6 +86,27 @@ impl ComputePipeline {
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
             device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
         }
+    }
+
+    /// Records a dispatch of `groups` workgroups with descriptor set 0 bound to `set`.
+    pub fn dispatch_with_set<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &P,
+        set: vk::DescriptorSet,
+        groups: [u32; 3],
+    ) {
+        unsafe {
+            self.ctx.device().cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[set],
+                &[],
+            )
+        };
+        self.dispatch(cmd, push, groups);
     }
 
     /// Records a dispatch of `groups` workgroups with push constants `push`.

@@ -1,0 +1,320 @@
+//! Per-frame GPU resources: what one frame in flight needs of its own.
+
+use ash::vk;
+
+use crate::camera::tile_grid;
+use crate::constants::{
+    COUNTER_CUTOFF, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE,
+    RASTER_CHUNK,
+};
+use crate::error::{Result, VkContext};
+use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
+use crate::renderer::FrameStats;
+use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
+use crate::stages::sort::{RadixSort, SortBuffers};
+use crate::stages::write_target::image_target_set_layout;
+use crate::vk::{Buffer, Context, MemoryLocation};
+
+/// Smallest intersection capacity a slot starts with.
+const MIN_CAPACITY: u64 = 1 << 16;
+/// Intersections per Gaussian a slot first reserves (real scenes at 640x480 average 2 to 3).
+const FIRST_INTERSECTIONS_PER_GAUSSIAN: u64 = 4;
+
+/// The working buffers of one frame in flight: parameters, projected splats, tile pairs and
+/// their sort, tile ranges, per-pixel state, counters, and the descriptor set of an image
+/// target. [`crate::Renderer::record`] writes them, so a slot must not be recorded again until
+/// the GPU has finished the submission that last used it; an engine with two or three frames
+/// in flight keeps one slot per frame, next to its own per-frame command buffer and fence.
+///
+/// Sizes follow the frames: a slot grows its buffers when the scene, image size or the last
+/// frame's intersection count needs it. A frame whose tile pairs exceed the capacity the slot
+/// had when it was recorded is drawn without the pairs that did not fit and reported with
+/// [`FrameStats::complete`] `== false`; the slot then grows for its next frame
+/// ([`FrameSlot::reserve`] sizes it ahead of time).
+pub struct FrameSlot {
+    ctx: Context,
+    pub(crate) resources: Option<FrameResources>,
+    counters_readback: Buffer,
+    /// Intersection capacity and rasterizer rounds the next frame gets (at least).
+    capacity: u64,
+    rounds: u32,
+    /// What the last recorded frame had, to judge its counters.
+    recorded: Option<(u64, u32)>,
+    image_set: Option<ImageTargetSet>,
+}
+
+/// Buffers of one frame size, reused while the sizes fit.
+pub(crate) struct FrameResources {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) gaussians: u32,
+    pub(crate) capacity: u64,
+    pub(crate) params: Buffer,
+    pub(crate) clip_params: Buffer,
+    pub(crate) counters: Buffer,
+    /// Cutoff side records, one slot per Gaussian; allocated on the first rara frame.
+    pub(crate) cutoffs: Option<Buffer>,
+    pub(crate) splats: Buffer,
+    pub(crate) tiles_touched: Buffer,
+    pub(crate) touched_scan: PrefixSumScratch,
+    pub(crate) sort: SortBuffers,
+    pub(crate) ranges: Buffer,
+    /// Per pixel (premultiplied colour, transmittance), for the write-target stage.
+    pub(crate) state: Buffer,
+    /// Which sort buffer holds the sorted pairs of the last frame.
+    pub(crate) sorted: usize,
+}
+
+/// The descriptor pool and set that hold an image target's view.
+struct ImageTargetSet {
+    layout: vk::DescriptorSetLayout,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    view: vk::ImageView,
+}
+
+impl FrameSlot {
+    /// An empty slot; buffers are allocated by the first frame recorded into it.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(FrameSlot {
+            ctx: ctx.clone(),
+            resources: None,
+            counters_readback: Buffer::new(
+                ctx,
+                "frame counters (host)",
+                COUNTER_SLOTS as u64 * 4,
+                MemoryLocation::GpuToCpu,
+            )?,
+            capacity: 0,
+            rounds: 1,
+            recorded: None,
+            image_set: None,
+        })
+    }
+
+    /// Sizes the slot for frames of up to `intersections` tile pairs whose longest tile list
+    /// has `longest_tile_list` entries (both are in [`FrameStats`]), so that they are complete
+    /// from the first.
+    pub fn reserve(&mut self, intersections: u64, longest_tile_list: u32) {
+        self.capacity = self.capacity.max(intersections);
+        self.rounds = self
+            .rounds
+            .max(longest_tile_list.div_ceil(RASTER_CHUNK).max(1));
+    }
+
+    /// Device bytes the slot holds now.
+    pub fn device_bytes(&self) -> u64 {
+        let r = match &self.resources {
+            None => return self.counters_readback.size,
+            Some(r) => r,
+        };
+        [
+            &r.params,
+            &r.clip_params,
+            &r.counters,
+            &r.splats,
+            &r.tiles_touched,
+            &r.ranges,
+            &r.state,
+        ]
+        .iter()
+        .map(|b| b.size)
+        .sum::<u64>()
+            + r.cutoffs.as_ref().map_or(0, |b| b.size)
+            + r.touched_scan.device_bytes()
+            + r.sort.device_bytes()
+            + self.counters_readback.size
+    }
+
+    /// The counters of the last frame recorded into this slot: call it once the submission
+    /// that holds the frame has completed (e.g. after waiting on its fence). `passes` and the
+    /// times are left empty: they live in the caller's [`crate::timing::PassTimer`].
+    pub fn stats(&mut self) -> Result<FrameStats> {
+        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(
+            &self.counters_readback.mapped()[..COUNTER_SLOTS as usize * 4],
+        );
+        let intersections = counters[COUNTER_INTERSECTIONS as usize];
+        let max_tile_len = counters[COUNTER_MAX_TILE_LEN as usize];
+        let complete = match self.recorded {
+            Some((capacity, rounds)) => {
+                intersections as u64 <= capacity && max_tile_len <= rounds * RASTER_CHUNK
+            }
+            None => true,
+        };
+        if !complete {
+            // Room for this frame and some growth, so a moving camera does not grow every frame.
+            self.reserve(
+                (intersections as u64 * 5 / 4).next_power_of_two(),
+                max_tile_len,
+            );
+        }
+        Ok(FrameStats {
+            intersections,
+            visible: counters[COUNTER_VISIBLE as usize],
+            cutoff: counters[COUNTER_CUTOFF as usize],
+            max_tile_len,
+            complete,
+            ..FrameStats::default()
+        })
+    }
+
+    /// Makes the buffers fit a `width` x `height` frame of `gaussians` Gaussians (with the
+    /// cutoff records when `rara`); returns the intersection capacity and rasterizer rounds
+    /// the frame gets.
+    pub(crate) fn prepare(
+        &mut self,
+        prefix_sum: &PrefixSum,
+        sort: &RadixSort,
+        width: u32,
+        height: u32,
+        gaussians: u32,
+        rara: bool,
+    ) -> Result<(u64, u32)> {
+        if self.recorded.is_some() {
+            // The previous frame of this slot has completed (the slot's contract): learn from
+            // its counters whether it overflowed.
+            self.stats()?;
+        }
+        self.capacity = self
+            .capacity
+            .max(gaussians as u64 * FIRST_INTERSECTIONS_PER_GAUSSIAN)
+            .max(MIN_CAPACITY);
+        let capacity = self.capacity;
+        let fits = self.resources.as_ref().is_some_and(|f| {
+            f.width == width
+                && f.height == height
+                && f.gaussians >= gaussians
+                && f.capacity >= capacity
+        });
+        if !fits {
+            self.resources = None; // free the old buffers first
+            let ctx = &self.ctx;
+            let gpu = MemoryLocation::GpuOnly;
+            let (gx, gy) = tile_grid(width, height);
+            let pixels = width as u64 * height as u64;
+            let n = gaussians.max(1) as u64;
+            self.resources = Some(FrameResources {
+                width,
+                height,
+                gaussians,
+                capacity,
+                params: Buffer::new(
+                    ctx,
+                    "frame params",
+                    std::mem::size_of::<GpuFrameParams>() as u64,
+                    gpu,
+                )?,
+                clip_params: Buffer::new(
+                    ctx,
+                    "clip params",
+                    std::mem::size_of::<GpuClipParams>() as u64,
+                    gpu,
+                )?,
+                counters: Buffer::new(ctx, "frame counters", COUNTER_SLOTS as u64 * 4, gpu)?,
+                cutoffs: None,
+                splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
+                tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
+                touched_scan: prefix_sum.scratch(ctx, n)?,
+                sort: sort.buffers(ctx, capacity)?,
+                ranges: Buffer::new(ctx, "tile ranges", (gx * gy) as u64 * 8, gpu)?,
+                state: Buffer::new(ctx, "raster state", pixels * 16, gpu)?,
+                sorted: 0,
+            });
+        }
+        // One side-record slot per Gaussian of the scene: (re)allocated when a rara frame needs
+        // more than the last one did.
+        let cutoff_bytes = gaussians.max(1) as u64 * std::mem::size_of::<GpuCutoffRecord>() as u64;
+        let frame = self.resources.as_mut().unwrap();
+        if rara
+            && !frame
+                .cutoffs
+                .as_ref()
+                .is_some_and(|b| b.size >= cutoff_bytes)
+        {
+            frame.cutoffs = None; // free the old buffer first
+            frame.cutoffs = Some(Buffer::new(
+                &self.ctx,
+                "cutoff records",
+                cutoff_bytes,
+                MemoryLocation::GpuOnly,
+            )?);
+        }
+        self.recorded = Some((capacity, self.rounds));
+        Ok((capacity, self.rounds))
+    }
+
+    /// The buffer the frame's counters are copied to for [`FrameSlot::stats`].
+    pub(crate) fn counters_readback(&self) -> &Buffer {
+        &self.counters_readback
+    }
+
+    /// The descriptor set holding `view` as the storage image at binding 0 (updated only when
+    /// the view changed; the slot is idle, so the set is not in use).
+    pub(crate) fn image_target_set(&mut self, view: vk::ImageView) -> Result<vk::DescriptorSet> {
+        let device = self.ctx.device();
+        if self.image_set.is_none() {
+            let layout = image_target_set_layout(&self.ctx)?;
+            let sizes = [vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_IMAGE,
+                descriptor_count: 1,
+            }];
+            let info = vk::DescriptorPoolCreateInfo::default()
+                .max_sets(1)
+                .pool_sizes(&sizes);
+            let pool = match unsafe { device.create_descriptor_pool(&info, None) } {
+                Ok(p) => p,
+                Err(e) => {
+                    unsafe { device.destroy_descriptor_set_layout(layout, None) };
+                    return Err(e).vk("vkCreateDescriptorPool");
+                }
+            };
+            let layouts = [layout];
+            let alloc = vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(pool)
+                .set_layouts(&layouts);
+            let set = match unsafe { device.allocate_descriptor_sets(&alloc) } {
+                Ok(s) => s[0],
+                Err(e) => {
+                    unsafe {
+                        device.destroy_descriptor_pool(pool, None);
+                        device.destroy_descriptor_set_layout(layout, None);
+                    }
+                    return Err(e).vk("vkAllocateDescriptorSets");
+                }
+            };
+            self.image_set = Some(ImageTargetSet {
+                layout,
+                pool,
+                set,
+                view: vk::ImageView::null(),
+            });
+        }
+        let image_set = self.image_set.as_mut().unwrap();
+        if image_set.view != view {
+            let images = [vk::DescriptorImageInfo::default()
+                .image_view(view)
+                .image_layout(vk::ImageLayout::GENERAL)];
+            let write = vk::WriteDescriptorSet::default()
+                .dst_set(image_set.set)
+                .dst_binding(0)
+                .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+                .image_info(&images);
+            unsafe { device.update_descriptor_sets(&[write], &[]) };
+            image_set.view = view;
+        }
+        Ok(image_set.set)
+    }
+}
+
+impl Drop for FrameSlot {
+    fn drop(&mut self) {
+        if let Some(s) = self.image_set.take() {
+            unsafe {
+                self.ctx.device().destroy_descriptor_pool(s.pool, None);
+                self.ctx
+                    .device()
+                    .destroy_descriptor_set_layout(s.layout, None);
+            }
+        }
+    }
+}

@@ -1,0 +1,174 @@
+//! What rara needs from a Vulkan device, for an engine to merge into its own device creation,
+//! and the checks that turn a missing piece into a clear [`Error::MissingRequirement`].
+
+use ash::vk;
+
+use crate::error::{Error, Result};
+
+/// The Vulkan version, extensions, features and properties rara needs ([`requirements`]).
+///
+/// An engine that creates its own device merges these before `vkCreateDevice`:
+///
+/// ```no_run
+/// # use ash::vk;
+/// let req = rara::requirements();
+/// // Ask for at least req.api_version in VkApplicationInfo, then:
+/// let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+/// req.enable_vulkan12_features(&mut features12);
+/// // ... push_next(&mut features12) onto the engine's VkDeviceCreateInfo, and list
+/// // req.device_extensions (none today) with the engine's own.
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Requirements {
+    /// Lowest Vulkan API version of the instance and device (`VK_API_VERSION_1_2`).
+    pub api_version: u32,
+    /// Device extensions to enable (none: everything rara uses is core in Vulkan 1.2).
+    pub device_extensions: Vec<&'static std::ffi::CStr>,
+    /// `VkPhysicalDeviceVulkan12Features::bufferDeviceAddress`: every kernel reaches its
+    /// buffers through device addresses.
+    pub buffer_device_address: bool,
+    /// Subgroup operations the kernels use in compute shaders (basic and arithmetic, for the
+    /// prefix sums); a property of the device, not something to enable.
+    pub subgroup_operations: vk::SubgroupFeatureFlags,
+}
+
+/// Optional capabilities: rara uses them when the engine enabled them and works without.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Optional {
+    /// `VkPhysicalDeviceFeatures::pipelineStatisticsQuery`: compute invocations per pass in
+    /// the pass timings.
+    pub pipeline_statistics_query: bool,
+    /// The instance has `VK_EXT_debug_utils` enabled: passes get labels for RenderDoc / Nsight
+    /// and buffers get names.
+    pub debug_utils: bool,
+}
+
+/// What rara needs from a device; see [`Requirements`].
+pub fn requirements() -> Requirements {
+    Requirements {
+        api_version: vk::API_VERSION_1_2,
+        device_extensions: Vec::new(),
+        buffer_device_address: true,
+        subgroup_operations: vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
+    }
+}
+
+impl Requirements {
+    /// Turns on, in an engine's feature chain, the Vulkan 1.2 features rara needs (leaves the
+    /// others as they are).
+    pub fn enable_vulkan12_features(&self, features: &mut vk::PhysicalDeviceVulkan12Features) {
+        if self.buffer_device_address {
+            features.buffer_device_address = vk::TRUE;
+        }
+    }
+
+    /// Checks that a physical device can meet the requirements; the error names each piece it
+    /// lacks.
+    ///
+    /// # Safety
+    /// `physical_device` must be a valid handle enumerated from `instance`.
+    pub unsafe fn check_physical_device(
+        &self,
+        instance: &ash::Instance,
+        physical_device: vk::PhysicalDevice,
+    ) -> Result<()> {
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+        instance.get_physical_device_properties2(physical_device, &mut props2);
+        let props = props2.properties;
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
+        instance.get_physical_device_features2(physical_device, &mut f2);
+        let name = props
+            .device_name_as_c_str()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let mut missing = Vec::new();
+        if props.api_version < self.api_version {
+            missing.push(format!(
+                "Vulkan {}.{} (the device has {}.{})",
+                vk::api_version_major(self.api_version),
+                vk::api_version_minor(self.api_version),
+                vk::api_version_major(props.api_version),
+                vk::api_version_minor(props.api_version)
+            ));
+        }
+        if self.buffer_device_address && f12.buffer_device_address != vk::TRUE {
+            missing.push("the bufferDeviceAddress feature".into());
+        }
+        if !subgroup
+            .supported_stages
+            .contains(vk::ShaderStageFlags::COMPUTE)
+            || !subgroup
+                .supported_operations
+                .contains(self.subgroup_operations)
+        {
+            missing.push(format!(
+                "subgroup operations {:?} in compute shaders",
+                self.subgroup_operations
+            ));
+        }
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::MissingRequirement(format!(
+                "{name} lacks {}",
+                missing.join(", ")
+            )))
+        }
+    }
+
+    /// Checks what an engine says it enabled on its device against the requirements.
+    pub fn check_enabled(&self, enabled: &EnabledFeatures) -> Result<()> {
+        let mut missing = Vec::new();
+        if enabled.api_version < self.api_version {
+            missing.push(format!(
+                "an instance and device of Vulkan {}.{} or later (apiVersion {}.{} was given)",
+                vk::api_version_major(self.api_version),
+                vk::api_version_minor(self.api_version),
+                vk::api_version_major(enabled.api_version),
+                vk::api_version_minor(enabled.api_version)
+            ));
+        }
+        if self.buffer_device_address && !enabled.buffer_device_address {
+            missing.push(
+                "VkPhysicalDeviceVulkan12Features::bufferDeviceAddress enabled at \
+                 vkCreateDevice"
+                    .to_string(),
+            );
+        }
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::MissingRequirement(format!(
+                "the engine's device lacks what rara needs: {} (merge rara::requirements() \
+                 into the device's creation)",
+                missing.join("; ")
+            )))
+        }
+    }
+}
+
+/// What an engine enabled when it created the instance and device it lends to rara
+/// ([`crate::vk::BorrowedDevice`]). Vulkan cannot be asked which features a device was created
+/// with, so the engine states them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EnabledFeatures {
+    /// `VkApplicationInfo::apiVersion` of the instance (rara needs 1.2 or later).
+    pub api_version: u32,
+    /// `VkPhysicalDeviceVulkan12Features::bufferDeviceAddress`.
+    pub buffer_device_address: bool,
+    /// Optional capabilities the engine enabled.
+    pub optional: Optional,
+}
+
+impl Default for EnabledFeatures {
+    /// Everything rara requires, no optional capability.
+    fn default() -> Self {
+        EnabledFeatures {
+            api_version: vk::API_VERSION_1_2,
+            buffer_device_address: true,
+            optional: Optional::default(),
+        }
+    }
+}

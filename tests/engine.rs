@@ -1,0 +1,250 @@
+//! The engine-facing API: a borrowed device, the caller's command buffer and targets, frames in
+//! flight, teardown. The engine example runs here for real (with validation when installed).
+
+mod common;
+
+#[allow(dead_code)]
+#[path = "../examples/engine.rs"]
+mod engine_example;
+
+use glam::Vec3;
+use rara::vk::{Buffer, MemoryLocation};
+use rara::{
+    BorrowedDevice, Composite, Context, EnabledFeatures, Error, FrameSlot, RenderOptions, Renderer,
+    Target, TargetFormat,
+};
+
+/// The example renders 4 frames with 2 in flight, over its cleared image, with a moving rara
+/// clip plane and its own vignette pass: every frame must equal the headless renderer's image
+/// over the same background, times the vignette; the engine's objects outlive rara's teardown
+/// and are destroyed by the engine with no validation message; rara's allocator ends empty.
+#[test]
+fn engine_example_frames_match_the_headless_renderer() {
+    let dir = std::env::temp_dir().join(format!("rara-engine-test-{}", std::process::id()));
+    let frames = 4;
+    let report = engine_example::run(&dir, frames).expect("the engine example runs");
+    assert_eq!(report.frames.len(), frames);
+    assert!(report.leaks.is_empty(), "rara leaked: {:?}", report.leaks);
+    assert!(
+        report.validation_messages.is_empty(),
+        "validation messages:\n{}",
+        report.validation_messages.join("\n")
+    );
+    println!(
+        "engine example: {} frames, validation {}, 0 messages, 0 live allocations",
+        frames,
+        if report.validation { "on" } else { "off" }
+    );
+    assert!(report.stats.iter().all(|s| s.3), "every frame complete");
+    // The plane moves: the cutoff Gaussians change from frame to frame.
+    assert!(report.stats.windows(2).any(|w| w[0].1 != w[1].1));
+
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let scene = renderer.upload(&rara::synth::demo_scene()).unwrap();
+    let camera = engine_example::camera().unwrap();
+    // The image holds the clear colour in rgba8, and that is what the draw goes over.
+    let clear = engine_example::CLEAR_COLOR.map(|c| (c * 255.0).round() / 255.0);
+    for (index, path) in report.frames.iter().enumerate() {
+        let mut options = engine_example::frame_options(&camera, index, frames).unwrap();
+        options.composite = Composite::Background;
+        options.background = Vec3::new(clear[0], clear[1], clear[2]);
+        let (expected, _) = renderer.render(&scene, &camera, &options).unwrap();
+        let actual = image::open(path).unwrap().to_rgba8();
+        let mut worst = 0f32;
+        for (x, y, e) in expected.enumerate_pixels() {
+            let a = actual.get_pixel(x, y);
+            let v = engine_example::vignette_factor(x, y);
+            for c in 0..3 {
+                // The image is rgba8: rounded once before the vignette (as the headless image
+                // is) and once after it.
+                let want = e[c] as f32 * v;
+                worst = worst.max((a[c] as f32 - want).abs());
+            }
+            assert_eq!(a[3], 255, "opaque over an opaque clear");
+        }
+        println!(
+            "engine frame {index}: largest difference from the headless render {worst:.2}/255"
+        );
+        assert!(worst <= 1.0, "frame {index} differs by {worst}/255");
+    }
+    common::assert_no_validation_messages(&ctx);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A device created without bufferDeviceAddress is refused with an error that names it, and so
+/// is a Vulkan 1.1 instance; the engine then destroys its device with no message.
+#[test]
+fn a_device_missing_a_required_feature_gets_a_clear_error() {
+    let engine = engine_example::Engine::new(false).expect("engine device");
+    let lend = |enabled: EnabledFeatures| BorrowedDevice {
+        instance: engine.instance.clone(),
+        physical_device: engine.physical_device,
+        device: engine.device.clone(),
+        queue_family: engine.queue_family,
+        queue: engine.queue,
+        enabled,
+    };
+    let no_bda = EnabledFeatures {
+        buffer_device_address: false,
+        ..EnabledFeatures::default()
+    };
+    match unsafe { Context::borrowed(lend(no_bda)) } {
+        Err(Error::MissingRequirement(m)) => {
+            println!("missing feature: {m}");
+            assert!(m.contains("bufferDeviceAddress"), "{m}");
+        }
+        Err(e) => panic!("wrong error: {e}"),
+        Ok(_) => panic!("a device without bufferDeviceAddress was accepted"),
+    }
+    let old = EnabledFeatures {
+        api_version: ash::vk::API_VERSION_1_1,
+        ..EnabledFeatures::default()
+    };
+    match unsafe { Context::borrowed(lend(old)) } {
+        Err(Error::MissingRequirement(m)) => assert!(m.contains("Vulkan 1.2"), "{m}"),
+        Err(e) => panic!("wrong error: {e}"),
+        Ok(_) => panic!("a Vulkan 1.1 instance was accepted"),
+    }
+    unsafe { engine.destroy() };
+}
+
+/// Buffer targets of every format, over a background and over what they hold, against the
+/// headless image; two slots and two scenes on one renderer, recorded into one command buffer.
+#[test]
+fn buffer_targets_and_two_slots_in_one_command_buffer() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let scenes = [
+        renderer.upload(&rara::synth::shell(3000, 1, 5)).unwrap(),
+        renderer.upload(&rara::synth::hair(3000, 0, 6)).unwrap(),
+    ];
+    let camera = &rara::synth::orbit_cameras(1, 3.0, 80, 60, 50.0).unwrap()[0];
+    let background = Vec3::new(0.2, 0.4, 0.6);
+    let pixels = 80 * 60;
+    for format in [
+        TargetFormat::Rgba8Unorm,
+        TargetFormat::Rgba16Float,
+        TargetFormat::Rgba32Float,
+    ] {
+        let bytes = pixels as u64 * format.bytes_per_pixel();
+        let mut buffers: Vec<Buffer> = (0..2)
+            .map(|_| Buffer::new(&ctx, "test target", bytes, MemoryLocation::CpuToGpu).unwrap())
+            .collect();
+        // "Over": the buffers hold the background, opaque, before the frame.
+        for b in &mut buffers {
+            let texel = encode(format, [background.x, background.y, background.z, 1.0]);
+            for px in b.mapped_mut()[..bytes as usize].chunks_mut(texel.len()) {
+                px.copy_from_slice(&texel);
+            }
+        }
+        let mut slots = [FrameSlot::new(&ctx).unwrap(), FrameSlot::new(&ctx).unwrap()];
+        ctx.run_commands(|cmd| {
+            for (k, slot) in slots.iter_mut().enumerate() {
+                let options = RenderOptions {
+                    composite: if k == 0 {
+                        Composite::Over
+                    } else {
+                        Composite::Background
+                    },
+                    background,
+                    ..RenderOptions::default()
+                };
+                let target = Target::Buffer {
+                    buffer: buffers[k].raw,
+                    offset: 0,
+                    format,
+                    width: 80,
+                    height: 60,
+                };
+                renderer
+                    .record(cmd, slot, &scenes[k], camera, &options, &target, None)
+                    .unwrap();
+            }
+        })
+        .unwrap();
+        for (k, slot) in slots.iter_mut().enumerate() {
+            assert!(slot.stats().unwrap().complete);
+            let options = RenderOptions {
+                background,
+                ..RenderOptions::default()
+            };
+            let (expected, stats) = renderer.render(&scenes[k], camera, &options).unwrap();
+            assert!(stats.visible > 0);
+            let got = &buffers[k].mapped()[..bytes as usize];
+            let mut worst = 0f32;
+            for (i, e) in expected.pixels().enumerate() {
+                let texel = &got[i * format.bytes_per_pixel() as usize..]
+                    [..format.bytes_per_pixel() as usize];
+                let a = decode(format, texel);
+                for c in 0..4 {
+                    worst = worst.max((a[c] * 255.0 - e[c] as f32).abs());
+                }
+            }
+            println!("{format:?} buffer target, scene {k}: largest difference {worst:.3}/255");
+            // The headless image is rounded to 8 bits; float targets differ by that rounding
+            // (and half floats by their own, 2^-11 near 1).
+            let bound = match format {
+                TargetFormat::Rgba8Unorm => 0.0,
+                TargetFormat::Rgba16Float => 0.65,
+                TargetFormat::Rgba32Float => 0.51,
+            };
+            assert!(worst <= bound, "{format:?}: {worst}/255");
+        }
+    }
+    drop(scenes);
+    drop(renderer);
+    assert!(
+        ctx.live_allocations().is_empty(),
+        "{:?}",
+        ctx.live_allocations()
+    );
+    common::assert_no_validation_messages(&ctx);
+}
+
+fn encode(format: TargetFormat, c: [f32; 4]) -> Vec<u8> {
+    match format {
+        TargetFormat::Rgba8Unorm => c.iter().map(|v| (v * 255.0).round() as u8).collect(),
+        TargetFormat::Rgba16Float => c
+            .iter()
+            .flat_map(|v| half_from_f32(*v).to_le_bytes())
+            .collect(),
+        TargetFormat::Rgba32Float => c.iter().flat_map(|v| v.to_le_bytes()).collect(),
+    }
+}
+
+fn decode(format: TargetFormat, texel: &[u8]) -> [f32; 4] {
+    let mut out = [0f32; 4];
+    for (c, o) in out.iter_mut().enumerate() {
+        *o = match format {
+            TargetFormat::Rgba8Unorm => texel[c] as f32 / 255.0,
+            TargetFormat::Rgba16Float => {
+                half_to_f32(u16::from_le_bytes([texel[2 * c], texel[2 * c + 1]]))
+            }
+            TargetFormat::Rgba32Float => {
+                f32::from_le_bytes(texel[4 * c..4 * c + 4].try_into().unwrap())
+            }
+        };
+    }
+    out
+}
+
+/// IEEE half to f32 (normal numbers and zero; the test values are in [0, 1]).
+fn half_to_f32(h: u16) -> f32 {
+    let exp = ((h >> 10) & 0x1f) as i32;
+    let mant = (h & 0x3ff) as f32;
+    if exp == 0 {
+        return mant * 2f32.powi(-24);
+    }
+    (1.0 + mant / 1024.0) * 2f32.powi(exp - 15)
+}
+
+/// f32 in [0, 1] to the nearest IEEE half.
+fn half_from_f32(v: f32) -> u16 {
+    if v == 0.0 {
+        return 0;
+    }
+    let exp = v.log2().floor() as i32;
+    let mant = ((v / 2f32.powi(exp) - 1.0) * 1024.0).round() as u16;
+    (((exp + 15) as u16) << 10) + mant
+}
