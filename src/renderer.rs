@@ -415,12 +415,7 @@ impl Renderer {
             )));
         }
         let buffer_target = match *target {
-            Target::Buffer {
-                buffer,
-                offset,
-                format,
-                ..
-            } => {
+            Target::Buffer { buffer, offset, .. } => {
                 if offset % 4 != 0 {
                     return Err(Error::InvalidInput(format!(
                         "a buffer target's offset must be a multiple of 4, not {offset}"
@@ -431,7 +426,6 @@ impl Renderer {
                         &vk::BufferDeviceAddressInfo::default().buffer(buffer),
                     )
                 };
-                let _ = format;
                 base + offset
             }
             Target::Image { .. } => 0,
