@@ -585,50 +585,25 @@ impl Renderer {
         self.write_target.record(cmd, &push, image_set);
         timer.end_pass(cmd, c"write target");
 
-        // The counters, for FrameSlot::stats once the frame completed. Only rara's own buffers
-        // are named here: the barrier orders compute writes before the copy, then the copy
-        // before host reads.
-        let to_transfer = vk::MemoryBarrier::default()
-            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-            .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
-        let to_host = vk::MemoryBarrier::default()
-            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(vk::AccessFlags::HOST_READ);
-        let region = [vk::BufferCopy {
-            src_offset: 0,
-            dst_offset: 0,
-            size: COUNTER_SLOTS as u64 * 4,
-        }];
-        unsafe {
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::DependencyFlags::empty(),
-                &[to_transfer],
-                &[],
-                &[],
-            );
-            device.cmd_copy_buffer(cmd, f.counters.raw, counters_readback.raw, &region);
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::HOST,
-                vk::DependencyFlags::empty(),
-                &[to_host],
-                &[],
-                &[],
-            );
-        }
+        // The counters, for FrameSlot::stats once the frame completed.
+        copy_to_host(
+            ctx,
+            cmd,
+            &f.counters,
+            counters_readback,
+            COUNTER_SLOTS as u64 * 4,
+        );
         Ok(())
     }
 }
 
-/// Copies `bytes` of `image` into the host-visible `readback` after the write-target pass.
+/// Records a copy of the first `bytes` of `source`, written by earlier compute passes, into
+/// the host-visible `readback`, with the barriers that order the compute writes before the
+/// copy and the copy before host reads (after the fence). Only rara's own buffers are involved.
 fn copy_to_host(
     ctx: &Context,
     cmd: vk::CommandBuffer,
-    image: &Buffer,
+    source: &Buffer,
     readback: &Buffer,
     bytes: u64,
 ) {
@@ -654,7 +629,7 @@ fn copy_to_host(
             &[],
             &[],
         );
-        device.cmd_copy_buffer(cmd, image.raw, readback.raw, &region);
+        device.cmd_copy_buffer(cmd, source.raw, readback.raw, &region);
         device.cmd_pipeline_barrier(
             cmd,
             vk::PipelineStageFlags::TRANSFER,
