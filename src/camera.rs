@@ -132,15 +132,33 @@ impl Camera {
     /// Reads every camera of an INRIA `cameras.json` file.
     pub fn load_all(path: impl AsRef<Path>) -> Result<Vec<Camera>> {
         let path = path.as_ref();
+        let io = |source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        // Real camera files are kilobytes; refuse to read an arbitrarily large one into memory.
+        let len = std::fs::metadata(path).map_err(io)?.len();
+        if len > MAX_CAMERAS_FILE_BYTES {
+            return Err(Error::Cameras {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{len} bytes is too large for a cameras.json (at most {MAX_CAMERAS_FILE_BYTES})"
+                ),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(io)?;
+        Camera::parse_all(&text, path)
+    }
+
+    /// [`Camera::load_all`] from the text of a cameras.json; `path` only names the source in
+    /// errors. Every camera is checked: finite values, positive focal lengths, an image size
+    /// the renderer accepts ([`check_size`]).
+    pub fn parse_all(text: &str, path: &Path) -> Result<Vec<Camera>> {
         let err = |message: String| Error::Cameras {
             path: path.to_path_buf(),
             message,
         };
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let cams: Vec<JsonCamera> = serde_json::from_str(&text).map_err(|e| {
+        let cams: Vec<JsonCamera> = serde_json::from_str(text).map_err(|e| {
             err(format!("not an INRIA cameras.json (an array of objects with width, height, position, rotation, fx, fy): {e}"))
         })?;
         if cams.is_empty() {
@@ -156,11 +174,12 @@ impl Camera {
                     .all(|v| v.is_finite())
                     && c.fx.is_finite()
                     && c.fy.is_finite();
-                if !finite || c.fx <= 0.0 || c.fy <= 0.0 || c.width == 0 || c.height == 0 {
+                if !finite || c.fx <= 0.0 || c.fy <= 0.0 {
                     return Err(err(format!(
-                        "camera {n}: needs finite values, positive fx/fy and a non-zero size"
+                        "camera {n}: needs finite values and positive fx/fy"
                     )));
                 }
+                check_size(c.width, c.height).map_err(|e| err(format!("camera {n}: {e}")))?;
                 // rotation[r][c]: rows as written; from_cols_array_2d takes columns, so transpose.
                 let rotation = Mat3::from_cols_array_2d(&c.rotation).transpose();
                 Ok(Camera {
@@ -221,9 +240,15 @@ pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
     )
 }
 
+/// Largest cameras.json [`Camera::load_all`] reads.
+pub const MAX_CAMERAS_FILE_BYTES: u64 = 64 << 20;
+
+/// Largest image side the renderer produces (the `maxImageDimension2D` most GPUs have).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
 /// Rejects image sizes the renderer cannot produce.
 pub fn check_size(width: u32, height: u32) -> Result<()> {
-    const MAX: u32 = 16384;
+    const MAX: u32 = MAX_IMAGE_SIDE;
     if width == 0 || height == 0 || width > MAX || height > MAX {
         return Err(Error::InvalidInput(format!(
             "image size {width}x{height} is out of range (1..={MAX} per side)"

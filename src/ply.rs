@@ -129,10 +129,26 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     };
     let file = File::open(path).map_err(io)?;
     let file_len = file.metadata().map_err(io)?.len();
-    let mut reader = BufReader::with_capacity(1 << 20, file);
+    read_ply(BufReader::with_capacity(1 << 20, file), file_len, path)
+}
+
+/// [`load_ply`] from any seekable reader holding `len` bytes (a file, a `Cursor` over bytes
+/// received from elsewhere); `path` only names the source in errors. Every count in the header
+/// is checked against `len` before anything is allocated for it.
+pub fn read_ply<R: BufRead + Seek>(
+    mut reader: R,
+    len: u64,
+    path: &Path,
+) -> Result<(Scene, LoadReport)> {
+    let file_len = len;
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     let header_bytes = read_header_bytes(path, &mut reader)?;
     // ply-rs expects '\n' line ends; accept '\r\n' too.
     let header_text = String::from_utf8_lossy(&header_bytes).replace('\r', "");
+    check_element_counts(path, &header_text)?;
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
     let header = parser
         .read_header(&mut header_text.as_bytes())
@@ -272,6 +288,30 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     Ok((scene, report))
 }
 
+/// Checks that every `element NAME COUNT` line has a count that fits a `usize`: ply-rs
+/// panics on one that does not (found by fuzzing), so it must never see one.
+fn check_element_counts(path: &Path, header_text: &str) -> Result<()> {
+    for (n, line) in header_text.lines().enumerate() {
+        let mut tokens = line.split_ascii_whitespace();
+        if tokens.next() != Some("element") {
+            continue;
+        }
+        let (name, count) = (tokens.next(), tokens.next());
+        let valid = count.is_some_and(|c| c.parse::<usize>().is_ok()) && tokens.next().is_none();
+        if name.is_none() || !valid {
+            return Err(ply_err(
+                path,
+                format!(
+                    "malformed header: line {} '{line}' is not 'element NAME COUNT' with a count in 0..={}",
+                    n + 1,
+                    usize::MAX
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn vertex_layout(path: &Path, vertex: &ply_rs::ply::ElementDef) -> Result<Layout> {
     let index_of = |name: &str| vertex.properties.keys().position(|k| k == name);
     let mut wanted = Vec::with_capacity(14 + 45);
@@ -341,11 +381,16 @@ fn push_gaussian(
 ) {
     let v = |k: usize| row[layout.wanted[k]];
     let all_finite = layout.wanted.iter().all(|&i| row[i].is_finite());
-    let q = Quat::from_xyzw(v(11), v(12), v(13), v(10));
-    if !all_finite || q.length_squared() == 0.0 || !q.length_squared().is_finite() {
+    // Normalised in f64: in f32 the squared length of a tiny or huge (but finite) quaternion
+    // underflows or overflows, which fuzzing turned up as "normalised" rotations of length 1.003.
+    let q64 = [v(11), v(12), v(13), v(10)].map(f64::from);
+    let length = q64.iter().map(|c| c * c).sum::<f64>().sqrt();
+    if !all_finite || length == 0.0 || !length.is_finite() {
         report.dropped_non_finite += 1;
         return;
     }
+    let [qx, qy, qz, qw] = q64.map(|c| (c / length) as f32);
+    let q = Quat::from_xyzw(qx, qy, qz, qw);
     let scale = Vec3::new(v(7).exp(), v(8).exp(), v(9).exp());
     let opacity = 1.0 / (1.0 + (-v(6)).exp());
     if !scale.is_finite() {
@@ -369,7 +414,7 @@ fn push_gaussian(
         Vec3::new(v(0), v(1), v(2)),
         opacity,
         scale,
-        q.normalize(),
+        q,
         sh,
     );
 }

@@ -1,0 +1,673 @@
+//! Fuzzing of the two parsers that read untrusted files: the PLY loader and the cameras.json
+//! parser. A property test, not a coverage-guided fuzzer: it mutates real headers and payloads
+//! (the real scenes' first vertices when `../shared/data/real` is there, the crate's own
+//! scenes in every encoding and SH degree always) with structure-aware and byte-level
+//! mutations, and checks for every input that
+//!
+//! - the parser returns `Ok` or `Err` and never panics;
+//! - no single allocation exceeds a bound proportional to the input's size (a count read from
+//!   the file must be checked against the file size before it sizes anything);
+//! - what it accepts is a valid scene or camera list (finite, activated, consistent lengths).
+//!
+//! Each target runs for `RARA_FUZZ_SECONDS` (default 10) from seed `RARA_FUZZ_SEED` (default
+//! fixed, so CI is reproducible); a failing input is written to `target/test-artifacts/`.
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::io::Cursor;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use rara::camera::Camera;
+use rara::ply::{read_ply, write_ply, PlyEncoding};
+use rara::synth::Rng;
+
+/// Counts the largest single allocation made by threads that opted in.
+struct TrackingAllocator;
+
+thread_local! {
+    /// Whether this thread's allocations are tracked, and the largest one since.
+    static TRACKING: Cell<bool> = const { Cell::new(false) };
+    static LARGEST_ALLOCATION: Cell<usize> = const { Cell::new(0) };
+}
+
+fn note_size(size: usize) {
+    if TRACKING.try_with(|t| t.get()).unwrap_or(false) {
+        let _ = LARGEST_ALLOCATION.try_with(|l| l.set(l.get().max(size)));
+    }
+}
+
+unsafe impl GlobalAlloc for TrackingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note_size(layout.size());
+        System.alloc(layout)
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note_size(layout.size());
+        System.alloc_zeroed(layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note_size(new_size);
+        System.realloc(ptr, layout, new_size)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: TrackingAllocator = TrackingAllocator;
+
+/// Runs `f` with this thread's allocations tracked; returns its result (or the panic message)
+/// and the largest single allocation it made on this thread.
+fn tracked<T>(f: impl FnOnce() -> T) -> (Result<T, String>, usize) {
+    LARGEST_ALLOCATION.with(|l| l.set(0));
+    TRACKING.with(|t| t.set(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|p| {
+        p.downcast_ref::<String>()
+            .cloned()
+            .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "non-string panic".into())
+    });
+    TRACKING.with(|t| t.set(false));
+    (result, LARGEST_ALLOCATION.with(|l| l.get()))
+}
+
+/// The most one parse may allocate at once for an input of `len` bytes. The loader reserves
+/// the scene for the vertex count the file can hold: up to 236 bytes of scene per vertex of
+/// at least 59 bytes (SH degree 3 with one-byte properties), so 4x; the header buffer and a
+/// read chunk make the constant.
+fn allocation_bound(len: usize) -> usize {
+    4 * len + (4 << 20)
+}
+
+fn seconds() -> Duration {
+    let s = std::env::var("RARA_FUZZ_SECONDS")
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok())
+        .unwrap_or(10.0);
+    Duration::from_secs_f64(s)
+}
+
+fn seed() -> u64 {
+    std::env::var("RARA_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20261122)
+}
+
+fn save_failure(name: &str, input: &[u8]) -> std::path::PathBuf {
+    let path = common::artifacts_dir().join(name);
+    std::fs::write(&path, input).unwrap();
+    path
+}
+
+// ---------------------------------------------------------------- seeds
+
+/// The header (through `end_header\n`) and payload of a PLY file, split.
+fn split_header(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
+    let end = bytes.windows(11).position(|w| w == b"end_header\n")? + 11;
+    Some(bytes.split_at(end))
+}
+
+/// The first `keep` vertices of a binary real scene, its header's count rewritten.
+fn real_prefix(path: &Path, keep: usize) -> Option<Vec<u8>> {
+    use std::io::Read;
+    let mut head = vec![0u8; 64 << 10];
+    let mut f = std::fs::File::open(path).ok()?;
+    let n = f.read(&mut head).ok()?;
+    head.truncate(n);
+    let (header, _) = split_header(&head)?;
+    let header = String::from_utf8_lossy(header).into_owned();
+    let (_, report) = rara::ply::load_ply(path).ok()?;
+    let count = report.vertices_in_file;
+    let stride = (std::fs::metadata(path).ok()?.len() as usize - header.len()) / count.max(1);
+    let keep = keep.min(count);
+    let mut payload = vec![0u8; keep * stride];
+    let mut f = std::fs::File::open(path).ok()?;
+    std::io::Seek::seek(&mut f, std::io::SeekFrom::Start(header.len() as u64)).ok()?;
+    f.read_exact(&mut payload).ok()?;
+    let header = header.replace(
+        &format!("element vertex {count}\n"),
+        &format!("element vertex {keep}\n"),
+    );
+    let mut out = header.into_bytes();
+    out.extend_from_slice(&payload);
+    Some(out)
+}
+
+fn ply_seeds() -> Vec<(String, Vec<u8>)> {
+    let dir = std::env::temp_dir().join(format!("rara-fuzz-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut seeds = Vec::new();
+    for degree in 0..=3 {
+        let scene = rara::synth::shell(12, degree, 3 + degree as u64);
+        for (enc, name) in [
+            (PlyEncoding::BinaryLittleEndian, "le"),
+            (PlyEncoding::BinaryBigEndian, "be"),
+            (PlyEncoding::Ascii, "ascii"),
+        ] {
+            let path = dir.join(format!("sh{degree}_{name}.ply"));
+            write_ply(&scene, &path, enc).unwrap();
+            seeds.push((
+                format!("synth sh{degree} {name}"),
+                std::fs::read(&path).unwrap(),
+            ));
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    match common::real_data_dir() {
+        Some(real) => {
+            let mut plys: Vec<_> = std::fs::read_dir(&real)
+                .unwrap()
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "ply"))
+                .collect();
+            plys.sort();
+            for p in plys {
+                if let Some(bytes) = real_prefix(&p, 24) {
+                    let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+                    eprintln!("fuzz seed: real scene {stem} (first 24 vertices)");
+                    seeds.push((format!("real {stem}"), bytes));
+                }
+            }
+        }
+        None => eprintln!("fuzz seeds: no real data; the crate's own scenes only"),
+    }
+    seeds
+}
+
+fn camera_seeds() -> Vec<(String, Vec<u8>)> {
+    let dir = std::env::temp_dir().join(format!("rara-fuzz-cams-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("orbit.cameras.json");
+    let cams = rara::synth::orbit_cameras(3, 3.0, 64, 48, 50.0).unwrap();
+    Camera::save_all(&cams, &path).unwrap();
+    let mut seeds = vec![("synth orbit".to_string(), std::fs::read(&path).unwrap())];
+    std::fs::remove_dir_all(&dir).ok();
+    if let Some(real) = common::real_data_dir() {
+        let mut files: Vec<_> = std::fs::read_dir(&real)
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.to_string_lossy().ends_with(".orbit_cameras.json"))
+            .collect();
+        files.sort();
+        for p in files {
+            let bytes = std::fs::read(&p).unwrap();
+            // Two cameras are enough structure; keep inputs small so mutations hit it often.
+            let text = String::from_utf8_lossy(&bytes);
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            let first: Vec<_> = v.as_array().unwrap().iter().take(2).cloned().collect();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            eprintln!("fuzz seed: real cameras {name} (first 2)");
+            seeds.push((
+                format!("real {name}"),
+                serde_json::to_vec_pretty(&first).unwrap(),
+            ));
+        }
+    }
+    seeds
+}
+
+// ---------------------------------------------------------------- mutations
+
+const INTERESTING_COUNTS: &[&str] = &[
+    "0",
+    "1",
+    "2",
+    "255",
+    "65536",
+    "2147483647",
+    "2147483648",
+    "4294967295",
+    "4294967296",
+    "9223372036854775807",
+    "18446744073709551615",
+    "18446744073709551616",
+    "99999999999999999999999",
+    "-1",
+    "1e9",
+    "0x10",
+    "",
+];
+
+const TYPES: &[&str] = &[
+    "char", "uchar", "short", "ushort", "int", "uint", "float", "double", "int8", "uint8",
+    "int16", "uint16", "int32", "uint32", "float32", "float64", "half", "bogus",
+];
+
+fn pick<'a, T: Copy>(rng: &mut Rng, items: &'a [T]) -> T {
+    items[(rng.next_u64() % items.len() as u64) as usize]
+}
+
+fn below(rng: &mut Rng, n: usize) -> usize {
+    if n == 0 {
+        0
+    } else {
+        (rng.next_u64() % n as u64) as usize
+    }
+}
+
+/// Rewrites one line of the PLY header.
+fn mutate_header_line(rng: &mut Rng, input: &mut Vec<u8>) {
+    let Some((header, payload)) = split_header(input) else {
+        return;
+    };
+    let payload = payload.to_vec();
+    let text = String::from_utf8_lossy(header).into_owned();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let i = below(rng, lines.len());
+    match rng.next_u64() % 10 {
+        0 | 1 => {
+            // An element count.
+            let count = pick(rng, INTERESTING_COUNTS);
+            if let Some(e) = lines.iter_mut().find(|l| l.starts_with("element vertex")) {
+                *e = format!("element vertex {count}");
+            }
+        }
+        2 => {
+            // A property type, or a list property.
+            if lines[i].starts_with("property ") {
+                let name = lines[i].rsplit(' ').next().unwrap_or("x").to_string();
+                lines[i] = if rng.next_u64() % 4 == 0 {
+                    format!("property list uchar {} {name}", pick(rng, TYPES))
+                } else {
+                    format!("property {} {name}", pick(rng, TYPES))
+                };
+            }
+        }
+        3 => {
+            lines.remove(i);
+        }
+        4 => {
+            let l = lines[i].clone();
+            lines.insert(i, l);
+        }
+        5 => {
+            let j = below(rng, lines.len());
+            lines.swap(i, j);
+        }
+        6 => {
+            let format = pick(
+                rng,
+                &[
+                    "format ascii 1.0",
+                    "format binary_little_endian 1.0",
+                    "format binary_big_endian 1.0",
+                    "format binary_little_endian 2.0",
+                    "format",
+                    "format ebcdic 1.0",
+                ],
+            );
+            if let Some(f) = lines.iter_mut().find(|l| l.starts_with("format")) {
+                *f = format.to_string();
+            }
+        }
+        7 => {
+            // Another element before the vertices, with a hostile count.
+            let count = pick(rng, INTERESTING_COUNTS);
+            let at = 2.min(lines.len());
+            lines.insert(at, format!("property {} junk", pick(rng, TYPES)));
+            lines.insert(at, format!("element extra {count}"));
+        }
+        8 => {
+            // Rename a property (missing / f_rest counts that are not 0, 9, 24, 45).
+            if lines[i].starts_with("property ") {
+                let suffix = pick(rng, &["f_rest_7", "f_rest_99", "x", "rot_0", "", "  "]);
+                let mut parts: Vec<&str> = lines[i].split(' ').collect();
+                if let Some(last) = parts.last_mut() {
+                    *last = suffix;
+                }
+                lines[i] = parts.join(" ");
+            }
+        }
+        _ => {
+            lines[i].push_str(pick(rng, &["\r", " extra", "\u{0}", "\u{fffd}", " 1 2 3"]));
+        }
+    }
+    let mut out = lines.join("\n").into_bytes();
+    out.push(b'\n');
+    out.extend_from_slice(&payload);
+    *input = out;
+}
+
+/// Writes a special float into the payload (or a special token into ascii).
+fn mutate_payload_value(rng: &mut Rng, input: &mut [u8]) {
+    let Some(start) = split_header(input).map(|(h, _)| h.len()) else {
+        return;
+    };
+    if input.len() < start + 4 {
+        return;
+    }
+    let at = start + below(rng, input.len() - start - 3);
+    let v: f32 = pick(
+        rng,
+        &[
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MAX,
+            -f32::MAX,
+            f32::MIN_POSITIVE / 2.0,
+            0.0,
+            -0.0,
+            1e30,
+            -1e30,
+            100.0,
+            -100.0,
+        ],
+    );
+    let bytes = if rng.next_u64() % 2 == 0 {
+        v.to_le_bytes()
+    } else {
+        v.to_be_bytes()
+    };
+    input[at..at + 4].copy_from_slice(&bytes);
+}
+
+/// Generic byte-level mutations.
+fn mutate_bytes(rng: &mut Rng, input: &mut Vec<u8>) {
+    let len = input.len();
+    match rng.next_u64() % 8 {
+        0 if len > 0 => {
+            let i = below(rng, len);
+            input[i] ^= 1 << (rng.next_u64() % 8);
+        }
+        1 if len > 0 => {
+            let i = below(rng, len);
+            input[i] = pick(rng, &[0u8, 0xff, 0x7f, 0x80, b'\n', b' ', b'-', b'9']);
+        }
+        2 => input.truncate(below(rng, len + 1)),
+        3 if len > 0 => {
+            let a = below(rng, len);
+            let b = (a + 1 + below(rng, 64)).min(len);
+            input.drain(a..b);
+        }
+        4 if len > 0 => {
+            let a = below(rng, len);
+            let b = (a + 1 + below(rng, 256)).min(len);
+            let chunk = input[a..b].to_vec();
+            let at = below(rng, len + 1);
+            input.splice(at..at, chunk);
+        }
+        5 => {
+            let n = below(rng, 64);
+            input.extend((0..n).map(|_| rng.next_u64() as u8));
+        }
+        6 if len > 0 => {
+            // Random bytes over a random run.
+            let a = below(rng, len);
+            let b = (a + 1 + below(rng, 16)).min(len);
+            for x in &mut input[a..b] {
+                *x = rng.next_u64() as u8;
+            }
+        }
+        _ => {
+            let at = below(rng, len + 1);
+            input.insert(at, rng.next_u64() as u8);
+        }
+    }
+}
+
+/// Replaces one JSON number or keyword with a hostile value, or breaks its structure.
+fn mutate_json(rng: &mut Rng, input: &mut Vec<u8>) {
+    let text = String::from_utf8_lossy(input).into_owned();
+    // Token boundaries: runs of number characters.
+    let numbers: Vec<(usize, usize)> = {
+        let b = text.as_bytes();
+        let mut v = Vec::new();
+        let mut i = 0;
+        while i < b.len() {
+            if b[i].is_ascii_digit() || b[i] == b'-' {
+                let s = i;
+                while i < b.len() && (b[i].is_ascii_digit() || b"-+.eE".contains(&b[i])) {
+                    i += 1;
+                }
+                v.push((s, i));
+            } else {
+                i += 1;
+            }
+        }
+        v
+    };
+    let out = match rng.next_u64() % 6 {
+        0..=2 if !numbers.is_empty() => {
+            let (s, e) = pick(rng, &numbers);
+            let value = pick(
+                rng,
+                &[
+                    "0",
+                    "-1",
+                    "1e309",
+                    "-1e309",
+                    "4294967295",
+                    "4294967296",
+                    "16384",
+                    "16385",
+                    "99999999999999999999",
+                    "1.5",
+                    "NaN",
+                    "null",
+                    "\"7\"",
+                    "[]",
+                    "{}",
+                    "1e-45",
+                ],
+            );
+            format!("{}{}{}", &text[..s], value, &text[e..])
+        }
+        3 => {
+            // Drop a field.
+            let field = pick(
+                rng,
+                &[
+                    "\"width\"",
+                    "\"height\"",
+                    "\"fx\"",
+                    "\"fy\"",
+                    "\"position\"",
+                    "\"rotation\"",
+                ],
+            );
+            text.replacen(field, "\"unused\"", 1)
+        }
+        4 => {
+            let depth = 1 + below(rng, 4000);
+            format!("{}{}{}", "[".repeat(depth), text, "]".repeat(depth))
+        }
+        _ => {
+            // Duplicate the array's contents (many cameras).
+            let inner = text.trim().trim_start_matches('[').trim_end_matches(']');
+            format!("[{inner},{inner},{inner}]")
+        }
+    };
+    *input = out.into_bytes();
+}
+
+// ---------------------------------------------------------------- oracles
+
+fn check_scene(scene: &rara::Scene, vertices_in_file: usize) -> Result<(), String> {
+    let n = scene.len();
+    if n > vertices_in_file {
+        return Err(format!("{n} Gaussians from {vertices_in_file} vertices"));
+    }
+    if scene.opacities.len() != n
+        || scene.scales.len() != n
+        || scene.rotations.len() != n
+        || scene.sh.len() != n * scene.sh_stride()
+    {
+        return Err("inconsistent array lengths".into());
+    }
+    for i in 0..n {
+        let (m, o, s, q) = (
+            scene.means[i],
+            scene.opacities[i],
+            scene.scales[i],
+            scene.rotations[i],
+        );
+        if !m.is_finite() || !(0.0..=1.0).contains(&o) || !s.is_finite() || s.min_element() < 0.0
+        {
+            return Err(format!(
+                "Gaussian {i} is not valid: mean {m}, opacity {o}, scale {s}"
+            ));
+        }
+        if !q.is_finite() || (q.length() - 1.0).abs() > 1e-3 {
+            return Err(format!("Gaussian {i}: rotation {q} is not normalised"));
+        }
+    }
+    if scene.sh.iter().any(|v| !v.is_finite()) {
+        return Err("non-finite SH".into());
+    }
+    Ok(())
+}
+
+fn check_cameras(cams: &[Camera]) -> Result<(), String> {
+    for (i, c) in cams.iter().enumerate() {
+        rara::camera::check_size(c.width, c.height).map_err(|e| format!("camera {i}: {e}"))?;
+        if !(c.fx.is_finite() && c.fy.is_finite() && c.fx > 0.0 && c.fy > 0.0)
+            || !c.position.is_finite()
+            || !c.rotation.is_finite()
+        {
+            return Err(format!("camera {i} accepted with bad values"));
+        }
+    }
+    Ok(())
+}
+
+/// Runs one target for the configured time; fails on the first bad input.
+fn fuzz(
+    target: &str,
+    seeds: &[(String, Vec<u8>)],
+    mutate: impl Fn(&mut Rng, &mut Vec<u8>),
+    parse: impl Fn(&[u8]) -> Result<(), String>,
+) {
+    let budget = seconds();
+    let seed = seed();
+    let mut rng = Rng::new(seed);
+    let start = Instant::now();
+    let (mut cases, mut accepted) = (0u64, 0u64);
+    let mut errors = std::collections::BTreeMap::<String, u64>::new();
+    let (mut slowest, mut largest_ratio, mut largest_any) = (Duration::ZERO, 0f64, 0usize);
+    // Unmutated seeds first: every one must load.
+    for (name, input) in seeds {
+        let (result, _) = tracked(|| parse(input));
+        if let Ok(Err(e)) | Err(e) = &result {
+            panic!("{target}: seed '{name}' does not parse: {e}");
+        }
+    }
+    while start.elapsed() < budget {
+        let (_, base) = &seeds[below(&mut rng, seeds.len())];
+        let mut input = base.clone();
+        for _ in 0..1 + below(&mut rng, 4) {
+            mutate(&mut rng, &mut input);
+        }
+        let t = Instant::now();
+        let (result, largest) = tracked(|| parse(&input));
+        slowest = slowest.max(t.elapsed());
+        cases += 1;
+        let bound = allocation_bound(input.len());
+        largest_any = largest_any.max(largest);
+        if input.len() >= 4096 {
+            largest_ratio = largest_ratio.max(largest as f64 / input.len() as f64);
+        }
+        let failure = match result {
+            Err(panic) => Some(format!("panicked: {panic}")),
+            Ok(_) if largest > bound => Some(format!(
+                "allocated {largest} bytes at once for a {}-byte input (bound {bound})",
+                input.len()
+            )),
+            Ok(Ok(())) => {
+                accepted += 1;
+                None
+            }
+            Ok(Err(e)) if e.starts_with("ACCEPTED BAD INPUT") => Some(e),
+            Ok(Err(e)) => {
+                // Group errors by their message shape: digits and quoted text stripped.
+                let mut key = String::new();
+                let mut quoted = false;
+                for c in e.chars() {
+                    if c == '\'' {
+                        quoted = !quoted;
+                    } else if !quoted && !c.is_ascii_digit() {
+                        key.push(c);
+                    }
+                }
+                let key: String = key.chars().take(90).collect();
+                *errors.entry(key).or_default() += 1;
+                None
+            }
+        };
+        if let Some(why) = failure {
+            let path = save_failure(&format!("fuzz_{target}_case_{cases}.bin"), &input);
+            panic!(
+                "{target}: case {cases} (seed {seed}) {why}; input saved to {}",
+                path.display()
+            );
+        }
+    }
+    eprintln!(
+        "fuzz {target}: {cases} cases in {:.1} s from {} seeds (seed {seed}): {accepted} accepted, \
+         {} rejected with {} distinct messages; slowest case {:.1} ms; largest allocation {} bytes, \
+         at most {:.2}x the input among inputs of 4 KiB or more",
+        start.elapsed().as_secs_f64(),
+        seeds.len(),
+        cases - accepted,
+        errors.len(),
+        slowest.as_secs_f64() * 1e3,
+        largest_any,
+        largest_ratio
+    );
+    let mut by_count: Vec<_> = errors.iter().collect();
+    by_count.sort_by(|a, b| b.1.cmp(a.1));
+    for (msg, n) in by_count.into_iter().take(25) {
+        eprintln!("  {n:>8}  {msg}");
+    }
+    assert!(cases > 0);
+}
+
+#[test]
+fn ply_loader_survives_mutated_headers_and_payloads() {
+    let seeds = ply_seeds();
+    fuzz(
+        "ply",
+        &seeds,
+        |rng, input| match rng.next_u64() % 4 {
+            0 => mutate_header_line(rng, input),
+            1 => mutate_payload_value(rng, input),
+            _ => mutate_bytes(rng, input),
+        },
+        |input| {
+            let len = input.len() as u64;
+            match read_ply(Cursor::new(input), len, Path::new("fuzz.ply")) {
+                Ok((scene, report)) => check_scene(&scene, report.vertices_in_file)
+                    .map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+                Err(e) => Err(e.to_string()),
+            }
+        },
+    );
+}
+
+#[test]
+fn cameras_parser_survives_mutated_files() {
+    let seeds = camera_seeds();
+    fuzz(
+        "cameras",
+        &seeds,
+        |rng, input| {
+            if rng.next_u64() % 3 == 0 {
+                mutate_bytes(rng, input)
+            } else {
+                mutate_json(rng, input)
+            }
+        },
+        |input| {
+            let text = String::from_utf8_lossy(input);
+            match Camera::parse_all(&text, Path::new("fuzz.cameras.json")) {
+                Ok(cams) => check_cameras(&cams).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+                Err(e) => Err(e.to_string()),
+            }
+        },
+    );
+}
