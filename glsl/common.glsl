@@ -59,6 +59,19 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DispatchArg
 
 uint div_ceil(uint a, uint b) { return (a + b - 1u) / b; }
 
+// Workgroup grid of a linear kernel over `items` (the host's `stages::linear_grid`): rows of
+// at most LINEAR_GRID_X workgroups, since only 65,535 per dimension are guaranteed.
+uvec3 linear_grid(uint items) {
+    uint groups = div_ceil(items, LINEAR_WORKGROUP);
+    return uvec3(min(groups, LINEAR_GRID_X), div_ceil(groups, LINEAR_GRID_X), 1u);
+}
+
+// The item of this invocation in a linear_grid dispatch.
+uint linear_index() {
+    return (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WORKGROUP
+        + gl_LocalInvocationIndex;
+}
+
 // Tight per-tile footprints. A splat adds to a pixel only where alpha = o exp(-q/2) >= 1/255,
 // q = A dx^2 + 2B dx dy + C dy^2, i.e. where q <= 2 ln(255 o). A tile of the SPEC's 3-sigma
 // rectangle whose pixels all lie outside that ellipse would skip the splat at every pixel, so

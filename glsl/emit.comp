@@ -17,7 +17,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = linear_index();
     FrameParams f = pc.frame.p;
     if (i >= f.scene.x) {
         return;

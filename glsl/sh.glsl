@@ -1,5 +1,6 @@
 // Colour from spherical harmonics of degree 0..3 (SPEC section 3), in the INRIA term order.
-// `sh` holds the Gaussian's coefficients coefficient-major: sh.v[base + 3 * k + channel].
+// `sh` holds the Gaussian's coefficients coefficient-major: value base + 3 * k + channel,
+// 32-bit floats or (with SH_HALF) half floats.
 #ifndef RARA_SH_GLSL
 #define RARA_SH_GLSL
 
@@ -11,11 +12,24 @@ const float SH_C3[7] = float[7](-0.5900435899266435, 2.890611442640554, -0.45704
                                 0.3731763325901154, -0.4570457994644658, 1.445305721320277,
                                 -0.5900435899266435);
 
-vec3 sh_coef(F32s sh, uint base, uint k) {
-    return vec3(sh.v[base + 3u * k], sh.v[base + 3u * k + 1u], sh.v[base + 3u * k + 2u]);
+#ifdef SH_HALF
+// Half floats, two to a uint: value i is the low (even i) or high half of word i / 2.
+#define ShCoefficients U32s
+float sh_value(ShCoefficients sh, uint i) {
+    vec2 pair = unpackHalf2x16(sh.v[i >> 1u]);
+    return (i & 1u) == 0u ? pair.x : pair.y;
+}
+#else
+#define ShCoefficients F32s
+float sh_value(ShCoefficients sh, uint i) { return sh.v[i]; }
+#endif
+
+vec3 sh_coef(ShCoefficients sh, uint base, uint k) {
+    uint i = base + 3u * k;
+    return vec3(sh_value(sh, i), sh_value(sh, i + 1u), sh_value(sh, i + 2u));
 }
 
-vec3 eval_sh(F32s sh, uint base, uint degree, vec3 dir) {
+vec3 eval_sh(ShCoefficients sh, uint base, uint degree, vec3 dir) {
     vec3 result = SH_C0 * sh_coef(sh, base, 0u);
     if (degree > 0u) {
         float x = dir.x, y = dir.y, z = dir.z;

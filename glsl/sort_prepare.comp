@@ -19,5 +19,5 @@ void main() {
     pc.info.s.num_blocks = blocks;
     pc.info.s.hist_len = blocks * SORT_RADIX;
     pc.info.s.block_args = uvec4(blocks, 1u, 1u, 0u);
-    pc.info.s.linear_args = uvec4(div_ceil(n, LINEAR_WORKGROUP), 1u, 1u, 0u);
+    pc.info.s.linear_args = uvec4(linear_grid(n), 0u);
 }

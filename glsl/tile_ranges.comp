@@ -13,7 +13,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = linear_index();
     uint n = pc.info.s.num_keys;
     if (i >= n) {
         return;

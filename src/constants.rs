@@ -16,6 +16,10 @@ pub const RASTER_CHUNK: u32 = 16384;
 /// Threads per workgroup of the one-item-per-thread kernels (project, emit, tile ranges).
 pub const LINEAR_WORKGROUP: u32 = 256;
 
+/// Most workgroups a linear kernel (project, emit, tile ranges) dispatches along X. Vulkan
+/// guarantees only 65,535 (`maxComputeWorkGroupCount[0]`, lavapipe's value), so longer
+/// dispatches become a 2D grid of rows of this many workgroups: 16.7M items per row.
+pub const LINEAR_GRID_X: u32 = 65535;
 /// Threads per workgroup of the prefix-sum kernels.
 pub const SCAN_WORKGROUP: u32 = 256;
 /// Elements each prefix-sum thread handles; a scan block is `SCAN_WORKGROUP * SCAN_ITEMS`.
@@ -25,6 +29,9 @@ pub const SCAN_BLOCK: u32 = SCAN_WORKGROUP * SCAN_ITEMS;
 /// Recursion depth of the prefix sum: it scans up to `SCAN_BLOCK^SCAN_LEVELS` elements.
 pub const SCAN_LEVELS: u32 = 3;
 
+/// Most Gaussians a scene may have: the prefix sum over them dispatches one workgroup per
+/// `SCAN_BLOCK` elements along X (67,107,840).
+pub const MAX_GAUSSIANS: u64 = SCAN_BLOCK as u64 * LINEAR_GRID_X as u64;
 /// Bits per radix-sort digit.
 pub const SORT_RADIX_BITS: u32 = 4;
 /// Buckets per radix-sort digit.
@@ -37,6 +44,10 @@ pub const SORT_ITEMS: u32 = 16;
 /// Keys one sort workgroup handles.
 pub const SORT_BLOCK: u32 = SORT_WORKGROUP * SORT_ITEMS;
 
+/// Most (tile, splat) pairs one frame sorts: the sort dispatches one workgroup per
+/// `SORT_BLOCK` keys along X (268,431,360; 6.4 GB of sort buffers). A frame with more is drawn
+/// incomplete and flagged.
+pub const MAX_INTERSECTIONS: u64 = SORT_BLOCK as u64 * LINEAR_GRID_X as u64;
 /// Slots of the per-frame counters buffer (`uint` indices), written by the kernels and read
 /// back by the host after the frame.
 pub const COUNTER_INTERSECTIONS: u32 = 0;
@@ -76,6 +87,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("RASTER_WORKGROUP", RASTER_WORKGROUP),
     ("RASTER_CHUNK", RASTER_CHUNK),
     ("LINEAR_WORKGROUP", LINEAR_WORKGROUP),
+    ("LINEAR_GRID_X", LINEAR_GRID_X),
     ("SCAN_WORKGROUP", SCAN_WORKGROUP),
     ("SCAN_ITEMS", SCAN_ITEMS),
     ("SCAN_BLOCK", SCAN_BLOCK),

@@ -53,6 +53,30 @@ pub enum Error {
         /// Its result code.
         result: vk::Result,
     },
+    /// The device has no memory left for a resource, or the resource is larger than one
+    /// allocation may be on this device.
+    #[error(
+        "out of GPU memory: {what} needs {bytes} bytes ({reason}); render smaller images \
+         or fewer Gaussians, store SH in half precision, or use a device with more memory"
+    )]
+    OutOfDeviceMemory {
+        /// The resource (buffer name) or Vulkan call.
+        what: String,
+        /// Bytes requested (0 when the failing call does not say).
+        bytes: u64,
+        /// What the driver or the device's limits said.
+        reason: String,
+    },
+    /// The device was lost (a GPU hang or fault, a driver reset, the GPU removed). Nothing
+    /// created on the device can be used any more.
+    #[error(
+        "the GPU device was lost during {call} (a GPU hang or fault, a driver reset, or the \
+         GPU was removed); recreate the context to go on"
+    )]
+    DeviceLost {
+        /// The Vulkan call that reported it.
+        call: &'static str,
+    },
     /// GPU memory could not be allocated.
     #[error("GPU memory allocation for {what} failed: {source}")]
     Allocation {
@@ -82,6 +106,46 @@ pub(crate) trait VkContext<T> {
 
 impl<T> VkContext<T> for std::result::Result<T, vk::Result> {
     fn vk(self, call: &'static str) -> Result<T> {
-        self.map_err(|result| Error::Vulkan { call, result })
+        self.map_err(|result| vk_error(call, result))
+    }
+}
+
+/// The [`Error`] for a failing Vulkan call: lost devices and exhausted memory get variants of
+/// their own, so callers (and users) can tell them from bugs.
+pub(crate) fn vk_error(call: &'static str, result: vk::Result) -> Error {
+    match result {
+        vk::Result::ERROR_DEVICE_LOST => Error::DeviceLost { call },
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+            Error::OutOfDeviceMemory {
+                what: call.to_string(),
+                bytes: 0,
+                reason: format!("{call} returned {result}"),
+            }
+        }
+        _ => Error::Vulkan { call, result },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lost_devices_and_exhausted_memory_are_named() {
+        let lost = vk_error("vkQueueSubmit", vk::Result::ERROR_DEVICE_LOST);
+        assert!(matches!(
+            lost,
+            Error::DeviceLost {
+                call: "vkQueueSubmit"
+            }
+        ));
+        assert!(lost
+            .to_string()
+            .contains("GPU device was lost during vkQueueSubmit"));
+        let oom = vk_error("vkAllocateMemory", vk::Result::ERROR_OUT_OF_DEVICE_MEMORY);
+        assert!(matches!(oom, Error::OutOfDeviceMemory { .. }));
+        assert!(oom.to_string().starts_with("out of GPU memory"));
+        let other = vk_error("vkCreateBuffer", vk::Result::ERROR_UNKNOWN);
+        assert!(matches!(other, Error::Vulkan { .. }));
     }
 }

@@ -5,7 +5,7 @@ use ash::vk;
 use crate::camera::tile_grid;
 use crate::constants::{
     COUNTER_CUTOFF, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE,
-    RASTER_CHUNK,
+    MAX_INTERSECTIONS, RASTER_CHUNK,
 };
 use crate::error::{Result, VkContext};
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
@@ -95,8 +95,9 @@ impl FrameSlot {
     /// Sizes the slot for frames of up to `intersections` tile pairs whose longest tile list
     /// has `longest_tile_list` entries (both are in [`FrameStats`]), so that they are complete
     /// from the first.
+    /// Capacity stops at [`MAX_INTERSECTIONS`].
     pub fn reserve(&mut self, intersections: u64, longest_tile_list: u32) {
-        self.capacity = self.capacity.max(intersections);
+        self.capacity = self.capacity.max(intersections.min(MAX_INTERSECTIONS));
         self.rounds = self
             .rounds
             .max(longest_tile_list.div_ceil(RASTER_CHUNK).max(1));
@@ -177,7 +178,7 @@ impl FrameSlot {
         }
         self.capacity = self
             .capacity
-            .max(gaussians as u64 * FIRST_INTERSECTIONS_PER_GAUSSIAN)
+            .max((gaussians as u64 * FIRST_INTERSECTIONS_PER_GAUSSIAN).min(MAX_INTERSECTIONS))
             .max(MIN_CAPACITY);
         let capacity = self.capacity;
         let fits = self.resources.as_ref().is_some_and(|f| {

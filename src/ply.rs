@@ -148,7 +148,7 @@ pub fn read_ply<R: BufRead + Seek>(
     let header_bytes = read_header_bytes(path, &mut reader)?;
     // ply-rs expects '\n' line ends; accept '\r\n' too.
     let header_text = String::from_utf8_lossy(&header_bytes).replace('\r', "");
-    check_element_counts(path, &header_text)?;
+    check_header_numbers(path, &header_text)?;
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
     let header = parser
         .read_header(&mut header_text.as_bytes())
@@ -288,12 +288,31 @@ pub fn read_ply<R: BufRead + Seek>(
     Ok((scene, report))
 }
 
-/// Checks that every `element NAME COUNT` line has a count that fits a `usize`: ply-rs
-/// panics on one that does not (found by fuzzing), so it must never see one.
-fn check_element_counts(path: &Path, header_text: &str) -> Result<()> {
+/// Checks the numbers of the header before ply-rs parses it: ply-rs panics on a number that
+/// does not fit its integer type (found by fuzzing, in element counts and in the format
+/// version), so every digit run outside comments must fit a `u64`, and every
+/// `element NAME COUNT` line must have a count that fits a `usize`.
+fn check_header_numbers(path: &Path, header_text: &str) -> Result<()> {
     for (n, line) in header_text.lines().enumerate() {
         let mut tokens = line.split_ascii_whitespace();
-        if tokens.next() != Some("element") {
+        let keyword = tokens.next();
+        if matches!(keyword, Some("comment") | Some("obj_info")) {
+            continue;
+        }
+        let too_large = line
+            .split(|c: char| !c.is_ascii_digit())
+            .any(|run| !run.is_empty() && run.parse::<u64>().is_err());
+        if too_large {
+            return Err(ply_err(
+                path,
+                format!(
+                    "malformed header: line {} '{line}' has a number larger than {}",
+                    n + 1,
+                    u64::MAX
+                ),
+            ));
+        }
+        if keyword != Some("element") {
             continue;
         }
         let (name, count) = (tokens.next(), tokens.next());
@@ -410,13 +429,7 @@ fn push_gaussian(
             sh[3 * (j + 1) + c] = v(14 + c * rest_per_channel + j);
         }
     }
-    scene.push(
-        Vec3::new(v(0), v(1), v(2)),
-        opacity,
-        scale,
-        q,
-        sh,
-    );
+    scene.push(Vec3::new(v(0), v(1), v(2)), opacity, scale, q, sh);
 }
 
 #[allow(clippy::too_many_arguments)]

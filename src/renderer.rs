@@ -9,10 +9,11 @@ use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
-use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS};
+use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, MAX_GAUSSIANS};
 use crate::error::{Error, Result};
 use crate::frame::FrameSlot;
 use crate::gpu_types::{GpuFrameParams, GpuGaussian};
+use crate::precision::{f32_to_f16_bits, ShPrecision};
 use crate::scene::Scene;
 use crate::stages::emit::{Emit, EmitPush};
 use crate::stages::prefix_sum::PrefixSum;
@@ -29,63 +30,115 @@ use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
 /// touched reads its length there.
 const PARAMS_COUNT_OFFSET: u64 = 112;
 
-/// The Gaussians as the kernels read them (activated values, SPEC section 1).
-fn gpu_gaussians(scene: &Scene) -> Vec<GpuGaussian> {
-    (0..scene.len())
-        .map(|i| {
-            let m = scene.means[i];
-            let q = scene.rotations[i];
-            let s = scene.scales[i];
-            GpuGaussian {
-                pos_opacity: [m.x, m.y, m.z, scene.opacities[i]],
-                rot: [q.w, q.x, q.y, q.z],
-                scale: [s.x, s.y, s.z, 0.0],
-            }
-        })
-        .collect()
+/// The Gaussian `i` of `scene` as the kernels read it (activated values, SPEC section 1).
+fn gpu_gaussian(scene: &Scene, i: usize) -> GpuGaussian {
+    let m = scene.means[i];
+    let q = scene.rotations[i];
+    let s = scene.scales[i];
+    GpuGaussian {
+        pos_opacity: [m.x, m.y, m.z, scene.opacities[i]],
+        rot: [q.w, q.x, q.y, q.z],
+        scale: [s.x, s.y, s.z, 0.0],
+    }
+}
+
+/// Bytes of the two scene buffers: Gaussians and SH coefficients.
+fn scene_buffer_sizes(scene: &Scene, precision: ShPrecision) -> (u64, u64) {
+    let n = scene.len() as u64;
+    (
+        n * std::mem::size_of::<GpuGaussian>() as u64,
+        scene.sh.len() as u64 * precision.bytes(),
+    )
 }
 
 /// A scene uploaded to the GPU: a resource of its own, which any number of renderers of the
 /// same device can draw. Dropping it frees its memory; frames that read it must have completed.
+///
+/// Buffers are reached by device address, never bound as descriptors, so their size is not
+/// limited by `maxStorageBufferRange` (128 MiB on lavapipe): a 6M-Gaussian SH degree 3 scene is
+/// one 1.15 GB SH buffer (576 MB with [`ShPrecision::F16`]).
 pub struct GpuScene {
     gaussians: Buffer,
     sh: Buffer,
     count: u32,
     sh_degree: u32,
+    sh_precision: ShPrecision,
 }
 
 impl GpuScene {
-    /// Uploads `scene` to the device of `ctx` (through a staging buffer, on the context's
-    /// queue; returns once the copy is done).
+    /// Uploads `scene` to the device of `ctx` with 32-bit SH coefficients (on the context's
+    /// queue, in chunks through one staging buffer; returns once the copies are done).
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
-        let count = u32::try_from(scene.len()).map_err(|_| {
-            Error::InvalidInput(format!("{} Gaussians exceed the 2^32 limit", scene.len()))
-        })?;
-        Ok(GpuScene {
-            gaussians: Buffer::from_slice(ctx, "scene gaussians", &gpu_gaussians(scene))?,
-            sh: Buffer::from_slice(ctx, "scene SH", &scene.sh)?,
-            count,
-            sh_degree: scene.sh_degree,
-        })
+        GpuScene::with_sh_precision(ctx, scene, ShPrecision::F32)
     }
 
-    /// Replaces the contents with `scene`, reusing the device buffers when they are large
-    /// enough. Frames recorded with the old contents must have completed.
-    pub fn replace(&mut self, scene: &Scene) -> Result<()> {
-        let ctx = self.gaussians.context().clone();
-        let gaussians = gpu_gaussians(scene);
-        let gaussian_bytes: &[u8] = bytemuck::cast_slice(&gaussians);
-        let sh_bytes: &[u8] = bytemuck::cast_slice(&scene.sh);
-        if gaussian_bytes.len() as u64 > self.gaussians.size || sh_bytes.len() as u64 > self.sh.size
-        {
-            *self = GpuScene::new(&ctx, scene)?;
-            return Ok(());
+    /// [`GpuScene::new`] storing the SH coefficients at `precision`.
+    pub fn with_sh_precision(ctx: &Context, scene: &Scene, precision: ShPrecision) -> Result<Self> {
+        if scene.len() as u64 > MAX_GAUSSIANS {
+            return Err(Error::InvalidInput(format!(
+                "{} Gaussians exceed the {MAX_GAUSSIANS} one scene may have",
+                scene.len()
+            )));
         }
-        self.gaussians.upload(gaussian_bytes)?;
-        self.sh.upload(sh_bytes)?;
+        let (gaussian_bytes, sh_bytes) = scene_buffer_sizes(scene, precision);
+        let gpu = MemoryLocation::GpuOnly;
+        let mut gpu_scene = GpuScene {
+            gaussians: Buffer::new(ctx, "scene gaussians", gaussian_bytes, gpu)?,
+            sh: Buffer::new(ctx, "scene SH", sh_bytes, gpu)?,
+            count: 0,
+            sh_degree: scene.sh_degree,
+            sh_precision: precision,
+        };
+        gpu_scene.upload(scene)?;
+        Ok(gpu_scene)
+    }
+
+    /// Bytes of device memory per Gaussian of a scene of `sh_degree` stored at `precision`.
+    pub fn bytes_per_gaussian(sh_degree: u32, precision: ShPrecision) -> u64 {
+        std::mem::size_of::<GpuGaussian>() as u64
+            + 3 * crate::scene::sh_coeffs(sh_degree) as u64 * precision.bytes()
+    }
+
+    /// Writes `scene` into the buffers (which are large enough), chunk by chunk.
+    fn upload(&mut self, scene: &Scene) -> Result<()> {
+        let (gaussian_bytes, sh_bytes) = scene_buffer_sizes(scene, self.sh_precision);
+        let record = std::mem::size_of::<GpuGaussian>();
+        self.gaussians
+            .upload_with(gaussian_bytes, record as u64, |offset, chunk| {
+                let first = offset as usize / record;
+                for (k, out) in chunk.chunks_exact_mut(record).enumerate() {
+                    out.copy_from_slice(bytemuck::bytes_of(&gpu_gaussian(scene, first + k)));
+                }
+            })?;
+        match self.sh_precision {
+            ShPrecision::F32 => self.sh.upload(bytemuck::cast_slice(&scene.sh))?,
+            ShPrecision::F16 => self.sh.upload_with(sh_bytes, 2, |offset, chunk| {
+                let first = offset as usize / 2;
+                for (k, out) in chunk.chunks_exact_mut(2).enumerate() {
+                    out.copy_from_slice(&f32_to_f16_bits(scene.sh[first + k]).to_le_bytes());
+                }
+            })?,
+        }
         self.count = scene.len() as u32;
         self.sh_degree = scene.sh_degree;
         Ok(())
+    }
+
+    /// Replaces the contents with `scene` (same SH precision), reusing the device buffers when
+    /// they are large enough. Frames recorded with the old contents must have completed.
+    pub fn replace(&mut self, scene: &Scene) -> Result<()> {
+        let (gaussian_bytes, sh_bytes) = scene_buffer_sizes(scene, self.sh_precision);
+        if gaussian_bytes > self.gaussians.size || sh_bytes > self.sh.size {
+            let ctx = self.gaussians.context().clone();
+            *self = GpuScene::with_sh_precision(&ctx, scene, self.sh_precision)?;
+            return Ok(());
+        }
+        self.upload(scene)
+    }
+
+    /// How the SH coefficients are stored.
+    pub fn sh_precision(&self) -> ShPrecision {
+        self.sh_precision
     }
 
     /// Number of Gaussians.
@@ -505,7 +558,8 @@ impl Renderer {
             clip: f.clip_params.address,
             cutoffs: cutoffs_address,
         };
-        self.project.record(cmd, &push, scene.count);
+        self.project
+            .record(cmd, &push, scene.count, scene.sh_precision);
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"project");
 

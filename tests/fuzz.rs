@@ -234,8 +234,8 @@ const INTERESTING_COUNTS: &[&str] = &[
 ];
 
 const TYPES: &[&str] = &[
-    "char", "uchar", "short", "ushort", "int", "uint", "float", "double", "int8", "uint8",
-    "int16", "uint16", "int32", "uint32", "float32", "float64", "half", "bogus",
+    "char", "uchar", "short", "ushort", "int", "uint", "float", "double", "int8", "uint8", "int16",
+    "uint16", "int32", "uint32", "float32", "float64", "half", "bogus",
 ];
 
 fn pick<'a, T: Copy>(rng: &mut Rng, items: &'a [T]) -> T {
@@ -507,8 +507,7 @@ fn check_scene(scene: &rara::Scene, vertices_in_file: usize) -> Result<(), Strin
             scene.scales[i],
             scene.rotations[i],
         );
-        if !m.is_finite() || !(0.0..=1.0).contains(&o) || !s.is_finite() || s.min_element() < 0.0
-        {
+        if !m.is_finite() || !(0.0..=1.0).contains(&o) || !s.is_finite() || s.min_element() < 0.0 {
             return Err(format!(
                 "Gaussian {i} is not valid: mean {m}, opacity {o}, scale {s}"
             ));

@@ -3,7 +3,6 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use crate::constants::LINEAR_WORKGROUP;
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{ComputePipeline, Context};
@@ -39,7 +38,6 @@ impl Emit {
 
     /// Records the emission for `count` Gaussians.
     pub fn record(&self, cmd: vk::CommandBuffer, push: &EmitPush, count: u32) {
-        self.pipeline
-            .dispatch(cmd, push, [count.div_ceil(LINEAR_WORKGROUP), 1, 1]);
+        self.pipeline.dispatch(cmd, push, super::linear_grid(count));
     }
 }

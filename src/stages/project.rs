@@ -1,10 +1,10 @@
-//! Stage 1: project every Gaussian (`glsl/project.comp`; CPU twin `reference::project`).
+//! Stage 1: project every Gaussian (`glsl/project_body.glsl`; CPU twin `reference::project`).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use crate::constants::LINEAR_WORKGROUP;
 use crate::error::Result;
+use crate::precision::ShPrecision;
 use crate::shaders;
 use crate::vk::{ComputePipeline, Context};
 
@@ -30,22 +30,37 @@ pub struct ProjectPush {
     pub cutoffs: u64,
 }
 
-/// The project kernel.
+/// The project kernel, in one variant per SH storage precision.
 pub struct Project {
-    pipeline: ComputePipeline,
+    sh32: ComputePipeline,
+    sh16: ComputePipeline,
 }
 
 impl Project {
     /// Builds the kernel.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Project {
-            pipeline: ComputePipeline::new::<ProjectPush>(ctx, c"project", shaders::PROJECT)?,
+            sh32: ComputePipeline::new::<ProjectPush>(ctx, c"project", shaders::PROJECT)?,
+            sh16: ComputePipeline::new::<ProjectPush>(
+                ctx,
+                c"project (SH f16)",
+                shaders::PROJECT_SH16,
+            )?,
         })
     }
 
-    /// Records the projection of `count` Gaussians.
-    pub fn record(&self, cmd: vk::CommandBuffer, push: &ProjectPush, count: u32) {
-        self.pipeline
-            .dispatch(cmd, push, [count.div_ceil(LINEAR_WORKGROUP), 1, 1]);
+    /// Records the projection of `count` Gaussians whose SH are stored at `precision`.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &ProjectPush,
+        count: u32,
+        precision: ShPrecision,
+    ) {
+        let pipeline = match precision {
+            ShPrecision::F32 => &self.sh32,
+            ShPrecision::F16 => &self.sh16,
+        };
+        pipeline.dispatch(cmd, push, super::linear_grid(count));
     }
 }

@@ -7,6 +7,9 @@ pub use gpu_allocator::MemoryLocation;
 use super::context::Context;
 use crate::error::{Error, Result, VkContext};
 
+/// Most bytes one upload stages at a time ([`Buffer::upload_with`]).
+pub const STAGING_CHUNK: u64 = 32 << 20;
+
 /// A named GPU buffer with its memory and device address, freed when dropped.
 ///
 /// Every buffer can be used as a storage buffer through its device address and as a transfer
@@ -27,6 +30,14 @@ impl Buffer {
     /// debuggers.
     pub fn new(ctx: &Context, name: &str, size: u64, location: MemoryLocation) -> Result<Self> {
         let size = size.max(4).next_multiple_of(4);
+        let max = ctx.info().max_memory_allocation_size;
+        if size > max {
+            return Err(Error::OutOfDeviceMemory {
+                what: format!("buffer '{name}'"),
+                bytes: size,
+                reason: format!("larger than the {max} bytes one allocation may have on this device (maxMemoryAllocationSize)"),
+            });
+        }
         let device = ctx.device();
         let info = vk::BufferCreateInfo::default()
             .size(size)
@@ -51,9 +62,20 @@ impl Buffer {
             Ok(a) => a,
             Err(source) => {
                 unsafe { device.destroy_buffer(raw, None) };
-                return Err(Error::Allocation {
-                    what: format!("buffer '{name}' ({size} bytes)"),
-                    source,
+                return Err(match source {
+                    gpu_allocator::AllocationError::OutOfMemory => Error::OutOfDeviceMemory {
+                        what: format!("buffer '{name}'"),
+                        bytes: size,
+                        reason: format!(
+                            "the device has no free memory of that size; its device-local heap \
+                             is {} bytes",
+                            ctx.info().device_local_heap_bytes
+                        ),
+                    },
+                    source => Error::Allocation {
+                        what: format!("buffer '{name}' ({size} bytes)"),
+                        source,
+                    },
                 });
             }
         };
@@ -62,10 +84,7 @@ impl Buffer {
         if let Err(e) = bind {
             let _ = ctx.allocator().free(allocation);
             unsafe { device.destroy_buffer(raw, None) };
-            return Err(Error::Vulkan {
-                call: "vkBindBufferMemory",
-                result: e,
-            });
+            return Err(crate::error::vk_error("vkBindBufferMemory", e));
         }
         let address = unsafe {
             device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
@@ -100,32 +119,55 @@ impl Buffer {
         Ok(buffer)
     }
 
-    /// Copies `bytes` to the start of the buffer (staging buffer + vkCmdCopyBuffer, waits).
+    /// Copies `bytes` to the start of the buffer (through [`Buffer::upload_with`]; waits).
     pub fn upload(&self, bytes: &[u8]) -> Result<()> {
-        if bytes.is_empty() {
+        self.upload_with(bytes.len() as u64, 1, |offset, chunk| {
+            let offset = offset as usize;
+            chunk.copy_from_slice(&bytes[offset..offset + chunk.len()]);
+        })
+    }
+
+    /// Fills the first `len` bytes of the buffer from the host in chunks of at most
+    /// [`STAGING_CHUNK`] bytes, through one reused staging buffer: `fill(offset, chunk)` writes
+    /// bytes `offset..offset + chunk.len()`, and every chunk but the last is a multiple of
+    /// `granule` bytes (the size of the caller's records). So a scene of any size is uploaded
+    /// while holding one chunk of host-visible memory, not a second copy of the scene. Waits
+    /// for each copy.
+    pub fn upload_with(
+        &self,
+        len: u64,
+        granule: u64,
+        mut fill: impl FnMut(u64, &mut [u8]),
+    ) -> Result<()> {
+        if len == 0 {
             return Ok(());
         }
-        assert!(
-            bytes.len() as u64 <= self.size,
-            "upload larger than the buffer"
-        );
+        assert!(len <= self.size, "upload larger than the buffer");
+        let granule = granule.max(1);
+        let chunk = (STAGING_CHUNK / granule).max(1) * granule;
         let mut staging = Buffer::new(
             &self.ctx,
             "staging (upload)",
-            bytes.len() as u64,
+            chunk.min(len),
             MemoryLocation::CpuToGpu,
         )?;
-        staging.mapped_mut()[..bytes.len()].copy_from_slice(bytes);
-        self.ctx.run_commands(|cmd| unsafe {
-            let region = vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: 0,
-                size: bytes.len() as u64,
-            };
-            self.ctx
-                .device()
-                .cmd_copy_buffer(cmd, staging.raw, self.raw, &[region]);
-        })
+        let mut offset = 0;
+        while offset < len {
+            let n = chunk.min(len - offset);
+            fill(offset, &mut staging.mapped_mut()[..n as usize]);
+            self.ctx.run_commands(|cmd| unsafe {
+                let region = vk::BufferCopy {
+                    src_offset: 0,
+                    dst_offset: offset,
+                    size: n,
+                };
+                self.ctx
+                    .device()
+                    .cmd_copy_buffer(cmd, staging.raw, self.raw, &[region]);
+            })?;
+            offset += n;
+        }
+        Ok(())
     }
 
     /// Reads the first `len` bytes back (vkCmdCopyBuffer to a host buffer, waits).

@@ -78,6 +78,12 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u32,
     /// Subgroup size of compute shaders.
     pub subgroup_size: u32,
+    /// Largest single memory allocation (`maxMemoryAllocationSize`): a buffer larger than this
+    /// is refused with [`crate::Error::OutOfDeviceMemory`] before Vulkan is asked.
+    pub max_memory_allocation_size: u64,
+    /// Size of the largest device-local memory heap (lavapipe reports 2 GiB but does not
+    /// enforce it: its memory is the host's).
+    pub device_local_heap_bytes: u64,
     /// Whether pipeline-statistics queries are enabled (compute invocations per pass).
     pub pipeline_statistics: bool,
 }
@@ -625,11 +631,20 @@ fn choose_physical_device(
 fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::default()
         .push_next(&mut driver)
-        .push_next(&mut subgroup);
+        .push_next(&mut subgroup)
+        .push_next(&mut maintenance3);
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let device_local_heap_bytes = memory.memory_heaps[..memory.memory_heap_count as usize]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let driver_name = driver
         .driver_name_as_c_str()
@@ -650,6 +665,8 @@ fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
         timestamps: families[family as usize].timestamp_valid_bits > 0,
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
         subgroup_size: subgroup.subgroup_size,
+        max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+        device_local_heap_bytes,
         pipeline_statistics: unsafe { instance.get_physical_device_features(pd) }
             .pipeline_statistics_query
             == vk::TRUE,

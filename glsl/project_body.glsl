@@ -1,0 +1,172 @@
+// Stage 1, project (SPEC sections 3 and 5): one invocation per Gaussian. Classifies it against
+// the clip region (dropped / drawn / cutoff), culls, projects the 3D covariance to a 2D conic,
+// finds the screen radius and the touched tiles, evaluates the SH colour, and writes the
+// ProjectedSplat record plus the number of tiles touched (0 = not drawn) for the prefix sum
+// that sizes the tile lists. Cutoff Gaussians also get a compact side record (CutoffRecord)
+// for the rasterizer's per-pixel weight; the others cost nothing extra.
+//
+// Included by project.comp (SH in 32-bit floats) and project_sh16.comp (SH_HALF: half floats,
+// two to a uint).
+#include "common.glsl"
+#include "sh.glsl"
+#include "clip.glsl"
+
+layout(local_size_x = LINEAR_WORKGROUP) in;
+
+layout(push_constant) uniform Push {
+    FrameParamsRef frame;
+    Gaussians gaussians;
+    ShCoefficients sh;
+    ProjectedSplats splats;
+    U32s tiles_touched;
+    U32s counters;
+    ClipParamsRef clip;
+    CutoffRecords cutoffs;  // out: one record per cutoff Gaussian, packed
+} pc;
+
+shared uint wg_visible;
+shared uint wg_cutoff_count;
+shared uint wg_cutoff_base;
+
+// Rotation matrix of a normalised quaternion (w, x, y, z), as rows.
+void quat_rows(vec4 q, out vec3 r0, out vec3 r1, out vec3 r2) {
+    float w = q.x, x = q.y, y = q.z, z = q.w;
+    r0 = vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y));
+    r1 = vec3(2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x));
+    r2 = vec3(2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y));
+}
+
+// Writes the record of a Gaussian that draws nothing.
+void skip(uint i) {
+    pc.tiles_touched.v[i] = 0u;
+    pc.splats.v[i].rect = uvec4(0u);
+}
+
+// Projects Gaussian i; returns true when it is drawn as cutoff, with its side record in rec.
+bool project(uint i, out CutoffRecord rec) {
+    FrameParams f = pc.frame.p;
+    Gaussian g = pc.gaussians.v[i];
+    vec3 mu = g.pos_opacity.xyz;
+    uint kind = clip_classify(pc.clip, mu, g.scale.xyz);
+    if (kind == CLASS_DROPPED) {
+        skip(i);
+        return false;
+    }
+    vec3 rel = mu - f.cam_pos.xyz;
+    vec3 t = vec3(dot(f.world_to_cam0.xyz, rel), dot(f.world_to_cam1.xyz, rel),
+                  dot(f.world_to_cam2.xyz, rel));
+    if (t.z <= 0.2) {
+        skip(i);
+        return false;
+    }
+    float fx = f.focal.x, fy = f.focal.y;
+    float W = float(f.size.x), H = float(f.size.y);
+    float lim_x = 1.3 * (W / (2.0 * fx));
+    float lim_y = 1.3 * (H / (2.0 * fy));
+    float xc = clamp(t.x / t.z, -lim_x, lim_x) * t.z;
+    float yc = clamp(t.y / t.z, -lim_y, lim_y) * t.z;
+    // Rows of J R_wc (2x3), in world coordinates.
+    vec3 j0 = (fx / t.z) * f.world_to_cam0.xyz - (fx * xc / (t.z * t.z)) * f.world_to_cam2.xyz;
+    vec3 j1 = (fy / t.z) * f.world_to_cam1.xyz - (fy * yc / (t.z * t.z)) * f.world_to_cam2.xyz;
+    // Sigma = M M^T with M = R S, so v^T Sigma w = (M^T v) . (M^T w) and M^T v = S R^T v.
+    vec3 r0, r1, r2;
+    quat_rows(g.rot, r0, r1, r2);
+    vec3 s = g.scale.xyz;
+    vec3 m0 = s * vec3(dot(vec3(r0.x, r1.x, r2.x), j0), dot(vec3(r0.y, r1.y, r2.y), j0),
+                       dot(vec3(r0.z, r1.z, r2.z), j0));
+    vec3 m1 = s * vec3(dot(vec3(r0.x, r1.x, r2.x), j1), dot(vec3(r0.y, r1.y, r2.y), j1),
+                       dot(vec3(r0.z, r1.z, r2.z), j1));
+    float a = dot(m0, m0) + 0.3;
+    float b = dot(m0, m1);
+    float c = dot(m1, m1) + 0.3;
+    float det = a * c - b * b;
+    if (det <= 0.0) {
+        skip(i);
+        return false;
+    }
+    vec3 conic = vec3(c, -b, a) / det;
+    float mid = 0.5 * (a + c);
+    float lambda = mid + sqrt(max(0.1, mid * mid - det));
+    float radius = ceil(3.0 * sqrt(lambda));
+    vec2 uv = vec2(fx * t.x / t.z + f.focal.z, fy * t.y / t.z + f.focal.w);
+    int gx = int(f.size.z), gy = int(f.size.w);
+    int x0 = clamp(int((uv.x - radius) / float(TILE_SIZE)), 0, gx);
+    int x1 = clamp(int((uv.x + radius + float(TILE_SIZE - 1u)) / float(TILE_SIZE)), 0, gx);
+    int y0 = clamp(int((uv.y - radius) / float(TILE_SIZE)), 0, gy);
+    int y1 = clamp(int((uv.y + radius + float(TILE_SIZE - 1u)) / float(TILE_SIZE)), 0, gy);
+    // Tiles of the 3-sigma rectangle that the splat's visible footprint reaches (common.glsl);
+    // a splat below 1/255 opacity draws nowhere.
+    float opacity = g.pos_opacity.w;
+    uint touched = 0u;
+    if (opacity >= 1.0 / 255.0) {
+        float q_max = footprint_q_max(opacity);
+        for (int ty = y0; ty < y1; ++ty) {
+            for (int tx = x0; tx < x1; ++tx) {
+                if (footprint_touches_tile(uv, conic, q_max, uint(tx), uint(ty))) {
+                    ++touched;
+                }
+            }
+        }
+    }
+    if (touched == 0u) {
+        skip(i);
+        return false;
+    }
+    vec3 dir = normalize(rel);
+    uint sh_stride = f.scene.z;
+    vec3 color = eval_sh(pc.sh, i * sh_stride, f.scene.y, dir);
+
+    ProjectedSplat p;
+    p.uv = uv;
+    p.depth = t.z;
+    p.opacity = g.pos_opacity.w;
+    p.conic = conic;
+    p.cutoff = NO_CUTOFF;
+    p.color = color;
+    p.pad = 0u;
+    p.rect = uvec4(x0, y0, x1, y1);
+    pc.splats.v[i] = p;
+    pc.tiles_touched.v[i] = touched;
+    atomicAdd(wg_visible, 1u);
+    if (kind != CLASS_CUTOFF) {
+        return false;
+    }
+    // M = S^-1 R^T: row k is column k of R over s_k. o' = M (eye - mu) = -M rel.
+    vec3 w0 = vec3(r0.x, r1.x, r2.x) / s.x;
+    vec3 w1 = vec3(r0.y, r1.y, r2.y) / s.y;
+    vec3 w2 = vec3(r0.z, r1.z, r2.z) / s.z;
+    rec.m0 = vec4(w0, -dot(w0, rel));
+    rec.m1 = vec4(w1, -dot(w1, rel));
+    rec.m2 = vec4(w2, -dot(w2, rel));
+    return true;
+}
+
+void main() {
+    uint lid = gl_LocalInvocationIndex;
+    if (lid == 0u) {
+        wg_visible = 0u;
+        wg_cutoff_count = 0u;
+    }
+    barrier();
+    uint i = linear_index();
+    CutoffRecord rec;
+    bool cutoff = i < pc.frame.p.scene.x && project(i, rec);
+    // Side records are packed: a slot within the workgroup, then one global atomic per
+    // workgroup for the base.
+    uint slot = cutoff ? atomicAdd(wg_cutoff_count, 1u) : 0u;
+    barrier();
+    if (lid == 0u) {
+        if (wg_visible > 0u) {
+            atomicAdd(pc.counters.v[COUNTER_VISIBLE], wg_visible);
+        }
+        if (wg_cutoff_count > 0u) {
+            wg_cutoff_base = atomicAdd(pc.counters.v[COUNTER_CUTOFF], wg_cutoff_count);
+        }
+    }
+    barrier();
+    if (cutoff) {
+        uint index = wg_cutoff_base + slot;
+        pc.cutoffs.v[index] = rec;
+        pc.splats.v[i].cutoff = index;
+    }
+}

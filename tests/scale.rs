@@ -1,0 +1,212 @@
+//! Scale: millions of Gaussians through the PLY file and the GPU, SH stored in half precision,
+//! and device memory limits reported as errors.
+//!
+//! `RARA_SCALE_COUNT` sets the Gaussian count of the large-scene test (default 6,000,000).
+
+mod common;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rara::ply::{load_ply, write_ply, PlyEncoding};
+use rara::{reference, Camera, Error, GpuScene, RenderOptions, Renderer, ShPrecision};
+
+fn options() -> RenderOptions {
+    RenderOptions {
+        background: Vec3::new(0.1, 0.2, 0.3),
+        ..RenderOptions::default()
+    }
+}
+
+/// The CLI's `rara synth` views of a unit shell, at another size.
+fn shell_cameras(width: u32, height: u32) -> Vec<Camera> {
+    rara::synth::orbit_cameras(8, 2.4 * 3f32.sqrt(), width, height, 50.0).unwrap()
+}
+
+/// A `rara synth --kind shell --count N --sh-degree 3` scene goes through a PLY file, the
+/// loader, the upload (with the validation layer on: every buffer is reached by device
+/// address, none is bound, so none is limited by `maxStorageBufferRange`) and a 160x120
+/// frame, which must match the CPU reference.
+#[test]
+fn six_million_sh3_gaussians_match_the_reference() {
+    let count: usize = std::env::var("RARA_SCALE_COUNT")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(6_000_000);
+    let dir = std::env::temp_dir().join(format!("rara-scale-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("shell.ply");
+    let t = Instant::now();
+    write_ply(
+        &rara::synth::shell(count, 3, 1),
+        &path,
+        PlyEncoding::BinaryLittleEndian,
+    )
+    .unwrap();
+    let file_bytes = std::fs::metadata(&path).unwrap().len();
+    let written = t.elapsed();
+    let t = Instant::now();
+    let (scene, report) = load_ply(&path).unwrap();
+    let loaded = t.elapsed();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(scene.len(), count);
+    assert_eq!(report.dropped_non_finite, 0);
+
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let t = Instant::now();
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let uploaded = t.elapsed();
+    assert_eq!(
+        gpu_scene.device_bytes(),
+        count as u64 * GpuScene::bytes_per_gaussian(3, ShPrecision::F32)
+    );
+    let camera = shell_cameras(160, 120)[0];
+    let t = Instant::now();
+    let (gpu, stats) = renderer.render(&gpu_scene, &camera, &options()).unwrap();
+    let rendered = t.elapsed();
+    assert!(stats.complete);
+    assert!(stats.visible as usize > count / 3, "{stats:?}");
+    let t = Instant::now();
+    let cpu = reference::render(&scene, &camera, &options());
+    let referenced = t.elapsed();
+    let d = common::check_images("scale_shell", &gpu, &cpu, 50.0, 4);
+    eprintln!(
+        "{count} SH3 Gaussians: PLY {:.2} GB written in {:.1} s, loaded in {:.1} s, uploaded \
+         ({:.2} GB) in {:.1} s; 160x120 GPU frame {:.1} s ({} visible, {} pairs), CPU \
+         reference {:.1} s; PSNR {:.2} dB, max diff {}",
+        file_bytes as f64 / 1e9,
+        written.as_secs_f64(),
+        loaded.as_secs_f64(),
+        gpu_scene.device_bytes() as f64 / 1e9,
+        uploaded.as_secs_f64(),
+        rendered.as_secs_f64(),
+        stats.visible,
+        stats.intersections,
+        referenced.as_secs_f64(),
+        d.psnr,
+        d.max_diff
+    );
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// SH in half precision: the GPU image equals the CPU reference of the scene whose SH were
+/// rounded the same way (so the kernels unpack exactly what was stored), the scene takes the
+/// bytes stated, and the error against 32-bit SH is small on real scenes.
+#[test]
+fn half_precision_sh() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let scene = rara::synth::shell(30_001, 3, 9);
+    let half = GpuScene::with_sh_precision(&ctx, &scene, ShPrecision::F16).unwrap();
+    let full = GpuScene::new(&ctx, &scene).unwrap();
+    assert_eq!(half.sh_precision(), ShPrecision::F16);
+    // 48 bytes of Gaussian and 48 halves of SH each; the SH buffer rounds up to whole words.
+    assert_eq!(
+        half.device_bytes(),
+        30_001 * 48 + (30_001 * 96_u64).next_multiple_of(4)
+    );
+    assert_eq!(full.device_bytes(), 30_001 * (48 + 192));
+    let rounded = ShPrecision::F16.round_scene(&scene);
+    assert_ne!(rounded.sh, scene.sh, "rounding changed nothing");
+    for (k, camera) in shell_cameras(320, 240).iter().step_by(3).enumerate() {
+        let (gpu, _) = renderer.render(&half, camera, &options()).unwrap();
+        let cpu = reference::render(&rounded, camera, &options());
+        common::check_images(&format!("sh16_shell_view{k}"), &gpu, &cpu, 50.0, 4);
+    }
+
+    for stem in [
+        "kacytran_indoor_iter7000_sh3",
+        "playbot_lod0_500k_sh2",
+        "plant_capture_sh0",
+    ] {
+        let Some((ply, cams)) = common::real_scene(stem) else {
+            continue;
+        };
+        let (scene, _) = load_ply(&ply).unwrap();
+        let cameras = match cams {
+            Some(path) => Camera::load_all(path).unwrap(),
+            None => {
+                // Views around the bulk of the scene.
+                let (lo, hi) = common::percentile_box(&scene);
+                let (centre, r) = (0.5 * (lo + hi), (hi - lo).length());
+                [0.3f32, 2.2, 4.1]
+                    .iter()
+                    .map(|&a| {
+                        let eye = centre + r * Vec3::new(a.cos(), -0.25, a.sin());
+                        Camera::look_at(eye, centre, Vec3::NEG_Y, 50.0, 320, 240).unwrap()
+                    })
+                    .collect()
+            }
+        };
+        let full = GpuScene::new(&ctx, &scene).unwrap();
+        let half = GpuScene::with_sh_precision(&ctx, &scene, ShPrecision::F16).unwrap();
+        let mut psnr = Vec::new();
+        for camera in cameras.iter().step_by(cameras.len().div_ceil(3)) {
+            let camera = camera.resized(320, None).unwrap();
+            let (a, _) = renderer.render(&full, &camera, &options()).unwrap();
+            let (b, _) = renderer.render(&half, &camera, &options()).unwrap();
+            let d = rara::metrics::compare(&a, &b);
+            assert!(d.psnr >= 45.0, "{stem}: f16 SH PSNR {:.2} dB", d.psnr);
+            psnr.push(d.psnr);
+        }
+        eprintln!(
+            "real-scene case '{stem}' RAN: SH f16 vs f32 at 320 px wide, PSNR {} dB; scene \
+             device bytes {} -> {}",
+            psnr.iter()
+                .map(|p| format!("{p:.2}"))
+                .collect::<Vec<_>>()
+                .join(" / "),
+            full.device_bytes(),
+            half.device_bytes()
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// A frame whose buffers exceed what one allocation may be on the device is refused with an
+/// error naming the buffer and the limit, and the renderer goes on drawing smaller frames.
+#[test]
+fn a_frame_too_large_for_the_device_is_a_clear_error() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let scene = rara::synth::shell(2_000, 0, 2);
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let max = ctx.info().max_memory_allocation_size;
+    // 16 bytes of per-pixel state: the largest square frame whose state exceeds `max`.
+    let side = rara::camera::MAX_IMAGE_SIDE;
+    if (side as u64).pow(2) * 16 <= max {
+        eprintln!("skipped: this device allows allocations of {max} bytes");
+        return;
+    }
+    let huge = Camera::look_at(
+        Vec3::new(0.0, 0.0, -3.0),
+        Vec3::ZERO,
+        Vec3::NEG_Y,
+        50.0,
+        side,
+        side,
+    )
+    .unwrap();
+    let err = renderer
+        .render(&gpu_scene, &huge, &options())
+        .err()
+        .expect("a frame larger than the device allows");
+    let text = err.to_string();
+    eprintln!("{text}");
+    assert!(matches!(err, Error::OutOfDeviceMemory { .. }), "{err:?}");
+    assert!(text.contains("raster state") && text.contains("maxMemoryAllocationSize"));
+    let small = Camera::look_at(
+        Vec3::new(0.0, 0.0, -3.0),
+        Vec3::ZERO,
+        Vec3::NEG_Y,
+        50.0,
+        64,
+        48,
+    )
+    .unwrap();
+    let (gpu, _) = renderer.render(&gpu_scene, &small, &options()).unwrap();
+    let cpu = reference::render(&scene, &small, &options());
+    common::check_images("after_oom", &gpu, &cpu, 50.0, 4);
+    common::assert_no_validation_messages(&ctx);
+}
