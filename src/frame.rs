@@ -43,6 +43,33 @@ pub struct FrameSlot {
     image_set: Option<ImageTargetSet>,
 }
 
+/// The device memory of a [`FrameSlot`], grouped by what it scales with: the per-frame
+/// scratch that comes on top of the scene ([`crate::GpuScene::device_bytes`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameMemory {
+    /// Projected splats (64 B), tiles touched (4 B) and their prefix sum (about 4 B), per
+    /// Gaussian of the scene.
+    pub per_gaussian: u64,
+    /// Cutoff side records (48 B per Gaussian), allocated by the first rara-clipped frame.
+    pub cutoff_records: u64,
+    /// Sort keys and values, double-buffered (24 B per pair), and the sort histograms, for
+    /// `intersection_capacity` (tile, splat) pairs.
+    pub per_intersection: u64,
+    /// Pairs the sort buffers hold (grown from the frames' counts).
+    pub intersection_capacity: u64,
+    /// Per-pixel state (16 B) and per-tile ranges.
+    pub per_pixel: u64,
+    /// Parameters and counters.
+    pub fixed: u64,
+}
+
+impl FrameMemory {
+    /// All of it.
+    pub fn total(&self) -> u64 {
+        self.per_gaussian + self.cutoff_records + self.per_intersection + self.per_pixel + self.fixed
+    }
+}
+
 /// Buffers of one frame size, reused while the sizes fit.
 pub(crate) struct FrameResources {
     pub(crate) width: u32,
@@ -105,26 +132,24 @@ impl FrameSlot {
 
     /// Device bytes the slot holds now.
     pub fn device_bytes(&self) -> u64 {
-        let r = match &self.resources {
-            None => return self.counters_readback.size,
-            Some(r) => r,
+        self.memory().total()
+    }
+
+    /// Device bytes the slot holds now, by what they scale with.
+    pub fn memory(&self) -> FrameMemory {
+        let mut m = FrameMemory {
+            fixed: self.counters_readback.size,
+            ..FrameMemory::default()
         };
-        [
-            &r.params,
-            &r.clip_params,
-            &r.counters,
-            &r.splats,
-            &r.tiles_touched,
-            &r.ranges,
-            &r.state,
-        ]
-        .iter()
-        .map(|b| b.size)
-        .sum::<u64>()
-            + r.cutoffs.as_ref().map_or(0, |b| b.size)
-            + r.touched_scan.device_bytes()
-            + r.sort.device_bytes()
-            + self.counters_readback.size
+        if let Some(r) = &self.resources {
+            m.fixed += r.params.size + r.clip_params.size + r.counters.size;
+            m.per_gaussian = r.splats.size + r.tiles_touched.size + r.touched_scan.device_bytes();
+            m.cutoff_records = r.cutoffs.as_ref().map_or(0, |b| b.size);
+            m.per_intersection = r.sort.device_bytes();
+            m.intersection_capacity = r.capacity;
+            m.per_pixel = r.ranges.size + r.state.size;
+        }
+        m
     }
 
     /// The counters of the last frame recorded into this slot: call it once the submission

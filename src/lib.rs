@@ -58,7 +58,7 @@ pub mod shaders {
 pub use camera::Camera;
 pub use clip::{Clip, ClipMode, ClipRegion, ClipWeight, Plane};
 pub use error::{Error, Result};
-pub use frame::FrameSlot;
+pub use frame::{FrameMemory, FrameSlot};
 pub use precision::ShPrecision;
 pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer};
 pub use scene::Scene;

@@ -129,6 +129,10 @@ struct RenderArgs {
     /// Output PNG.
     #[arg(short, long)]
     output: PathBuf,
+    /// Store the SH coefficients on the GPU in half precision (half the memory of the
+    /// largest scene buffer; see the README for the image error).
+    #[arg(long)]
+    sh_half: bool,
     /// Render with the CPU reference renderer instead of the GPU.
     #[arg(long)]
     reference: bool,
@@ -255,7 +259,8 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     }
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene = renderer.upload(&scene)?;
+    let gpu_scene = rara::GpuScene::with_sh_precision(&ctx, &scene, cli::sh_precision(args.sh_half))?;
+    drop(scene); // the device copy is all the GPU path needs
     let (img, stats) = renderer.render(&gpu_scene, &camera, &options)?;
     save_png(&img, &args.output)?;
     println!(
@@ -267,6 +272,10 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         stats.visible,
         stats.cutoff,
         stats.intersections
+    );
+    println!(
+        "{}",
+        cli::describe_memory(&gpu_scene, &renderer.headless_memory())
     );
     if args.repeat > 0 {
         let bar = ProgressBar::new(args.repeat as u64)

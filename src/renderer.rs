@@ -11,7 +11,7 @@ use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
 use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, MAX_GAUSSIANS};
 use crate::error::{Error, Result};
-use crate::frame::FrameSlot;
+use crate::frame::{FrameMemory, FrameSlot};
 use crate::gpu_types::{GpuFrameParams, GpuGaussian};
 use crate::precision::{f32_to_f16_bits, ShPrecision};
 use crate::scene::Scene;
@@ -285,6 +285,19 @@ impl Renderer {
     /// The context the renderer was made with.
     pub fn context(&self) -> &Context {
         &self.ctx
+    }
+
+    /// Device memory of the headless path of [`Renderer::render`]: its frame slot, plus its
+    /// rgba8 target and host copy (counted in `per_pixel`). Zero before the first frame.
+    pub fn headless_memory(&self) -> FrameMemory {
+        let Some(h) = &self.headless else {
+            return FrameMemory::default();
+        };
+        let mut m = h.slot.memory();
+        if let Some((_, _, image, readback)) = &h.image {
+            m.per_pixel += image.size + readback.size;
+        }
+        m
     }
 
     /// Uploads a scene ([`GpuScene::new`]).

@@ -593,7 +593,7 @@ fn fuzz(
                         key.push(c);
                     }
                 }
-                let key: String = key.chars().take(90).collect();
+                let key: String = key.chars().take(60).collect();
                 *errors.entry(key).or_default() += 1;
                 None
             }

@@ -36,6 +36,9 @@ pub struct BenchArgs {
     /// Modes to run, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "original,hard,rara")]
     modes: Vec<BenchMode>,
+    /// Store the SH coefficients on the GPU in half precision.
+    #[arg(long)]
+    pub sh_half: bool,
     /// Write the results as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -160,7 +163,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene = renderer.upload(&scene)?;
+    let gpu_scene = rara::GpuScene::with_sh_precision(&ctx, &scene, super::sh_precision(args.sh_half))?;
     eprintln!(
         "bench: {} ({} Gaussians, SH {}) at {}x{}, {} frames per mode after {} warm-up, plane normal ({:.3}, {:.3}, {:.3}) d {d0:.4} -> {d1:.4}",
         path.display(),
@@ -208,8 +211,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     bar.finish_and_clear();
 
     print_table(&ctx, path, &camera, args, &results);
+    let memory = renderer.headless_memory();
+    println!("{}", super::describe_memory(&gpu_scene, &memory));
     if let Some(out) = &args.json {
-        write_json(out, &json_report(&ctx, path, &camera, &results))?;
+        let mut report = json_report(&ctx, path, &camera, &results);
+        report["memory"] = super::memory_json(&gpu_scene, &memory);
+        write_json(out, &report)?;
         println!("wrote {}", out.display());
     }
     if let Some(out) = &args.trace {

@@ -3,3 +3,56 @@
 pub mod bench;
 pub mod clip_args;
 pub mod sweep;
+
+use rara::{FrameMemory, GpuScene};
+
+/// `--sh-half`: how the SH coefficients are stored on the device.
+pub fn sh_precision(half: bool) -> rara::ShPrecision {
+    if half {
+        rara::ShPrecision::F16
+    } else {
+        rara::ShPrecision::F32
+    }
+}
+
+fn mb(bytes: u64) -> String {
+    format!("{:.1} MB", bytes as f64 / 1e6)
+}
+
+/// Device memory of a scene and of the frame that drew it, by what it scales with.
+pub fn describe_memory(scene: &GpuScene, frame: &FrameMemory) -> String {
+    let n = scene.len().max(1) as u64;
+    let pairs = frame.intersection_capacity.max(1);
+    format!(
+        "device memory: scene {} ({} B/Gaussian, SH {}); frame scratch {} = per Gaussian {} \
+         ({:.1} B) + cutoff records {} + sort {} for {} pairs ({:.1} B/pair) + per pixel {} + {} fixed",
+        mb(scene.device_bytes()),
+        scene.device_bytes() / n,
+        scene.sh_precision().name(),
+        mb(frame.total()),
+        mb(frame.per_gaussian),
+        frame.per_gaussian as f64 / n as f64,
+        mb(frame.cutoff_records),
+        mb(frame.per_intersection),
+        frame.intersection_capacity,
+        frame.per_intersection as f64 / pairs as f64,
+        mb(frame.per_pixel),
+        mb(frame.fixed),
+    )
+}
+
+/// [`describe_memory`] as JSON.
+pub fn memory_json(scene: &GpuScene, frame: &FrameMemory) -> serde_json::Value {
+    serde_json::json!({
+        "scene_bytes": scene.device_bytes(),
+        "scene_bytes_per_gaussian": scene.device_bytes() as f64 / scene.len().max(1) as f64,
+        "sh_precision": scene.sh_precision().name(),
+        "frame_bytes": frame.total(),
+        "frame_per_gaussian_bytes": frame.per_gaussian,
+        "frame_cutoff_record_bytes": frame.cutoff_records,
+        "frame_sort_bytes": frame.per_intersection,
+        "frame_intersection_capacity": frame.intersection_capacity,
+        "frame_per_pixel_bytes": frame.per_pixel,
+        "frame_fixed_bytes": frame.fixed,
+    })
+}
