@@ -66,7 +66,11 @@ pub struct FrameMemory {
 impl FrameMemory {
     /// All of it.
     pub fn total(&self) -> u64 {
-        self.per_gaussian + self.cutoff_records + self.per_intersection + self.per_pixel + self.fixed
+        self.per_gaussian
+            + self.cutoff_records
+            + self.per_intersection
+            + self.per_pixel
+            + self.fixed
     }
 }
 

@@ -259,7 +259,8 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     }
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene = rara::GpuScene::with_sh_precision(&ctx, &scene, cli::sh_precision(args.sh_half))?;
+    let gpu_scene =
+        rara::GpuScene::with_sh_precision(&ctx, &scene, cli::sh_precision(args.sh_half))?;
     drop(scene); // the device copy is all the GPU path needs
     let (img, stats) = renderer.render(&gpu_scene, &camera, &options)?;
     save_png(&img, &args.output)?;

@@ -123,6 +123,10 @@ mod tests {
             // Floats across and beyond the half range, including its subnormals.
             let x = f32::from_bits((rng.next_u64() as u32) & 0xc7ff_ffff);
             let h = f32_to_f16_bits(x);
+            if x.abs() >= 65520.0 {
+                assert_eq!(h & 0x7fff, 0x7c00, "{x} overflows to infinity");
+                continue;
+            }
             let y = f16_bits_to_f32(h) as f64;
             let err = (y - x as f64).abs();
             // The neighbours of h are no closer to x.

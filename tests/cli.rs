@@ -77,6 +77,33 @@ fn render_and_info_succeed() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let img = image::open(&out).unwrap();
     assert_eq!((img.width(), img.height()), (64, 48));
+    // The memory report: 500 Gaussians of SH degree 1 are 48 + 12 * 4 bytes each in f32 and
+    // 48 + 12 * 2 in f16; the half-precision image is within 8-bit rounding of the f32 one.
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        stdout.contains("device memory: scene 0.0 MB (96 B/Gaussian, SH f32)"),
+        "{stdout}"
+    );
+    let half = dir().join("out_half.png");
+    let mut args = render_args(
+        scene.to_str().unwrap(),
+        cams.to_str().unwrap(),
+        half.to_str().unwrap(),
+    );
+    args.push("--sh-half");
+    let o = rara(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(stdout.contains("(72 B/Gaussian, SH f16)"), "{stdout}");
+    let d = rara::metrics::compare(
+        &image::open(&out).unwrap().to_rgba8(),
+        &image::open(&half).unwrap().to_rgba8(),
+    );
+    assert!(
+        d.max_diff <= 1,
+        "f16 SH changed the image by {}",
+        d.max_diff
+    );
     let o = rara(&[
         "render",
         scene.to_str().unwrap(),

@@ -23,6 +23,27 @@ fn shell_cameras(width: u32, height: u32) -> Vec<Camera> {
     rara::synth::orbit_cameras(8, 2.4 * 3f32.sqrt(), width, height, 50.0).unwrap()
 }
 
+/// A `/proc/self/status` field in bytes.
+fn status_bytes(field: &str) -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with(field))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Resets the process's peak resident memory to its current value (Linux `clear_refs`) and
+/// returns that value, or `None` where the kernel does not allow it.
+fn reset_peak_rss() -> Option<u64> {
+    std::fs::write("/proc/self/clear_refs", "5").ok()?;
+    let (rss, peak) = (status_bytes("VmRSS:")?, status_bytes("VmHWM:")?);
+    // The reset worked only if the peak came down to about the current size.
+    (peak <= rss + (64 << 20)).then_some(rss)
+}
+
+fn peak_rss() -> u64 {
+    status_bytes("VmHWM:").unwrap_or(0)
+}
+
 /// A `rara synth --kind shell --count N --sh-degree 3` scene goes through a PLY file, the
 /// loader, the upload (with the validation layer on: every buffer is reached by device
 /// address, none is bound, so none is limited by `maxStorageBufferRange`) and a 160x120
@@ -45,9 +66,19 @@ fn six_million_sh3_gaussians_match_the_reference() {
     .unwrap();
     let file_bytes = std::fs::metadata(&path).unwrap().len();
     let written = t.elapsed();
+    let baseline = reset_peak_rss();
     let t = Instant::now();
     let (scene, report) = load_ply(&path).unwrap();
     let loaded = t.elapsed();
+    // The loader streams: its peak is the scene it returns (236 of the file's 248 bytes per
+    // Gaussian) plus a read buffer, never a second copy.
+    let load_peak = baseline.map(|rss| peak_rss().saturating_sub(rss));
+    if let Some(peak) = load_peak {
+        assert!(
+            peak as f64 <= 1.5 * file_bytes as f64,
+            "loading a {file_bytes}-byte PLY raised the peak resident memory by {peak} bytes"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(scene.len(), count);
     assert_eq!(report.dropped_non_finite, 0);
@@ -72,12 +103,18 @@ fn six_million_sh3_gaussians_match_the_reference() {
     let referenced = t.elapsed();
     let d = common::check_images("scale_shell", &gpu, &cpu, 50.0, 4);
     eprintln!(
-        "{count} SH3 Gaussians: PLY {:.2} GB written in {:.1} s, loaded in {:.1} s, uploaded \
+        "{count} SH3 Gaussians: PLY {:.2} GB written in {:.1} s, loaded in {:.1} s (peak \
+         resident memory +{}), uploaded \
          ({:.2} GB) in {:.1} s; 160x120 GPU frame {:.1} s ({} visible, {} pairs), CPU \
          reference {:.1} s; PSNR {:.2} dB, max diff {}",
         file_bytes as f64 / 1e9,
         written.as_secs_f64(),
         loaded.as_secs_f64(),
+        load_peak.map_or("not measured".into(), |b| format!(
+            "{:.2} GB, {:.2}x the file",
+            b as f64 / 1e9,
+            b as f64 / file_bytes as f64
+        )),
         gpu_scene.device_bytes() as f64 / 1e9,
         uploaded.as_secs_f64(),
         rendered.as_secs_f64(),

@@ -163,7 +163,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene = rara::GpuScene::with_sh_precision(&ctx, &scene, super::sh_precision(args.sh_half))?;
+    let gpu_scene =
+        rara::GpuScene::with_sh_precision(&ctx, &scene, super::sh_precision(args.sh_half))?;
     eprintln!(
         "bench: {} ({} Gaussians, SH {}) at {}x{}, {} frames per mode after {} warm-up, plane normal ({:.3}, {:.3}, {:.3}) d {d0:.4} -> {d1:.4}",
         path.display(),
