@@ -125,8 +125,8 @@ impl FrameSlot {
 
     /// Sizes the slot for frames of up to `intersections` tile pairs whose longest tile list
     /// has `longest_tile_list` entries (both are in [`FrameStats`]), so that they are complete
-    /// from the first.
-    /// Capacity stops at [`MAX_INTERSECTIONS`].
+    /// from the first. The capacity stops at [`MAX_INTERSECTIONS`]: a frame with more pairs is
+    /// drawn incomplete.
     pub fn reserve(&mut self, intersections: u64, longest_tile_list: u32) {
         self.capacity = self.capacity.max(intersections.min(MAX_INTERSECTIONS));
         self.rounds = self

@@ -247,3 +247,56 @@ fn a_frame_too_large_for_the_device_is_a_clear_error() {
     common::check_images("after_oom", &gpu, &cpu, 50.0, 4);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// More (tile, splat) pairs than one row of linear workgroups covers (65,535 x 256 =
+/// 16,776,960): tile ranges then run on a 2D grid whose size the GPU computes, and the image
+/// must still match the CPU reference. Big opaque splats keep the compositing cheap.
+#[test]
+fn more_pairs_than_one_row_of_workgroups() {
+    let mut rng = rara::synth::Rng::new(17);
+    let mut scene = rara::Scene {
+        sh_degree: 0,
+        ..Default::default()
+    };
+    for _ in 0..240_000 {
+        let rgb = Vec3::new(rng.f32(), rng.f32(), rng.f32());
+        let dc = rgb.to_array().map(rara::scene::rgb_to_sh_dc);
+        scene.push(
+            0.3 * rng.unit_vector(),
+            rng.range(0.5, 0.95),
+            Vec3::splat(rng.range(1.0, 1.5)),
+            glam::Quat::IDENTITY,
+            &dc,
+        );
+    }
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let camera = Camera::look_at(
+        Vec3::new(0.0, -0.5, -3.0),
+        Vec3::ZERO,
+        Vec3::NEG_Y,
+        50.0,
+        160,
+        120,
+    )
+    .unwrap();
+    let (gpu, stats) = renderer.render(&gpu_scene, &camera, &options()).unwrap();
+    assert!(stats.complete);
+    let row = 65_535u32 * 256;
+    assert!(
+        stats.intersections > row,
+        "{} pairs do not exceed one row of workgroups ({row})",
+        stats.intersections
+    );
+    let cpu = reference::render(&scene, &camera, &options());
+    let d = common::check_images("many_pairs", &gpu, &cpu, 50.0, 4);
+    eprintln!(
+        "{} pairs ({:.2} rows of linear workgroups): PSNR {:.2} dB, max diff {}",
+        stats.intersections,
+        stats.intersections as f64 / row as f64,
+        d.psnr,
+        d.max_diff
+    );
+    common::assert_no_validation_messages(&ctx);
+}
