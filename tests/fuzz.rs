@@ -238,7 +238,7 @@ const TYPES: &[&str] = &[
     "uint16", "int32", "uint32", "float32", "float64", "half", "bogus",
 ];
 
-fn pick<'a, T: Copy>(rng: &mut Rng, items: &'a [T]) -> T {
+fn pick<T: Copy>(rng: &mut Rng, items: &[T]) -> T {
     items[(rng.next_u64() % items.len() as u64) as usize]
 }
 
@@ -525,10 +525,13 @@ fn check_scene(scene: &rara::Scene, vertices_in_file: usize) -> Result<(), Strin
 fn check_cameras(cams: &[Camera]) -> Result<(), String> {
     for (i, c) in cams.iter().enumerate() {
         rara::camera::check_size(c.width, c.height).map_err(|e| format!("camera {i}: {e}"))?;
-        if !(c.fx.is_finite() && c.fy.is_finite() && c.fx > 0.0 && c.fy > 0.0)
-            || !c.position.is_finite()
-            || !c.rotation.is_finite()
-        {
+        let valid = c.fx.is_finite()
+            && c.fy.is_finite()
+            && c.fx > 0.0
+            && c.fy > 0.0
+            && c.position.is_finite()
+            && c.rotation.is_finite();
+        if !valid {
             return Err(format!("camera {i} accepted with bad values"));
         }
     }

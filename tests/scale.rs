@@ -227,8 +227,7 @@ fn a_frame_too_large_for_the_device_is_a_clear_error() {
     .unwrap();
     let err = renderer
         .render(&gpu_scene, &huge, &options())
-        .err()
-        .expect("a frame larger than the device allows");
+        .expect_err("a frame larger than the device allows");
     let text = err.to_string();
     eprintln!("{text}");
     assert!(matches!(err, Error::OutOfDeviceMemory { .. }), "{err:?}");
