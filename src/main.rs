@@ -259,10 +259,20 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     }
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene =
-        rara::GpuScene::with_sh_precision(&ctx, &scene, cli::sh_precision(args.sh_half))?;
+    // Large scenes take seconds to upload and, on a CPU device, to render: say what is going on.
+    let spinner = ProgressBar::new_spinner().with_message(format!(
+        "uploading {} Gaussians to {}",
+        scene.len(),
+        ctx.info().name
+    ));
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    let uploaded = rara::GpuScene::with_sh_precision(&ctx, &scene, cli::sh_precision(args.sh_half));
     drop(scene); // the device copy is all the GPU path needs
-    let (img, stats) = renderer.render(&gpu_scene, &camera, &options)?;
+    let gpu_scene = uploaded.inspect_err(|_| spinner.finish_and_clear())?;
+    spinner.set_message(format!("rendering {}x{}", camera.width, camera.height));
+    let rendered = renderer.render(&gpu_scene, &camera, &options);
+    spinner.finish_and_clear();
+    let (img, stats) = rendered?;
     save_png(&img, &args.output)?;
     println!(
         "wrote {} ({}x{}) on {}: {} visible Gaussians ({} cutoff), {} tile intersections",
