@@ -151,6 +151,17 @@ fn half_precision_sh() {
         let cpu = reference::render(&rounded, camera, &options());
         common::check_images(&format!("sh16_shell_view{k}"), &gpu, &cpu, 50.0, 4);
     }
+    // Replacing the contents keeps the precision; 400k SH3 Gaussians are 38 MB of halves, more
+    // than one 32 MiB staging chunk, so the chunked conversion is exercised across a boundary.
+    let mut half = half;
+    let big = rara::synth::shell(400_000, 3, 10);
+    half.replace(&big).unwrap();
+    assert_eq!(half.sh_precision(), ShPrecision::F16);
+    assert_eq!(half.len(), 400_000);
+    let camera = shell_cameras(160, 120)[1];
+    let (gpu, _) = renderer.render(&half, &camera, &options()).unwrap();
+    let cpu = reference::render(&ShPrecision::F16.round_scene(&big), &camera, &options());
+    common::check_images("sh16_shell_400k", &gpu, &cpu, 50.0, 4);
 
     for stem in [
         "kacytran_indoor_iter7000_sh3",
