@@ -7,6 +7,30 @@ pub use gpu_allocator::MemoryLocation;
 use super::context::Context;
 use crate::error::{Error, Result, VkContext};
 
+/// The [`Error`] for a failed allocation of buffer `name`: running out of device memory gets
+/// its own variant, naming the buffer, its size and the device's heap.
+fn allocation_error(
+    name: &str,
+    size: u64,
+    heap_bytes: u64,
+    source: gpu_allocator::AllocationError,
+) -> Error {
+    match source {
+        gpu_allocator::AllocationError::OutOfMemory => Error::OutOfDeviceMemory {
+            what: format!("buffer '{name}'"),
+            bytes: size,
+            reason: format!(
+                "the device has no free memory of that size; its device-local heap is \
+                 {heap_bytes} bytes"
+            ),
+        },
+        source => Error::Allocation {
+            what: format!("buffer '{name}' ({size} bytes)"),
+            source,
+        },
+    }
+}
+
 /// Most bytes one upload stages at a time ([`Buffer::upload_with`]).
 pub const STAGING_CHUNK: u64 = 32 << 20;
 
@@ -62,21 +86,12 @@ impl Buffer {
             Ok(a) => a,
             Err(source) => {
                 unsafe { device.destroy_buffer(raw, None) };
-                return Err(match source {
-                    gpu_allocator::AllocationError::OutOfMemory => Error::OutOfDeviceMemory {
-                        what: format!("buffer '{name}'"),
-                        bytes: size,
-                        reason: format!(
-                            "the device has no free memory of that size; its device-local heap \
-                             is {} bytes",
-                            ctx.info().device_local_heap_bytes
-                        ),
-                    },
-                    source => Error::Allocation {
-                        what: format!("buffer '{name}' ({size} bytes)"),
-                        source,
-                    },
-                });
+                return Err(allocation_error(
+                    name,
+                    size,
+                    ctx.info().device_local_heap_bytes,
+                    source,
+                ));
             }
         };
         let bind =
@@ -224,5 +239,37 @@ impl Drop for Buffer {
             let _ = self.ctx.allocator().free(allocation);
         }
         unsafe { self.ctx.device().destroy_buffer(self.raw, None) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_exhausted_heap_is_out_of_device_memory() {
+        let e = allocation_error(
+            "sort keys A",
+            1 << 33,
+            1 << 32,
+            gpu_allocator::AllocationError::OutOfMemory,
+        );
+        assert!(
+            matches!(e, Error::OutOfDeviceMemory { bytes, .. } if bytes == 1 << 33),
+            "{e:?}"
+        );
+        let text = e.to_string();
+        assert!(text.starts_with("out of GPU memory: buffer 'sort keys A' needs 8589934592 bytes"));
+        assert!(
+            text.contains("device-local heap is 4294967296 bytes"),
+            "{text}"
+        );
+        let other = allocation_error(
+            "x",
+            4,
+            0,
+            gpu_allocator::AllocationError::InvalidAllocationCreateDesc,
+        );
+        assert!(matches!(other, Error::Allocation { .. }));
     }
 }
