@@ -47,8 +47,8 @@ pub struct FrameSlot {
 /// scratch that comes on top of the scene ([`crate::GpuScene::device_bytes`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameMemory {
-    /// Projected splats (64 B), tiles touched (4 B) and their prefix sum (about 4 B), per
-    /// Gaussian of the scene.
+    /// Projected splats (64 B) and tiles touched (4 B, scanned in place) per Gaussian of the
+    /// scene, plus the prefix sum's partial sums (4 B per 1,024).
     pub per_gaussian: u64,
     /// Cutoff side records (48 B per Gaussian), allocated by the first rara-clipped frame.
     pub cutoff_records: u64,
