@@ -248,10 +248,9 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 
 /// Rejects image sizes the renderer cannot produce.
 pub fn check_size(width: u32, height: u32) -> Result<()> {
-    const MAX: u32 = MAX_IMAGE_SIDE;
-    if width == 0 || height == 0 || width > MAX || height > MAX {
+    if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(Error::InvalidInput(format!(
-            "image size {width}x{height} is out of range (1..={MAX} per side)"
+            "image size {width}x{height} is out of range (1..={MAX_IMAGE_SIDE} per side)"
         )));
     }
     Ok(())

@@ -112,29 +112,33 @@ fn split_header(bytes: &[u8]) -> Option<(&[u8], &[u8])> {
     Some(bytes.split_at(end))
 }
 
-/// The first `keep` vertices of a binary real scene, its header's count rewritten.
+/// The first `keep` vertices of a binary real scene (from the file's first 64 KiB), its
+/// header's count rewritten.
 fn real_prefix(path: &Path, keep: usize) -> Option<Vec<u8>> {
     use std::io::Read;
-    let mut head = vec![0u8; 64 << 10];
-    let mut f = std::fs::File::open(path).ok()?;
-    let n = f.read(&mut head).ok()?;
-    head.truncate(n);
-    let (header, _) = split_header(&head)?;
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(64 << 10)
+        .read_to_end(&mut head)
+        .ok()?;
+    let (header, rest) = split_header(&head)?;
     let header = String::from_utf8_lossy(header).into_owned();
-    let (_, report) = rara::ply::load_ply(path).ok()?;
-    let count = report.vertices_in_file;
+    let count: usize = header
+        .lines()
+        .find_map(|l| l.strip_prefix("element vertex "))?
+        .trim()
+        .parse()
+        .ok()?;
     let stride = (std::fs::metadata(path).ok()?.len() as usize - header.len()) / count.max(1);
     let keep = keep.min(count);
-    let mut payload = vec![0u8; keep * stride];
-    let mut f = std::fs::File::open(path).ok()?;
-    std::io::Seek::seek(&mut f, std::io::SeekFrom::Start(header.len() as u64)).ok()?;
-    f.read_exact(&mut payload).ok()?;
+    let payload = rest.get(..keep * stride)?;
     let header = header.replace(
         &format!("element vertex {count}\n"),
         &format!("element vertex {keep}\n"),
     );
     let mut out = header.into_bytes();
-    out.extend_from_slice(&payload);
+    out.extend_from_slice(payload);
     Some(out)
 }
 

@@ -17,18 +17,7 @@ fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec
                 .map(|&k| all[k % all.len()].resized(width, None).unwrap())
                 .collect()
         }
-        None => {
-            let (lo, hi) = common::percentile_box(scene);
-            let centre = 0.5 * (lo + hi);
-            let r = (hi - lo).length();
-            [0.3f32, 2.2]
-                .iter()
-                .map(|&a| {
-                    let eye = centre + r * Vec3::new(a.cos(), -0.25, a.sin());
-                    Camera::look_at(eye, centre, Vec3::NEG_Y, 50.0, width, width * 3 / 4).unwrap()
-                })
-                .collect()
-        }
+        None => common::views_around(scene, &[0.3, 2.2], width, width * 3 / 4),
     }
 }
 

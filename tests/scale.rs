@@ -174,18 +174,7 @@ fn half_precision_sh() {
         let (scene, _) = load_ply(&ply).unwrap();
         let cameras = match cams {
             Some(path) => Camera::load_all(path).unwrap(),
-            None => {
-                // Views around the bulk of the scene.
-                let (lo, hi) = common::percentile_box(&scene);
-                let (centre, r) = (0.5 * (lo + hi), (hi - lo).length());
-                [0.3f32, 2.2, 4.1]
-                    .iter()
-                    .map(|&a| {
-                        let eye = centre + r * Vec3::new(a.cos(), -0.25, a.sin());
-                        Camera::look_at(eye, centre, Vec3::NEG_Y, 50.0, 320, 240).unwrap()
-                    })
-                    .collect()
-            }
+            None => common::views_around(&scene, &[0.3, 2.2, 4.1], 320, 240),
         };
         let full = GpuScene::new(&ctx, &scene).unwrap();
         let half = GpuScene::with_sh_precision(&ctx, &scene, ShPrecision::F16).unwrap();

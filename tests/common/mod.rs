@@ -96,6 +96,25 @@ pub fn check_images(
     d
 }
 
+/// Views of `scene` from azimuths `angles` (radians) around its percentile box, a little above
+/// it, at `width` x `height`: for scenes without camera files.
+pub fn views_around(
+    scene: &rara::Scene,
+    angles: &[f32],
+    width: u32,
+    height: u32,
+) -> Vec<rara::Camera> {
+    let (lo, hi) = percentile_box(scene);
+    let (centre, r) = (0.5 * (lo + hi), (hi - lo).length());
+    angles
+        .iter()
+        .map(|&a| {
+            let eye = centre + r * glam::Vec3::new(a.cos(), -0.25, a.sin());
+            rara::Camera::look_at(eye, centre, glam::Vec3::NEG_Y, 50.0, width, height).unwrap()
+        })
+        .collect()
+}
+
 /// Bounds of the 2nd..98th percentile of the centres, per axis (robust to floaters).
 pub fn percentile_box(scene: &rara::Scene) -> (glam::Vec3, glam::Vec3) {
     let (mut lo, mut hi) = (glam::Vec3::ZERO, glam::Vec3::ZERO);
