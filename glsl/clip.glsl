@@ -75,46 +75,46 @@ uint clip_classify(ClipParamsRef clip, vec3 mu, vec3 scale) {
     return CLASS_CUTOFF;
 }
 
-// The visible part of the ray eye + t dir (all real t) as two intervals (lo0, hi0, lo1, hi1);
-// an unused or empty interval is (0, 0). dir need not be of unit length: the weights depend
-// only on the ray, not on how t is scaled along it.
-vec4 clip_ray_spans(ClipParamsRef clip, vec3 eye, vec3 dir) {
-    uvec4 config = clip.p.config;
-    float lo, hi;
-    if ((config.z & CLIP_FLAG_SPHERE) != 0u) {
-        vec4 sphere = clip.p.sphere;
-        // |oc + t dir|^2 = r^2; dir need not be of unit length.
-        vec3 oc = eye - sphere.xyz;
-        float a = dot(dir, dir);
-        float b = dot(oc, dir);
-        float disc = b * b - a * (dot(oc, oc) - sphere.w * sphere.w);
-        if (disc > 0.0) {
-            float h = sqrt(disc);
-            lo = (-b - h) / a;
-            hi = (-b + h) / a;
-        } else {
-            lo = 0.0;
-            hi = 0.0;
-        }
-    } else {
-        lo = -UNBOUNDED;
-        hi = UNBOUNDED;
-        for (uint k = 0u; k < config.w; ++k) {
-            vec4 pl = clip.p.planes[k];
-            float nd = dot(pl.xyz, dir);
-            float ne = dot(pl.xyz, eye) + pl.w;
-            if (nd > 0.0) {
-                lo = max(lo, -ne / nd);
-            } else if (nd < 0.0) {
-                hi = min(hi, -ne / nd);
-            } else if (ne < 0.0) {
-                lo = 0.0;
-                hi = 0.0;
-            }
-        }
+// The ray eye + t dir (all real t) is visible where lo <= t <= hi inside the region. dir need
+// not be of unit length: the weights depend only on the ray, not on how t is scaled along it.
+// The rasterizer works out a strip of rays at once: it starts from the whole line
+// (-UNBOUNDED, UNBOUNDED), narrows it by each plane (clip_span_cut_by_plane) or replaces it by
+// the sphere's chord (clip_span_in_sphere), and turns the result into the visible intervals
+// (clip_visible_spans).
+
+// Narrows (lo, hi) to the part of the ray where pl = (n, d) has n.x + d >= 0.
+void clip_span_cut_by_plane(vec4 pl, vec3 eye, vec3 dir, inout float lo, inout float hi) {
+    float nd = dot(pl.xyz, dir);
+    float ne = dot(pl.xyz, eye) + pl.w;
+    if (nd > 0.0) {
+        lo = max(lo, -ne / nd);
+    } else if (nd < 0.0) {
+        hi = min(hi, -ne / nd);
+    } else if (ne < 0.0) {
+        lo = 0.0;
+        hi = 0.0;
     }
+}
+
+// The chord (lo, hi) of the ray inside sphere (centre, radius); empty (0, 0) if it misses.
+vec2 clip_span_in_sphere(vec4 sphere, vec3 eye, vec3 dir) {
+    // |oc + t dir|^2 = r^2; dir need not be of unit length.
+    vec3 oc = eye - sphere.xyz;
+    float a = dot(dir, dir);
+    float b = dot(oc, dir);
+    float disc = b * b - a * (dot(oc, oc) - sphere.w * sphere.w);
+    if (disc > 0.0) {
+        float h = sqrt(disc);
+        return vec2((-b - h) / a, (-b + h) / a);
+    }
+    return vec2(0.0);
+}
+
+// The visible part of a ray whose part inside the region is (lo, hi), as two intervals
+// (lo0, hi0, lo1, hi1); an unused or empty interval is (0, 0). flags: the region's config.z.
+vec4 clip_visible_spans(uint flags, float lo, float hi) {
     bool empty = lo >= hi;
-    if ((config.z & CLIP_FLAG_INVERT) == 0u) {
+    if ((flags & CLIP_FLAG_INVERT) == 0u) {
         return empty ? vec4(0.0) : vec4(lo, hi, 0.0, 0.0);
     }
     return empty ? vec4(-UNBOUNDED, UNBOUNDED, 0.0, 0.0) : vec4(-UNBOUNDED, lo, hi, UNBOUNDED);

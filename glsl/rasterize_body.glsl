@@ -132,6 +132,43 @@ bool composite(uint k, vec4 co, bool cutoff) {
     return any_open;
 }
 
+#if CUTOFF_WEIGHT != 0
+// Sets px_spans, the visible intervals of the strip's rays (clip.glsl). The loop over the
+// planes is outside the loop over the strip: on lavapipe, P loops here (one per pixel) made
+// the whole kernel slower, by about half of plain compositing on plant.
+void strip_spans(vec3 eye) {
+    uvec4 config = pc.clip.p.config;
+    float lo[P];
+    float hi[P];
+    [[unroll]] for (uint r = 0u; r < P; ++r) {
+        lo[r] = -UNBOUNDED;
+        hi[r] = UNBOUNDED;
+    }
+    if ((config.z & CLIP_FLAG_SPHERE) != 0u) {
+        vec4 sphere = pc.clip.p.sphere;
+        [[unroll]] for (uint r = 0u; r < P; ++r) {
+            vec2 chord = clip_span_in_sphere(sphere, eye, ray0 + float(r) * ray_step);
+            lo[r] = chord.x;
+            hi[r] = chord.y;
+        }
+    } else {
+        for (uint k = 0u; k < config.w; ++k) {
+            vec4 pl = pc.clip.p.planes[k];
+            [[unroll]] for (uint r = 0u; r < P; ++r) {
+                clip_span_cut_by_plane(pl, eye, ray0 + float(r) * ray_step, lo[r], hi[r]);
+            }
+        }
+    }
+    [[unroll]] for (uint r = 0u; r < P; ++r) {
+#if CUTOFF_SPANS > 1
+        px_spans[r] = clip_visible_spans(config.z, lo[r], hi[r]);
+#else
+        px_spans[r] = clip_visible_spans(config.z, lo[r], hi[r]).xy;
+#endif
+    }
+}
+#endif
+
 void main() {
     FrameParams f = pc.frame.p;
     uint lid = gl_LocalInvocationIndex;
@@ -163,15 +200,10 @@ void main() {
         if (px_done[r]) {
             newly_done += 1u;
         }
-#if CUTOFF_WEIGHT != 0
-        vec3 ray = ray0 + float(r) * ray_step;
-#if CUTOFF_SPANS > 1
-        px_spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, ray);
-#else
-        px_spans[r] = clip_ray_spans(pc.clip, f.cam_pos.xyz, ray).xy;
-#endif
-#endif
     }
+#if CUTOFF_WEIGHT != 0
+    strip_spans(f.cam_pos.xyz);
+#endif
 
     uvec2 range = pc.ranges.v[tile.y * f.size.z + tile.x];
     uint start = min(range.x + pc.round_index * RASTER_CHUNK, range.y);
