@@ -132,51 +132,65 @@ float normal_cdf(float x) {
     return x >= 0.0 ? 1.0 - tail : tail;
 }
 
-// Mass of the normal density N(t_star, 1/sqrt_a^2) on the interval span = (lo, hi); unbounded
-// ends contribute exactly 0 and 1, and an empty interval nothing.
-float span_mass(vec2 span, float t_star, float sqrt_a) {
+// A cutoff Gaussian seen along a strip of rays eye + t dir(r), dir(r) = dir0 + r step, in its
+// whitened frame: d'(r) = M dir(r) = d0 + r ds, so a(r) = |d'(r)|^2, o'.d'(r) and o' x d'(r)
+// are polynomials in r. The rasterizer works them out once per splat for its strip of pixels
+// instead of a 3x3 product per pixel; a single ray is the strip's r = 0. src/clip.rs
+// (CutoffRay::weight) computes the same per ray: t* = -(o'.d')/a.
+struct WhitenedStrip {
+    vec3 a;     // a(r) = a.x + r (a.y + r a.z)
+    vec2 od;    // o'.d'(r) = od.x + r od.y
+    vec3 c0;    // o' x d'(r) = c0 + r c1 (the length weight only)
+    vec3 c1;
+};
+
+WhitenedStrip whitened_strip(CutoffRecord rec, vec3 dir0, vec3 step) {
+    vec3 d0 = vec3(dot(rec.m0.xyz, dir0), dot(rec.m1.xyz, dir0), dot(rec.m2.xyz, dir0));
+    vec3 ds = vec3(dot(rec.m0.xyz, step), dot(rec.m1.xyz, step), dot(rec.m2.xyz, step));
+    vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
+    WhitenedStrip s;
+    s.a = vec3(dot(d0, d0), 2.0 * dot(d0, ds), dot(ds, ds));
+    s.od = vec2(dot(o, d0), dot(o, ds));
+    s.c0 = cross(o, d0);
+    s.c1 = cross(o, ds);
+    return s;
+}
+
+// Mass of the Gaussian along the ray (the normal density N(t*, 1/a)) on the interval
+// span = (lo, hi), from a, o'.d' and 1/sqrt(a): (t - t*) sqrt(a) = (t a + o'.d') / sqrt(a).
+// Unbounded ends contribute exactly 0 and 1, and an empty interval nothing.
+float span_mass(vec2 span, float a, float od, float inv_sqrt_a) {
     if (span.x >= span.y) {
         return 0.0;
     }
-    float upper = span.y >= UNBOUNDED ? 1.0 : normal_cdf((span.y - t_star) * sqrt_a);
-    float lower = span.x <= -UNBOUNDED ? 0.0 : normal_cdf((span.x - t_star) * sqrt_a);
+    float upper = span.y >= UNBOUNDED ? 1.0 : normal_cdf((span.y * a + od) * inv_sqrt_a);
+    float lower = span.x <= -UNBOUNDED ? 0.0 : normal_cdf((span.x * a + od) * inv_sqrt_a);
     return upper - lower;
 }
 
-// Ray in the whitened frame of a cutoff Gaussian: d' = M dir, o' = M (eye - mu), a = |d'|^2 and
-// t* = -(o'.d')/a (see src/clip.rs).
-void whitened_ray(CutoffRecord rec, vec3 dir, out vec3 d, out vec3 o, out float a, out float t_star) {
-    d = vec3(dot(rec.m0.xyz, dir), dot(rec.m1.xyz, dir), dot(rec.m2.xyz, dir));
-    o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
-    a = dot(d, d);
-    t_star = -dot(o, d) / a;
-}
-
-// Weight `mass`: the probability mass of the Gaussian along the unit ray direction dir that
-// lies in the visible intervals spans (from clip_ray_spans).
-float cutoff_weight_mass(CutoffRecord rec, vec3 dir, vec4 spans) {
-    vec3 d, o;
-    float a, t_star;
-    whitened_ray(rec, dir, d, o, a, t_star);
-    float sqrt_a = sqrt(a);
-    float w = span_mass(spans.xy, t_star, sqrt_a);
+// Weight `mass` on ray r of the strip s: the probability mass of the Gaussian along the ray
+// that lies in the visible intervals spans (clip_visible_spans).
+float cutoff_weight_mass(WhitenedStrip s, float r, vec4 spans) {
+    float a = s.a.x + r * (s.a.y + r * s.a.z);
+    float od = s.od.x + r * s.od.y;
+    float inv_sqrt_a = inversesqrt(a);
+    float w = span_mass(spans.xy, a, od, inv_sqrt_a);
 #if CUTOFF_SPANS > 1
     // Only inverted regions have a second interval; the other kernels leave this out, since a
     // CPU driver would evaluate it under a mask even when it is empty.
     if (spans.z < spans.w) {
-        w += span_mass(spans.zw, t_star, sqrt_a);
+        w += span_mass(spans.zw, a, od, inv_sqrt_a);
     }
 #endif
     return clamp(w, 0.0, 1.0);
 }
 
-// Weight `length`: the visible fraction of the chord through the band ellipsoid (q <= band2);
-// for a ray that misses it, whether the ray's closest point is visible.
-float cutoff_weight_length(CutoffRecord rec, vec3 dir, vec4 spans, float band2) {
-    vec3 d, o;
-    float a, t_star;
-    whitened_ray(rec, dir, d, o, a, t_star);
-    vec3 c = cross(o, d);
+// Weight `length` on ray r of the strip s: the visible fraction of the chord through the band
+// ellipsoid (q <= band2); for a ray that misses it, whether the ray's closest point is visible.
+float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
+    float a = s.a.x + r * (s.a.y + r * s.a.z);
+    float t_star = -(s.od.x + r * s.od.y) / a;
+    vec3 c = s.c0 + r * s.c1;
     float q_min = dot(c, c) / a;
     if (q_min >= band2) {
         bool seen = (spans.x <= t_star && t_star <= spans.y && spans.x < spans.y)

@@ -91,6 +91,12 @@ bool composite(uint k, vec4 co, bool cutoff) {
     vec2 uv = batch_uv[k];
     vec3 rgb = batch_color[k];
     bool any_open = false;
+#if CUTOFF_WEIGHT != 0
+    WhitenedStrip strip;
+    if (cutoff) {
+        strip = whitened_strip(batch_cutoff[k], ray0, ray_step);
+    }
+#endif
     [[unroll]] for (uint r = 0u; r < P; ++r) {
         if (px_done[r]) {
             continue;
@@ -107,13 +113,11 @@ bool composite(uint k, vec4 co, bool cutoff) {
         }
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
         if (cutoff) {
-            alpha *= cutoff_weight_mass(batch_cutoff[k], ray0 + float(r) * ray_step,
-                                        SPANS_OF(px_spans[r]));
+            alpha *= cutoff_weight_mass(strip, float(r), SPANS_OF(px_spans[r]));
         }
 #elif CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
         if (cutoff) {
-            alpha *= cutoff_weight_length(batch_cutoff[k], ray0 + float(r) * ray_step,
-                                          SPANS_OF(px_spans[r]), band2);
+            alpha *= cutoff_weight_length(strip, float(r), SPANS_OF(px_spans[r]), band2);
         }
 #endif
         alpha = min(0.99, alpha);
