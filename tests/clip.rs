@@ -11,6 +11,7 @@ use rara::clip::{
 use rara::gpu_types::GpuProjectedSplat;
 use rara::metrics::{compare, ssim};
 use rara::reference;
+use rara::stages::rasterize::RasterLayout;
 use rara::synth::Rng;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
@@ -65,10 +66,11 @@ fn modes(region: &ClipRegion) -> Vec<(&'static str, Clip)> {
     ]
 }
 
-/// Renders every region x mode with the GPU and the CPU reference; PSNR >= 50 dB.
-fn gpu_matches_cpu(name: &str, scene: &Scene, camera: &Camera) {
+/// Renders every region x mode with the GPU (rasterizer `layout`) and the CPU reference;
+/// PSNR >= 50 dB.
+fn gpu_matches_cpu(name: &str, scene: &Scene, camera: &Camera, layout: RasterLayout) {
     let ctx = common::context();
-    let mut renderer = Renderer::new(&ctx).unwrap();
+    let mut renderer = Renderer::with_raster_layout(&ctx, layout).unwrap();
     let gpu_scene = renderer.upload(scene).unwrap();
     let (unclipped, _) = renderer
         .render(&gpu_scene, camera, &RenderOptions::default())
@@ -83,14 +85,14 @@ fn gpu_matches_cpu(name: &str, scene: &Scene, camera: &Camera) {
             let (gpu, stats) = renderer.render(&gpu_scene, camera, &options).unwrap();
             let cpu = reference::render(scene, camera, &options);
             let d = common::check_images(
-                &format!("clip_{name}_{region_name}_{mode_name}"),
+                &format!("clip_{name}_{region_name}_{mode_name}_{layout:?}"),
                 &gpu,
                 &cpu,
                 50.0,
                 16,
             );
             eprintln!(
-                "  {name} {region_name} {mode_name}: {} cutoff, PSNR {:.2} dB",
+                "  {name} {region_name} {mode_name} {layout:?}: {} cutoff, PSNR {:.2} dB",
                 stats.cutoff, d.psnr
             );
             if mode_name == "hard" {
@@ -116,6 +118,8 @@ fn orbit_camera(scene: &Scene, width: u32) -> Camera {
     Camera::look_at(eye, c, Vec3::NEG_Y, 50.0, width, width * 3 / 4).unwrap()
 }
 
+/// Both rasterizer layouts: lavapipe picks strips, GPUs a pixel per invocation, and the two
+/// compile the weight code differently.
 #[test]
 fn gpu_matches_cpu_on_synthetic_scenes() {
     for (name, scene) in [
@@ -124,7 +128,9 @@ fn gpu_matches_cpu_on_synthetic_scenes() {
         ("layers", rara::synth::layers(12000, 2, 5)),
     ] {
         let camera = orbit_camera(&scene, 240);
-        gpu_matches_cpu(name, &scene, &camera);
+        for layout in [RasterLayout::Strips, RasterLayout::PixelPerInvocation] {
+            gpu_matches_cpu(name, &scene, &camera, layout);
+        }
     }
 }
 
@@ -143,7 +149,7 @@ fn gpu_matches_cpu_on_real_scenes() {
                 .unwrap(),
             None => orbit_camera(&scene, 240),
         };
-        gpu_matches_cpu(stem, &scene, &camera);
+        gpu_matches_cpu(stem, &scene, &camera, RasterLayout::Strips);
     }
 }
 
