@@ -24,12 +24,6 @@ struct CutoffRecord {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer CutoffRecords { CutoffRecord v[]; };
 
-// Intervals the visible part of a ray can have: 1 for a region, 2 for an inverted one. The
-// rasterizer variants set it; project does not use the weights.
-#ifndef CUTOFF_SPANS
-#define CUTOFF_SPANS 2
-#endif
-
 #define CLASS_DROPPED 0u
 #define CLASS_DRAWN 1u
 #define CLASS_CUTOFF 2u
@@ -156,33 +150,60 @@ WhitenedStrip whitened_strip(CutoffRecord rec, vec3 dir0, vec3 step) {
     return s;
 }
 
-// Mass of the Gaussian along the ray (the normal density N(t*, 1/a)) on the interval
-// span = (lo, hi), from a, o'.d' and 1/sqrt(a): (t - t*) sqrt(a) = (t a + o'.d') / sqrt(a).
-// Unbounded ends contribute exactly 0 and 1, and an empty interval nothing.
-float span_mass(vec2 span, float a, float od, float inv_sqrt_a) {
-    if (span.x >= span.y) {
-        return 0.0;
-    }
-    float upper = span.y >= UNBOUNDED ? 1.0 : normal_cdf((span.y * a + od) * inv_sqrt_a);
-    float lower = span.x <= -UNBOUNDED ? 0.0 : normal_cdf((span.x * a + od) * inv_sqrt_a);
-    return upper - lower;
+// Weight `mass`: the probability mass of the Gaussian along the ray that lies in the visible
+// intervals. The density along the ray is N(t*, 1/a); an interval (lo, hi) holds
+// Phi(u(hi)) - Phi(u(lo)) of it, with u(t) = (t - t*) sqrt(a) = (t a + o'.d') / sqrt(a). Since
+// -Phi(x) = Phi(-x) - 1, the visible mass is `base` plus Phi(sign u(t)) over the visible set's
+// bounded ends t, sign +1 for an upper end and -1 for a lower one; `base` counts 1 for every
+// unbounded upper end and -1 for every bounded lower end. A ray has at most two bounded ends
+// (one interval has two; an inverted region's outer ends are unbounded). An end a ray does not
+// have is (-UNBOUNDED, +1), whose Phi is 0 to within 1e-23. On a CPU driver, where both sides of
+// a branch cost, this evaluates Phi as often as the strip has bounded ends (once for a plane)
+// rather than twice per interval.
+struct MassEnds {
+    vec4 ends;      // (t0, sign0, t1, sign1)
+    float base;
+    uint count;     // bounded ends, 0 to 2
+};
+
+// Adds end = (t, sign) to m.
+void mass_add_end(inout MassEnds m, vec2 end) {
+    m.ends = m.count == 0u ? vec4(end, m.ends.zw) : vec4(m.ends.xy, end);
+    m.count += 1u;
 }
 
-// Weight `mass` on ray r of the strip s: the probability mass of the Gaussian along the ray
-// that lies in the visible intervals spans (clip_visible_spans).
-float cutoff_weight_mass(WhitenedStrip s, float r, vec4 spans) {
+// Adds the visible interval span = (lo, hi) to m; an empty one adds nothing.
+void mass_add_span(inout MassEnds m, vec2 span) {
+    if (span.x >= span.y) {
+        return;
+    }
+    if (span.y >= UNBOUNDED) {
+        m.base += 1.0;
+    } else {
+        mass_add_end(m, vec2(span.y, 1.0));
+    }
+    if (span.x > -UNBOUNDED) {
+        m.base -= 1.0;
+        mass_add_end(m, vec2(span.x, -1.0));
+    }
+}
+
+// The ends of the visible intervals spans (clip_visible_spans) for the mass weight.
+MassEnds clip_mass_ends(vec4 spans) {
+    MassEnds m;
+    m.ends = vec4(-UNBOUNDED, 1.0, -UNBOUNDED, 1.0);
+    m.base = 0.0;
+    m.count = 0u;
+    mass_add_span(m, spans.xy);
+    mass_add_span(m, spans.zw);
+    return m;
+}
+
+// Phi(sign u(t)) of end = (t, sign) on ray r of the strip s (see MassEnds).
+float end_mass(WhitenedStrip s, float r, vec2 end) {
     float a = s.a.x + r * (s.a.y + r * s.a.z);
     float od = s.od.x + r * s.od.y;
-    float inv_sqrt_a = inversesqrt(a);
-    float w = span_mass(spans.xy, a, od, inv_sqrt_a);
-#if CUTOFF_SPANS > 1
-    // Only inverted regions have a second interval; the other kernels leave this out, since a
-    // CPU driver would evaluate it under a mask even when it is empty.
-    if (spans.z < spans.w) {
-        w += span_mass(spans.zw, a, od, inv_sqrt_a);
-    }
-#endif
-    return clamp(w, 0.0, 1.0);
+    return normal_cdf(end.y * (end.x * a + od) * inversesqrt(a));
 }
 
 // Weight `length` on ray r of the strip s: the visible fraction of the chord through the band

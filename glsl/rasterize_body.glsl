@@ -19,7 +19,7 @@
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
 // ray (clip.glsl), staged with the batch. Splats that are not cutoff take the plain path.
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
-// + 1 or CLIP_WEIGHT_LENGTH + 1; CUTOFF_SPANS (1 or 2) the visible intervals a ray can have.
+// + 1 or CLIP_WEIGHT_LENGTH + 1.
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
 // must not be in its kernel at all.
 #extension GL_EXT_control_flow_attributes : require
@@ -57,16 +57,12 @@ shared vec3 batch_color[RASTER_BATCH];
 shared CutoffRecord batch_cutoff[RASTER_BATCH];
 #endif
 
-// The weights take (lo0, hi0, lo1, hi1); kernels for regions that are not inverted keep one.
-#if CUTOFF_SPANS > 1
-#define SPANS_OF(s) (s)
-#else
-#define SPANS_OF(s) vec4((s), 0.0, 0.0)
-#endif
 shared uint pixels_done;
 
 // The invocation's strip: first pixel, and per pixel the compositing state and, for rara,
-// the ray (SPEC section 2) and its visible intervals.
+// the ray (SPEC section 2) and its visible intervals: as ends for the mass weight (MassEnds in
+// clip.glsl; strip_end_count is the most ends a ray of the strip has, at least 1), as
+// (lo0, hi0, lo1, hi1) for the length weight.
 uvec2 first_pixel;
 vec3 px_color[P];
 float px_T[P];
@@ -77,12 +73,14 @@ uint newly_done;
 // not depend on the scale of t): two vectors instead of P keep the strip's state in registers.
 vec3 ray0;
 vec3 ray_step;
-#if CUTOFF_SPANS > 1
-vec4 px_spans[P];
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
+vec4 px_ends[P];
+float px_mass_base[P];
+uint strip_end_count;
 #else
-vec2 px_spans[P];
-#endif
+vec4 px_spans[P];
 float band2;
+#endif
 #endif
 
 // Composites staged splat k, with conic and opacity co, over the strip (SPEC section 4);
@@ -91,7 +89,24 @@ bool composite(uint k, vec4 co, bool cutoff) {
     vec2 uv = batch_uv[k];
     vec3 rgb = batch_color[k];
     bool any_open = false;
-#if CUTOFF_WEIGHT != 0
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
+    // All P weights at once: the loop over the ends is outside the loop over the strip (one
+    // loop, not P), and a do-while, which a CPU driver leaves after its last taken iteration.
+    float weight[P];
+    if (cutoff) {
+        WhitenedStrip strip = whitened_strip(batch_cutoff[k], ray0, ray_step);
+        [[unroll]] for (uint r = 0u; r < P; ++r) {
+            weight[r] = px_mass_base[r];
+        }
+        uint e = 0u;
+        do {
+            [[unroll]] for (uint r = 0u; r < P; ++r) {
+                weight[r] += end_mass(strip, float(r), e == 0u ? px_ends[r].xy : px_ends[r].zw);
+            }
+            ++e;
+        } while (e < strip_end_count);
+    }
+#elif CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
     WhitenedStrip strip;
     if (cutoff) {
         strip = whitened_strip(batch_cutoff[k], ray0, ray_step);
@@ -113,11 +128,11 @@ bool composite(uint k, vec4 co, bool cutoff) {
         }
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
         if (cutoff) {
-            alpha *= cutoff_weight_mass(strip, float(r), SPANS_OF(px_spans[r]));
+            alpha *= clamp(weight[r], 0.0, 1.0);
         }
 #elif CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
         if (cutoff) {
-            alpha *= cutoff_weight_length(strip, float(r), SPANS_OF(px_spans[r]), band2);
+            alpha *= cutoff_weight_length(strip, float(r), px_spans[r], band2);
         }
 #endif
         alpha = min(0.99, alpha);
@@ -137,7 +152,7 @@ bool composite(uint k, vec4 co, bool cutoff) {
 }
 
 #if CUTOFF_WEIGHT != 0
-// Sets px_spans, the visible intervals of the strip's rays (clip.glsl). The loop over the
+// Sets the visible intervals of the strip's rays (px_ends or px_spans; clip.glsl). The loop over the
 // planes is outside the loop over the strip: on lavapipe, P loops here (one per pixel) made
 // the whole kernel slower, by about half of plain compositing on plant.
 void strip_spans(vec3 eye) {
@@ -163,11 +178,18 @@ void strip_spans(vec3 eye) {
             }
         }
     }
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
+    strip_end_count = 1u;
+#endif
     [[unroll]] for (uint r = 0u; r < P; ++r) {
-#if CUTOFF_SPANS > 1
-        px_spans[r] = clip_visible_spans(config.z, lo[r], hi[r]);
+        vec4 spans = clip_visible_spans(config.z, lo[r], hi[r]);
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
+        MassEnds m = clip_mass_ends(spans);
+        px_ends[r] = m.ends;
+        px_mass_base[r] = m.base;
+        strip_end_count = max(strip_end_count, m.count);
 #else
-        px_spans[r] = clip_visible_spans(config.z, lo[r], hi[r]).xy;
+        px_spans[r] = spans;
 #endif
     }
 }
@@ -178,7 +200,7 @@ void main() {
     uint lid = gl_LocalInvocationIndex;
     uvec2 tile = gl_WorkGroupID.xy;
     first_pixel = tile * TILE_SIZE + uvec2(gl_LocalInvocationID.x, gl_LocalInvocationID.y * P);
-#if CUTOFF_WEIGHT != 0
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
     band2 = pc.clip.p.band.y;
 #endif
 

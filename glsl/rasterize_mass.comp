@@ -1,7 +1,6 @@
-// Stage 6, rasterize, GPU layout, rara clipping with the mass weight, regions that are not
-// inverted (one visible interval per ray; see rasterize_body.glsl).
+// Stage 6, rasterize, GPU layout, rara clipping with the mass weight
+// (see rasterize_body.glsl).
 #version 460
 #define PIXELS_PER_INVOCATION 1
 #define CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1
-#define CUTOFF_SPANS 1
 #include "rasterize_body.glsl"

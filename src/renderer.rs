@@ -632,8 +632,7 @@ impl Renderer {
             round_index: 0,
             flags: 0,
         };
-        let inverted = options.clip.region.as_ref().is_some_and(|r| r.invert);
-        let cutoff_weight = rara.then_some((options.clip.weight, inverted));
+        let cutoff_weight = rara.then_some(options.clip.weight);
         self.rasterize
             .record(ctx, cmd, &push, (gx, gy), rounds, cutoff_weight);
         compute_barrier(ctx, cmd);

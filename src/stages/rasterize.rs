@@ -73,7 +73,6 @@ impl RasterLayout {
 pub struct Rasterize {
     plain: ComputePipeline,
     mass: ComputePipeline,
-    mass_inverted: ComputePipeline,
     length: ComputePipeline,
     layout: RasterLayout,
 }
@@ -88,17 +87,12 @@ impl Rasterize {
             RasterLayout::PixelPerInvocation => Rasterize {
                 plain: build(c"rasterize", shaders::RASTERIZE)?,
                 mass: build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
-                mass_inverted: build(c"rasterize_mass_inverted", shaders::RASTERIZE_MASS_INVERTED)?,
                 length: build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
                 layout,
             },
             RasterLayout::Strips => Rasterize {
                 plain: build(c"rasterize_strips", shaders::RASTERIZE_STRIPS)?,
                 mass: build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS)?,
-                mass_inverted: build(
-                    c"rasterize_strips_mass_inverted",
-                    shaders::RASTERIZE_STRIPS_MASS_INVERTED,
-                )?,
                 length: build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH)?,
                 layout,
             },
@@ -111,8 +105,8 @@ impl Rasterize {
     }
 
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
-    /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping
-    /// and whether its region is inverted, `None` when no splat is cutoff.
+    /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping,
+    /// `None` when no splat is cutoff.
     pub fn record(
         &self,
         ctx: &Context,
@@ -120,13 +114,12 @@ impl Rasterize {
         push: &RasterizePush,
         tiles: (u32, u32),
         rounds: u32,
-        cutoff_weight: Option<(ClipWeight, bool)>,
+        cutoff_weight: Option<ClipWeight>,
     ) {
         let pipeline = match cutoff_weight {
             None => &self.plain,
-            Some((ClipWeight::Mass, false)) => &self.mass,
-            Some((ClipWeight::Mass, true)) => &self.mass_inverted,
-            Some((ClipWeight::Length, _)) => &self.length,
+            Some(ClipWeight::Mass) => &self.mass,
+            Some(ClipWeight::Length) => &self.length,
         };
         for round in 0..rounds {
             let mut p = *push;

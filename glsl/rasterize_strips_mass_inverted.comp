@@ -1,7 +1,0 @@
-// Stage 6, rasterize, CPU-driver layout, rara clipping with the mass weight, inverted regions
-// (up to two visible intervals per ray; see rasterize_body.glsl).
-#version 460
-#define PIXELS_PER_INVOCATION 16
-#define CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1
-#define CUTOFF_SPANS 2
-#include "rasterize_body.glsl"
