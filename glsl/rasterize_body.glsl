@@ -283,24 +283,29 @@ void main() {
 #else
         // Runs of plain splats go through a loop of their own, so that the weight code runs
         // once per cutoff splat rather than for every splat: CPU drivers execute an if's body
-        // under a mask whatever the condition, but leave a loop once no lane continues it.
+        // under a mask whatever the condition, but leave a loop once no lane continues it. Both
+        // loops are do-whiles, which such a driver leaves right after the last splat; a while
+        // loop would run its body once more, masked, to find its end. co is always the conic
+        // and opacity of splat k (count >= 1 here).
         uint k = 0u;
         bool open = true;
-        while (k < count && open) {
-            vec4 co = batch_conic_opacity[k];
-            while (k < count && open) {
-                co = batch_conic_opacity[k];
-                if (co.w < 0.0) {
-                    break;
+        vec4 co = batch_conic_opacity[0];
+        do {
+            bool plain = co.w >= 0.0;
+            do {
+                if (plain) {
+                    open = composite(k, co, false);
+                    ++k;
+                    co = batch_conic_opacity[min(k, count - 1u)];
+                    plain = open && k < count && co.w >= 0.0;
                 }
-                open = composite(k, co, false);
-                ++k;
-            }
-            if (k < count && open) {
+            } while (plain);
+            if (open && k < count) {
                 open = composite(k, vec4(co.xyz, -co.w), true);
                 ++k;
+                co = batch_conic_opacity[min(k, count - 1u)];
             }
-        }
+        } while (open && k < count);
 #endif
         if (newly_done > 0u) {
             atomicAdd(pixels_done, newly_done);
