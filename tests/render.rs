@@ -3,9 +3,10 @@
 mod common;
 
 use glam::{Quat, Vec3};
+use rara::constants::RASTER_CHUNK;
 use rara::reference::project::{footprint_q_max, footprint_touches_tile, project_one};
 use rara::reference::{self, rasterize::tile_lists};
-use rara::{Camera, Clip, RenderOptions, Renderer, Scene};
+use rara::{Camera, Clip, ClipRegion, RenderOptions, Renderer, Scene};
 
 /// Two views of `scene` at `width` pixels: from its orbit cameras, or around its percentile box.
 fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec<Camera> {
@@ -198,7 +199,9 @@ fn each_stage_matches_its_cpu_twin() {
 }
 
 /// A tile list of more than 100k splats (lavapipe ends a shader invocation after 65,535 loop
-/// iterations): 120k splats too faint to count (opacity < 1/255) in front of one opaque splat.
+/// iterations in total): about 110k splats too faint to count (alpha < 1/255 away from their
+/// pixel) in front of one opaque splat, which is the last entry of a full rasterizer round
+/// (RASTER_CHUNK entries), so a round cut short by the loop cap would lose it.
 #[test]
 fn tile_with_more_than_100k_splats() {
     let ctx = common::context();
@@ -207,7 +210,7 @@ fn tile_with_more_than_100k_splats() {
         sh_degree: 0,
         ..Default::default()
     };
-    // 120,000 tiny splats on pixel (3, 3) of tile (0, 0), in front of an opaque red splat
+    // Tiny splats on pixel (3, 3) of tile (0, 0), in front of an opaque red splat
     // that covers the image: every pixel of that tile but the few under the tiny splats has to
     // walk the whole list to reach the red one.
     let cam = Camera::look_at(
@@ -221,7 +224,7 @@ fn tile_with_more_than_100k_splats() {
     .unwrap();
     let mut rng = rara::synth::Rng::new(1);
     let grey = [rara::scene::rgb_to_sh_dc(1.0); 3];
-    for _ in 0..120_000 {
+    for _ in 0..9 * RASTER_CHUNK - 1 {
         let depth = 3.0 + rng.range(-0.5, 0.5);
         // The camera-space point that projects to pixel (3, 3) at this depth.
         let (cx, cy) = cam.principal_point();
@@ -265,6 +268,31 @@ fn tile_with_more_than_100k_splats() {
     assert!(
         under[1] > 200,
         "the tiny splats must show at (3, 3), got {under:?}"
+    );
+
+    // The same list with every splat cutoff (trace_all) by a box around the scene, the eye
+    // outside it: every ray's visible interval has two bounded ends, the most loop iterations
+    // per entry the rara kernel takes.
+    let boxed = Clip {
+        trace_all: true,
+        ..Clip::rara(
+            ClipRegion::oriented_box(Vec3::new(0.0, 0.0, 1.0), Vec3::splat(3.0), Quat::IDENTITY)
+                .unwrap(),
+        )
+    };
+    let options = RenderOptions {
+        clip: boxed,
+        ..RenderOptions::default()
+    };
+    let (gpu, stats) = renderer.render(&gpu_scene, &cam, &options).unwrap();
+    assert_eq!(stats.cutoff, scene.len() as u32);
+    assert!(stats.max_tile_len > 100_000);
+    let cpu = reference::render(&scene, &cam, &options);
+    common::check_images("long_tile_list_rara_box", &gpu, &cpu, 50.0, 4);
+    let far = gpu.get_pixel(12, 12);
+    assert!(
+        far[0] > 150 && far[1] < 60,
+        "rara: the opaque splat behind the list must show, got {far:?}"
     );
     common::assert_no_validation_messages(&ctx);
 }
