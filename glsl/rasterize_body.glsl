@@ -54,7 +54,10 @@ shared vec2 batch_uv[RASTER_BATCH];
 shared vec4 batch_conic_opacity[RASTER_BATCH];   // opacity negated for a cutoff splat
 shared vec3 batch_color[RASTER_BATCH];
 #if CUTOFF_WEIGHT != 0
-shared CutoffRecord batch_cutoff[RASTER_BATCH];
+// The cutoff record index of a cutoff splat (its 48-byte record is read from the buffer when
+// the splat is composited: staging every slot's record would cost a masked 12-word copy per
+// pair on a CPU driver, cutoff or not).
+shared uint batch_cutoff[RASTER_BATCH];
 #endif
 
 shared uint pixels_done;
@@ -94,7 +97,7 @@ bool composite(uint k, vec4 co, bool cutoff) {
     // loop, not P), and a do-while, which a CPU driver leaves after its last taken iteration.
     float weight[P];
     if (cutoff) {
-        WhitenedStrip strip = whitened_strip(batch_cutoff[k], ray0, ray_step);
+        WhitenedStrip strip = whitened_strip(pc.cutoffs.v[batch_cutoff[k]], ray0, ray_step);
         [[unroll]] for (uint r = 0u; r < P; ++r) {
             weight[r] = px_mass_base[r];
         }
@@ -109,7 +112,7 @@ bool composite(uint k, vec4 co, bool cutoff) {
 #elif CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
     WhitenedStrip strip;
     if (cutoff) {
-        strip = whitened_strip(batch_cutoff[k], ray0, ray_step);
+        strip = whitened_strip(pc.cutoffs.v[batch_cutoff[k]], ray0, ray_step);
     }
 #endif
     [[unroll]] for (uint r = 0u; r < P; ++r) {
@@ -263,9 +266,7 @@ void main() {
                 // the plain ones learns it from a load it makes anyway.
                 bool cutoff = p.cutoff != NO_CUTOFF;
                 batch_conic_opacity[slot] = vec4(p.conic, cutoff ? -p.opacity : p.opacity);
-                if (cutoff) {
-                    batch_cutoff[slot] = pc.cutoffs.v[p.cutoff];
-                }
+                batch_cutoff[slot] = p.cutoff;
 #else
                 batch_conic_opacity[slot] = vec4(p.conic, p.opacity);
 #endif
