@@ -17,7 +17,8 @@
 //
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
-// ray (clip.glsl), staged with the batch. Splats that are not cutoff take the plain path.
+// ray (clip.glsl), from its cutoff record (the batch stages the record's index). Splats that
+// are not cutoff take the plain path.
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
 // + 1 or CLIP_WEIGHT_LENGTH + 1.
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
