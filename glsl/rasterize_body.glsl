@@ -93,6 +93,14 @@ bool composite(uint k, vec4 co, bool cutoff) {
     vec2 uv = batch_uv[k];
     vec3 rgb = batch_color[k];
     bool any_open = false;
+    // The exponent -0.5 (cx dx^2 + cz dy^2) - cy dx dy down the strip's column (dx fixed,
+    // dy = dy0 - r) is a quadratic in r, worked out once per splat, in base 2 for exp2:
+    // power(r) log2(e) = q.x + r (q.y + r q.z).
+    vec2 d0 = uv - vec2(first_pixel);
+    vec3 q = 1.4426950408889634 * vec3(
+        -0.5 * (co.x * d0.x * d0.x + co.z * d0.y * d0.y) - co.y * d0.x * d0.y,
+        co.z * d0.y + co.y * d0.x,
+        -0.5 * co.z);
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
     // All P weights at once: the loop over the ends is outside the loop over the strip (one
     // loop, not P), and a do-while, which a CPU driver leaves after its last taken iteration.
@@ -121,12 +129,11 @@ bool composite(uint k, vec4 co, bool cutoff) {
             continue;
         }
         any_open = true;
-        vec2 d = uv - vec2(first_pixel + uvec2(0u, r));
-        float power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
-        if (power > 0.0) {
+        float power2 = q.x + float(r) * (q.y + float(r) * q.z);
+        if (power2 > 0.0) {
             continue;
         }
-        float alpha = co.w * exp(power);
+        float alpha = co.w * exp2(power2);
         if (alpha < 1.0 / 255.0) {
             continue; // w <= 1 cannot lift it over the threshold
         }
