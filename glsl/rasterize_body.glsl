@@ -137,19 +137,20 @@ bool composite(uint k, vec4 co, bool cutoff) {
         if (alpha < 1.0 / 255.0) {
             continue; // w <= 1 cannot lift it over the threshold
         }
+#if CUTOFF_WEIGHT != 0
+        if (cutoff) {
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
-        if (cutoff) {
             alpha *= clamp(weight[r], 0.0, 1.0);
-        }
-#elif CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
-        if (cutoff) {
+#else
             alpha *= cutoff_weight_length(strip, float(r), px_spans[r], band2);
+#endif
+            // Only the weight can take alpha back under the threshold (min(0.99, .) cannot).
+            if (alpha < 1.0 / 255.0) {
+                continue;
+            }
         }
 #endif
         alpha = min(0.99, alpha);
-        if (alpha < 1.0 / 255.0) {
-            continue;
-        }
         float next_T = px_T[r] * (1.0 - alpha);
         if (next_T < 1e-4) {
             px_done[r] = true;
