@@ -164,9 +164,10 @@ bool composite(uint k, vec4 co, bool cutoff) {
 }
 
 #if CUTOFF_WEIGHT != 0
-// Sets the visible intervals of the strip's rays (px_ends or px_spans; clip.glsl). The loop over the
-// planes is outside the loop over the strip: on lavapipe, P loops here (one per pixel) made
-// the whole kernel slower, by about half of plain compositing on plant.
+// Sets the visible intervals of the strip's rays (px_ends or px_spans; clip.glsl). The loop
+// over the planes is outside the loop over the strip: on lavapipe, P loops here (one per pixel)
+// made the whole rara kernel 1.9x slower on a frame with no cutoff splat (plant: 547 against
+// 290 ms of rasterize for the plain kernel; 307 ms with the one loop).
 void strip_spans(vec3 eye) {
     uvec4 config = pc.clip.p.config;
     float lo[P];
