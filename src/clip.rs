@@ -623,8 +623,9 @@ impl CutoffRay {
         match kind {
             ClipWeight::Mass => {
                 let sqrt_a = a.sqrt();
-                // Unbounded ends contribute exactly 0 and 1, empty intervals nothing (as on
-                // the GPU: span_mass in glsl/clip.glsl).
+                // Unbounded ends contribute exactly 0 and 1, empty intervals nothing. The GPU
+                // sums the same terms rewritten over the bounded ends (MassEnds in
+                // glsl/clip.glsl), one normal CDF per end.
                 let w: f64 = visible
                     .0
                     .iter()
