@@ -11,8 +11,8 @@ pub const RASTER_WORKGROUP: u32 = TILE_SIZE * TILE_SIZE;
 /// Most tile-list entries one rasterizer round walks per tile. lavapipe stops an invocation's
 /// loops after 65,535 iterations in total, and the rara rasterizer takes up to four loop
 /// iterations per entry (a cutoff splat: the outer loop, the empty run of plain splats before
-/// it, and two ends of its visible interval), so longer lists are split over several rounds (dispatches) that carry
-/// the per-pixel state in a buffer.
+/// it, and two ends of its visible interval), so longer lists are split over several rounds
+/// (dispatches) that carry the per-pixel state in a buffer.
 pub const RASTER_CHUNK: u32 = 12288;
 /// Threads per workgroup of the one-item-per-thread kernels (project, emit, tile ranges).
 pub const LINEAR_WORKGROUP: u32 = 256;
