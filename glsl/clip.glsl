@@ -150,6 +150,16 @@ WhitenedStrip whitened_strip(CutoffRecord rec, vec3 dir0, vec3 step) {
     return s;
 }
 
+// a(r) = |d'(r)|^2 on ray r of the strip s.
+float strip_a(WhitenedStrip s, float r) {
+    return s.a.x + r * (s.a.y + r * s.a.z);
+}
+
+// o'.d'(r) on ray r of the strip s.
+float strip_od(WhitenedStrip s, float r) {
+    return s.od.x + r * s.od.y;
+}
+
 // Weight `mass`: the probability mass of the Gaussian along the ray that lies in the visible
 // intervals. The density along the ray is N(t*, 1/a); an interval (lo, hi) holds
 // Phi(u(hi)) - Phi(u(lo)) of it, with u(t) = (t - t*) sqrt(a) = (t a + o'.d') / sqrt(a). Since
@@ -201,16 +211,16 @@ MassEnds clip_mass_ends(vec4 spans) {
 
 // Phi(sign u(t)) of end = (t, sign) on ray r of the strip s (see MassEnds).
 float end_mass(WhitenedStrip s, float r, vec2 end) {
-    float a = s.a.x + r * (s.a.y + r * s.a.z);
-    float od = s.od.x + r * s.od.y;
+    float a = strip_a(s, r);
+    float od = strip_od(s, r);
     return normal_cdf(end.y * (end.x * a + od) * inversesqrt(a));
 }
 
 // Weight `length` on ray r of the strip s: the visible fraction of the chord through the band
 // ellipsoid (q <= band2); for a ray that misses it, whether the ray's closest point is visible.
 float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
-    float a = s.a.x + r * (s.a.y + r * s.a.z);
-    float t_star = -(s.od.x + r * s.od.y) / a;
+    float a = strip_a(s, r);
+    float t_star = -strip_od(s, r) / a;
     vec3 c = s.c0 + r * s.c1;
     float q_min = dot(c, c) / a;
     if (q_min >= band2) {
