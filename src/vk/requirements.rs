@@ -3,6 +3,7 @@
 
 use ash::vk;
 
+use crate::constants::SORT_MIN_SUBGROUP;
 use crate::error::{Error, Result};
 
 /// The Vulkan version, extensions, features and properties rara needs ([`requirements`]).
@@ -106,6 +107,15 @@ impl Requirements {
             missing.push(format!(
                 "subgroup operations {:?} in compute shaders",
                 self.subgroup_operations
+            ));
+        }
+        // The sort's scatter keeps one slot per subgroup of its workgroup in shared memory.
+        // (The kernels are SPIR-V 1.5 without varying-size pipelines, so `subgroupSize` is the
+        // size they run at.)
+        if subgroup.subgroup_size < SORT_MIN_SUBGROUP {
+            missing.push(format!(
+                "a subgroup size of {SORT_MIN_SUBGROUP} or more (the device has {})",
+                subgroup.subgroup_size
             ));
         }
         if missing.is_empty() {
