@@ -14,7 +14,7 @@ layout(push_constant) uniform Push {
 
 void main() {
     uint n = pc.count.v[0];
-    uint base = gl_WorkGroupID.x * SCAN_BLOCK + gl_LocalInvocationID.x * SCAN_ITEMS;
+    uint base = gl_WorkGroupID.x * SCAN_BLOCK + workgroup_scan_rank() * SCAN_ITEMS;
     uint sum = 0u;
     for (uint k = 0u; k < SCAN_ITEMS; ++k) {
         if (base + k < n) {

@@ -3,7 +3,7 @@
 // position for its digit (scanned global histogram) + the keys of that digit in earlier
 // subgroups (a short per-digit scan over the subgroups' totals) + those in earlier lanes of its
 // subgroup (subgroupExclusiveAdd) + those before it in its own run. No atomics, so keys of equal
-// digit keep their order: the sort is stable at any subgroup size of SORT_MIN_SUBGROUP or more.
+// digit keep their order: the sort is stable at any subgroup size of MIN_SUBGROUP_SIZE or more.
 // (A full scan of a digit x invocation table in shared memory did the same job at 1.3x the cost
 // of this kernel on lavapipe, whose shared-memory accesses run lane by lane.)
 #version 460

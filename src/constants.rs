@@ -42,10 +42,11 @@ pub const SORT_WORKGROUP: u32 = 256;
 /// Consecutive keys each sort thread owns within its block (the scatter keeps their order,
 /// which makes the sort stable).
 pub const SORT_ITEMS: u32 = 16;
-/// Smallest subgroup size the sort supports (Vulkan devices have 4 or more).
-pub const SORT_MIN_SUBGROUP: u32 = 4;
+/// Smallest subgroup size the kernels support (real devices have 4 or more): the sort's
+/// scatter and the workgroup scan keep one shared-memory slot per subgroup.
+pub const MIN_SUBGROUP_SIZE: u32 = 4;
 /// Most subgroups in one sort workgroup.
-pub const SORT_MAX_SUBGROUPS: u32 = SORT_WORKGROUP / SORT_MIN_SUBGROUP;
+pub const SORT_MAX_SUBGROUPS: u32 = SORT_WORKGROUP / MIN_SUBGROUP_SIZE;
 /// Keys one sort workgroup handles.
 pub const SORT_BLOCK: u32 = SORT_WORKGROUP * SORT_ITEMS;
 
@@ -100,6 +101,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("SORT_RADIX", SORT_RADIX),
     ("SORT_WORKGROUP", SORT_WORKGROUP),
     ("SORT_ITEMS", SORT_ITEMS),
+    ("MIN_SUBGROUP_SIZE", MIN_SUBGROUP_SIZE),
     ("SORT_MAX_SUBGROUPS", SORT_MAX_SUBGROUPS),
     ("SORT_BLOCK", SORT_BLOCK),
     ("COUNTER_INTERSECTIONS", COUNTER_INTERSECTIONS),

@@ -3,7 +3,7 @@
 
 use ash::vk;
 
-use crate::constants::SORT_MIN_SUBGROUP;
+use crate::constants::MIN_SUBGROUP_SIZE;
 use crate::error::{Error, Result};
 
 /// The Vulkan version, extensions, features and properties rara needs ([`requirements`]).
@@ -109,12 +109,12 @@ impl Requirements {
                 self.subgroup_operations
             ));
         }
-        // The sort's scatter keeps one slot per subgroup of its workgroup in shared memory.
+        // The sort's scatter and the workgroup scan keep one shared-memory slot per subgroup.
         // (The kernels are SPIR-V 1.5 without varying-size pipelines, so `subgroupSize` is the
         // size they run at.)
-        if subgroup.subgroup_size < SORT_MIN_SUBGROUP {
+        if subgroup.subgroup_size < MIN_SUBGROUP_SIZE {
             missing.push(format!(
-                "a subgroup size of {SORT_MIN_SUBGROUP} or more (the device has {})",
+                "a subgroup size of {MIN_SUBGROUP_SIZE} or more (the device has {})",
                 subgroup.subgroup_size
             ));
         }
