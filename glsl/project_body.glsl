@@ -1,8 +1,8 @@
 // Stage 1, project (SPEC sections 3 and 5): one invocation per Gaussian. Classifies it against
 // the clip region (dropped / drawn / cutoff), culls, projects the 3D covariance to a 2D conic,
 // finds the screen radius and the touched tiles, evaluates the SH colour, and writes the
-// ProjectedSplat record plus the number of tiles touched (0 = not drawn) for the prefix sum
-// that sizes the tile lists. Cutoff Gaussians also get a compact side record (CutoffRecord)
+// ProjectedSplat record, the number of tiles touched (0 = not drawn) that sizes the tile lists,
+// and a drawn flag that the depth-order stage scans into each drawn Gaussian's sort slot. Cutoff Gaussians also get a compact side record (CutoffRecord)
 // for the rasterizer's per-pixel weight; the others cost nothing extra.
 //
 // Included by project.comp (SH in 32-bit floats) and project_sh16.comp (SH_HALF: half floats,
@@ -19,12 +19,12 @@ layout(push_constant) uniform Push {
     ShCoefficients sh;
     ProjectedSplats splats;
     U32s tiles_touched;
+    U32s drawn;         // out: 1 for a Gaussian that touches a tile, else 0 (scanned next)
     U32s counters;
     ClipParamsRef clip;
     CutoffRecords cutoffs;  // out: one record per cutoff Gaussian, packed
 } pc;
 
-shared uint wg_visible;
 shared uint wg_cutoff_count;
 shared uint wg_cutoff_base;
 
@@ -39,6 +39,7 @@ void quat_rows(vec4 q, out vec3 r0, out vec3 r1, out vec3 r2) {
 // Writes the record of a Gaussian that draws nothing.
 void skip(uint i) {
     pc.tiles_touched.v[i] = 0u;
+    pc.drawn.v[i] = 0u;
     pc.splats.v[i].rect = uvec4(0u);
 }
 
@@ -127,7 +128,7 @@ bool project(uint i, out CutoffRecord rec) {
     p.rect = uvec4(x0, y0, x1, y1);
     pc.splats.v[i] = p;
     pc.tiles_touched.v[i] = touched;
-    atomicAdd(wg_visible, 1u);
+    pc.drawn.v[i] = 1u;
     if (kind != CLASS_CUTOFF) {
         return false;
     }
@@ -144,7 +145,6 @@ bool project(uint i, out CutoffRecord rec) {
 void main() {
     uint lid = gl_LocalInvocationIndex;
     if (lid == 0u) {
-        wg_visible = 0u;
         wg_cutoff_count = 0u;
     }
     barrier();
@@ -156,9 +156,6 @@ void main() {
     uint slot = cutoff ? atomicAdd(wg_cutoff_count, 1u) : 0u;
     barrier();
     if (lid == 0u) {
-        if (wg_visible > 0u) {
-            atomicAdd(pc.counters.v[COUNTER_VISIBLE], wg_visible);
-        }
         if (wg_cutoff_count > 0u) {
             wg_cutoff_base = atomicAdd(pc.counters.v[COUNTER_CUTOFF], wg_cutoff_count);
         }

@@ -1,4 +1,4 @@
-// Stage 6, rasterize, GPU layout (one invocation per pixel), no rara clipping
+// Stage 7, rasterize, GPU layout (one invocation per pixel), no rara clipping
 // (see rasterize_body.glsl).
 #version 460
 #define PIXELS_PER_INVOCATION 1

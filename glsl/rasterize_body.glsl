@@ -1,4 +1,4 @@
-// Stage 6, rasterize (SPEC section 4): one workgroup per 16x16 tile. The tile's splats, sorted
+// Stage 7, rasterize (SPEC section 4): one workgroup per 16x16 tile. The tile's splats, sorted
 // front to back, are staged through shared memory in batches of RASTER_BATCH; each pixel
 // composites them until its transmittance runs out, and the workgroup stops once every pixel is
 // done.

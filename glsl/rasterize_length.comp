@@ -1,4 +1,4 @@
-// Stage 6, rasterize, GPU layout, rara clipping with the length weight
+// Stage 7, rasterize, GPU layout, rara clipping with the length weight
 // (see rasterize_body.glsl).
 #version 460
 #define PIXELS_PER_INVOCATION 1

@@ -1,5 +1,5 @@
-// Radix sort of (uvec2 key, uint value) pairs: layout of the sort's scratch buffer and the digit
-// extraction shared by its kernels. Keys are 64-bit as (low word, high word).
+// Radix sort of (uint key, uint value) pairs: layout of the sort's scratch buffer and the digit
+// extraction shared by its kernels.
 #ifndef RARA_SORT_COMMON_GLSL
 #define RARA_SORT_COMMON_GLSL
 
@@ -14,9 +14,10 @@ struct SortInfo {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer SortInfoRef { SortInfo s; };
 
-uint key_digit(uvec2 key, uint shift) {
-    uint word = shift < 32u ? key.x : key.y;
-    return (word >> (shift & 31u)) & (SORT_RADIX - 1u);
+// The digit of `key` at bit `shift`; `digit_mask` is SORT_RADIX - 1 except in a last pass that
+// reaches past the key bits being sorted, whose bits above them it leaves out.
+uint key_digit(uint key, uint shift, uint digit_mask) {
+    return (key >> shift) & digit_mask;
 }
 
 #endif

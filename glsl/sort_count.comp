@@ -11,10 +11,11 @@
 layout(local_size_x = SORT_WORKGROUP) in;
 
 layout(push_constant) uniform Push {
-    U32s keys;          // (low word, high word) pairs: only the word holding the digit is read
+    U32s keys;
     SortInfoRef info;
     U32s hist;
     uint shift;
+    uint digit_mask;
 } pc;
 
 shared uint block_hist[SORT_RADIX];
@@ -30,8 +31,6 @@ void main() {
     // Count in registers (one counter per digit, unrolled compares: no per-key memory traffic
     // beyond the key), then add the subgroup's sums into shared memory, one atomic per digit
     // and subgroup. Counting does not depend on order, so the reads are coalesced.
-    uint word = pc.shift < 32u ? 0u : 1u;
-    uint shift = pc.shift & 31u;
     uint counts[SORT_RADIX];
     [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
         counts[d] = 0u;
@@ -39,7 +38,7 @@ void main() {
     [[unroll]] for (uint k = 0u; k < SORT_ITEMS; ++k) {
         uint i = base + k * SORT_WORKGROUP + lid;
         if (i < n) {
-            uint digit = (pc.keys.v[2u * i + word] >> shift) & (SORT_RADIX - 1u);
+            uint digit = key_digit(pc.keys.v[i], pc.shift, pc.digit_mask);
             [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
                 counts[d] += digit == d ? 1u : 0u;
             }

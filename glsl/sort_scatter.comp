@@ -16,13 +16,14 @@
 layout(local_size_x = SORT_WORKGROUP) in;
 
 layout(push_constant) uniform Push {
-    UVec2s keys_in;
+    U32s keys_in;
     U32s values_in;
-    UVec2s keys_out;
+    U32s keys_out;
     U32s values_out;
     SortInfoRef info;
     U32s hist;          // scanned histogram: first output position of (digit, block)
     uint shift;
+    uint digit_mask;
 } pc;
 
 // Keys of each digit in each subgroup, then (after the per-digit scan over subgroups) the
@@ -41,14 +42,14 @@ void main() {
 
     // The invocation's keys and per-digit counters live in registers (unrolled loops, compares
     // instead of indexed memory), which suits CPU drivers and costs GPUs nothing.
-    uvec2 keys[SORT_ITEMS];
+    uint keys[SORT_ITEMS];
     uint counts[SORT_RADIX];
     [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
         counts[d] = 0u;
     }
     [[unroll]] for (uint k = 0u; k < SORT_ITEMS; ++k) {
-        keys[k] = base + k < n ? pc.keys_in.v[base + k] : uvec2(0u);
-        uint digit = key_digit(keys[k], pc.shift);
+        keys[k] = base + k < n ? pc.keys_in.v[base + k] : 0u;
+        uint digit = key_digit(keys[k], pc.shift, pc.digit_mask);
         [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
             counts[d] += (digit == d && base + k < n) ? 1u : 0u;
         }
@@ -83,7 +84,7 @@ void main() {
     [[unroll]] for (uint k = 0u; k < SORT_ITEMS; ++k) {
         uint i = base + k;
         if (i < n) {
-            uint digit = key_digit(keys[k], pc.shift);
+            uint digit = key_digit(keys[k], pc.shift, pc.digit_mask);
             uint dst = 0u;
             [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
                 if (digit == d) {

@@ -1,4 +1,4 @@
-// Stage 5, tile ranges: one invocation per sorted pair marks where each tile's list starts and
+// Stage 6, tile ranges: one invocation per sorted pair marks where each tile's list starts and
 // ends (ranges[tile] = [start, end), zero-filled beforehand for empty tiles).
 #version 460
 #include "common.glsl"
@@ -7,7 +7,7 @@
 layout(local_size_x = LINEAR_WORKGROUP) in;
 
 layout(push_constant) uniform Push {
-    UVec2s keys;        // sorted
+    U32s keys;          // sorted tile ids
     SortInfoRef info;   // num_keys
     UVec2s ranges;
 } pc;
@@ -18,11 +18,11 @@ void main() {
     if (i >= n) {
         return;
     }
-    uint tile = pc.keys.v[i].y;
-    if (i == 0u || pc.keys.v[i - 1u].y != tile) {
+    uint tile = pc.keys.v[i];
+    if (i == 0u || pc.keys.v[i - 1u] != tile) {
         pc.ranges.v[tile].x = i;
     }
-    if (i + 1u == n || pc.keys.v[i + 1u].y != tile) {
+    if (i + 1u == n || pc.keys.v[i + 1u] != tile) {
         pc.ranges.v[tile].y = i + 1u;
     }
 }

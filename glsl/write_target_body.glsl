@@ -1,4 +1,4 @@
-// Stage 7, write target: turns the rasterizer's per-pixel state (premultiplied colour C and
+// Stage 8, write target: turns the rasterizer's per-pixel state (premultiplied colour C and
 // transmittance T) into the caller's target, one invocation per pixel:
 //   background: out = (C + T bg.rgb, (1 - T) + T bg.a)
 //   over:       out = (C + T dst.rgb, (1 - T) + T dst.a), dst = what the target holds

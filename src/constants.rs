@@ -59,7 +59,8 @@ pub const MAX_INTERSECTIONS: u64 = SORT_BLOCK as u64 * LINEAR_GRID_X as u64;
 pub const COUNTER_INTERSECTIONS: u32 = 0;
 /// Counter slot: longest tile list seen by the rasterizer.
 pub const COUNTER_MAX_TILE_LEN: u32 = 1;
-/// Counter slot: Gaussians that survived projection (drawn or cutoff).
+/// Counter slot: Gaussians that touch at least one tile (the total of the drawn flags' scan;
+/// the depth sort sorts this many).
 pub const COUNTER_VISIBLE: u32 = 2;
 /// Counter slot: Gaussians classified as cutoff by the clip test.
 pub const COUNTER_CUTOFF: u32 = 3;

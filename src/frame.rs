@@ -47,12 +47,13 @@ pub struct FrameSlot {
 /// scratch that comes on top of the scene ([`crate::GpuScene::device_bytes`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameMemory {
-    /// Projected splats (64 B) and tiles touched (4 B, scanned in place) per Gaussian of the
-    /// scene, plus the prefix sum's partial sums (4 B per 1,024).
+    /// Per Gaussian of the scene: projected splats (64 B), tiles touched (4 B), sort slots /
+    /// pair offsets (4 B), the depth sort's keys and values (16 B) and histograms, plus the
+    /// prefix sum's partial sums (4 B per 1,024).
     pub per_gaussian: u64,
     /// Cutoff side records (48 B per Gaussian), allocated by the first rara-clipped frame.
     pub cutoff_records: u64,
-    /// Sort keys and values, double-buffered (24 B per pair), and the sort histograms, for
+    /// Sort keys and values, double-buffered (16 B per pair), and the sort histograms, for
     /// `intersection_capacity` (tile, splat) pairs.
     pub per_intersection: u64,
     /// Pairs the sort buffers hold (grown from the frames' counts).
@@ -87,7 +88,14 @@ pub(crate) struct FrameResources {
     pub(crate) cutoffs: Option<Buffer>,
     pub(crate) splats: Buffer,
     pub(crate) tiles_touched: Buffer,
-    pub(crate) touched_scan: PrefixSumScratch,
+    /// Per Gaussian: project's drawn flags, scanned into each drawn Gaussian's slot in the
+    /// depth sort; then, in depth order, the tiles touched, scanned into each one's first pair.
+    pub(crate) slots: Buffer,
+    /// Scratch of both prefix sums over `slots`.
+    pub(crate) slots_scan: PrefixSumScratch,
+    /// The drawn Gaussians' (depth bits, index) pairs and their sort.
+    pub(crate) depth_sort: SortBuffers,
+    /// The (tile id, splat index) pairs and their sort.
     pub(crate) sort: SortBuffers,
     pub(crate) ranges: Buffer,
     /// Per pixel (premultiplied colour, transmittance), for the write-target stage.
@@ -147,7 +155,11 @@ impl FrameSlot {
         };
         if let Some(r) = &self.resources {
             m.fixed += r.params.size + r.clip_params.size + r.counters.size;
-            m.per_gaussian = r.splats.size + r.tiles_touched.size + r.touched_scan.device_bytes();
+            m.per_gaussian = r.splats.size
+                + r.tiles_touched.size
+                + r.slots.size
+                + r.slots_scan.device_bytes()
+                + r.depth_sort.device_bytes();
             m.cutoff_records = r.cutoffs.as_ref().map_or(0, |b| b.size);
             m.per_intersection = r.sort.device_bytes();
             m.intersection_capacity = r.capacity;
@@ -244,7 +256,9 @@ impl FrameSlot {
                 cutoffs: None,
                 splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
                 tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
-                touched_scan: prefix_sum.scratch(ctx, n)?,
+                slots: Buffer::new(ctx, "depth sort slots / pair offsets", n * 4, gpu)?,
+                slots_scan: prefix_sum.scratch(ctx, n)?,
+                depth_sort: sort.buffers(ctx, n)?,
                 sort: sort.buffers(ctx, capacity)?,
                 ranges: Buffer::new(ctx, "tile ranges", (gx * gy) as u64 * 8, gpu)?,
                 state: Buffer::new(ctx, "raster state", pixels * 16, gpu)?,

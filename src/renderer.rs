@@ -1,5 +1,5 @@
-//! The frame: project -> prefix sum -> emit -> sort -> tile ranges -> rasterize -> write
-//! target, recorded into one command buffer with no host round trip inside it.
+//! The frame: project -> depth order -> prefix sum -> emit -> sort -> tile ranges -> rasterize
+//! -> write target, recorded into one command buffer with no host round trip inside it.
 //!
 //! [`Renderer::record`] is the engine-facing entry point: it only records into the caller's
 //! command buffer. [`Renderer::render`] is the headless one the CLI uses, built on `record`.
@@ -9,25 +9,26 @@ use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
-use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, MAX_GAUSSIANS};
+use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, COUNTER_VISIBLE, MAX_GAUSSIANS};
 use crate::error::{Error, Result};
 use crate::frame::{FrameMemory, FrameSlot};
 use crate::gpu_types::{GpuFrameParams, GpuGaussian};
 use crate::precision::{f32_to_f16_bits, ShPrecision};
 use crate::scene::Scene;
+use crate::stages::depth_order::{DepthCountsPush, DepthKeysPush, DepthOrder};
 use crate::stages::emit::{Emit, EmitPush};
 use crate::stages::prefix_sum::PrefixSum;
 use crate::stages::project::{Project, ProjectPush};
 use crate::stages::rasterize::{RasterLayout, Rasterize, RasterizePush};
-use crate::stages::sort::RadixSort;
+use crate::stages::sort::{RadixSort, DEPTH_SORT_LABELS, TILE_SORT_LABELS};
 use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
 use crate::stages::write_target::{WriteTarget, WriteTargetPush};
 use crate::target::{Composite, Target, TargetFormat};
 use crate::timing::{PassTimer, PassTiming};
 use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
 
-/// Byte offset of `scene.x` (the Gaussian count) in `FrameParams`: the prefix sum of tiles
-/// touched reads its length there.
+/// Byte offset of `scene.x` (the Gaussian count) in `FrameParams`: the scan of the drawn flags
+/// reads its length there.
 const PARAMS_COUNT_OFFSET: u64 = 112;
 
 /// The Gaussian `i` of `scene` as the kernels read it (activated values, SPEC section 1).
@@ -213,10 +214,15 @@ pub struct FrameStats {
 pub struct Intermediates {
     /// Output of project, per Gaussian.
     pub splats: Vec<crate::gpu_types::GpuProjectedSplat>,
-    /// Exclusive prefix sum of tiles touched, per Gaussian.
+    /// Tiles touched, per Gaussian.
+    pub tiles_touched: Vec<u32>,
+    /// The drawn Gaussians' indices in depth order (ties: index order).
+    pub depth_order: Vec<u32>,
+    /// Exclusive prefix sum of tiles touched, in depth order: each drawn Gaussian's first
+    /// pair.
     pub offsets: Vec<u32>,
-    /// Sorted keys (tile in the high word, depth bits in the low word).
-    pub keys: Vec<u64>,
+    /// Sorted keys (tile ids).
+    pub keys: Vec<u32>,
     /// Splat index of each sorted key.
     pub values: Vec<u32>,
     /// `[start, end)` per tile.
@@ -230,6 +236,7 @@ pub struct Renderer {
     ctx: Context,
     project: Project,
     prefix_sum: PrefixSum,
+    depth_order: DepthOrder,
     emit: Emit,
     sort: RadixSort,
     tile_ranges: TileRanges,
@@ -247,11 +254,15 @@ struct HeadlessFrame {
     image: Option<(u32, u32, Buffer, Buffer)>,
 }
 
-/// Sort key bits: 32 depth bits + enough bits for the tile id.
+/// Sort key bits of the frame's pair sort: enough bits for the tile id (the pairs are emitted in
+/// depth order, which the stable sort keeps within each tile).
 pub fn key_bits(width: u32, height: u32) -> u32 {
     let (gx, gy) = tile_grid(width, height);
-    32 + (gx * gy).next_power_of_two().trailing_zeros()
+    (gx * gy).next_power_of_two().trailing_zeros()
 }
+
+/// Key bits of the depth sort: all 32 bits of the (positive) float depth.
+const DEPTH_KEY_BITS: u32 = 32;
 
 impl Renderer {
     /// Builds every kernel of the pipeline, with the rasterizer layout that suits the device
@@ -266,6 +277,7 @@ impl Renderer {
             ctx: ctx.clone(),
             project: Project::new(ctx)?,
             prefix_sum: PrefixSum::new(ctx)?,
+            depth_order: DepthOrder::new(ctx)?,
             emit: Emit::new(ctx)?,
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx)?,
@@ -421,11 +433,15 @@ impl Renderer {
             .and_then(|h| h.slot.resources.as_ref())
             .expect("render a frame first");
         let n = scene.count as usize;
+        let drawn = stats.visible as usize;
         let m = stats.intersections as usize;
         let (gx, gy) = tile_grid(f.width, f.height);
+        let depth_sorted = crate::stages::sort::passes_for(DEPTH_KEY_BITS) as usize % 2;
         Ok(Intermediates {
             splats: f.splats.download_as(n)?,
-            offsets: f.tiles_touched.download_as(n)?,
+            tiles_touched: f.tiles_touched.download_as(n)?,
+            depth_order: f.depth_sort.values[depth_sorted].download_as(drawn)?,
+            offsets: f.slots.download_as(drawn)?,
             keys: f.sort.keys[f.sorted].download_as(m)?,
             values: f.sort.values[f.sorted].download_as(m)?,
             ranges: f.ranges.download_as((gx * gy) as usize)?,
@@ -567,6 +583,7 @@ impl Renderer {
             sh: scene.sh.address,
             splats: f.splats.address,
             tiles_touched: f.tiles_touched.address,
+            drawn: f.slots.address,
             counters: f.counters.address,
             clip: f.clip_params.address,
             cutoffs: cutoffs_address,
@@ -576,14 +593,55 @@ impl Renderer {
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"project");
 
-        timer.begin_pass(cmd, c"prefix sum");
+        // The drawn Gaussians, packed in index order, then sorted by depth.
+        timer.begin_pass(cmd, c"depth keys");
         self.prefix_sum.record(
             ctx,
             cmd,
-            f.tiles_touched.address,
+            f.slots.address,
             f.params.address + PARAMS_COUNT_OFFSET,
+            Some(counters_at(COUNTER_VISIBLE)),
+            &f.slots_scan,
+        );
+        let push = DepthKeysPush {
+            frame: f.params.address,
+            splats: f.splats.address,
+            tiles_touched: f.tiles_touched.address,
+            slots: f.slots.address,
+            keys: f.depth_sort.keys[0].address,
+            values: f.depth_sort.values[0].address,
+        };
+        self.depth_order.record_keys(cmd, &push, scene.count);
+        compute_barrier(ctx, cmd);
+        timer.end_pass(cmd, c"depth keys");
+        let depth_sorted = self.sort.record(
+            ctx,
+            cmd,
+            &f.depth_sort,
+            counters_at(COUNTER_VISIBLE),
+            DEPTH_KEY_BITS,
+            &DEPTH_SORT_LABELS,
+            Some(&mut *timer),
+        );
+        let depth_order = f.depth_sort.values[depth_sorted].address;
+
+        // Each drawn Gaussian's first pair, in depth order.
+        timer.begin_pass(cmd, c"prefix sum");
+        let push = DepthCountsPush {
+            drawn: counters_at(COUNTER_VISIBLE),
+            order: depth_order,
+            tiles_touched: f.tiles_touched.address,
+            counts: f.slots.address,
+        };
+        self.depth_order.record_counts(cmd, &push, scene.count);
+        compute_barrier(ctx, cmd);
+        self.prefix_sum.record(
+            ctx,
+            cmd,
+            f.slots.address,
+            counters_at(COUNTER_VISIBLE),
             Some(counters_at(COUNTER_INTERSECTIONS)),
-            &f.touched_scan,
+            &f.slots_scan,
         );
         timer.end_pass(cmd, c"prefix sum");
 
@@ -591,7 +649,9 @@ impl Renderer {
         let push = EmitPush {
             frame: f.params.address,
             splats: f.splats.address,
-            offsets: f.tiles_touched.address,
+            drawn: counters_at(COUNTER_VISIBLE),
+            order: depth_order,
+            offsets: f.slots.address,
             keys: f.sort.keys[0].address,
             values: f.sort.values[0].address,
         };
@@ -605,6 +665,7 @@ impl Renderer {
             &f.sort,
             counters_at(COUNTER_INTERSECTIONS),
             key_bits(w, h),
+            &TILE_SORT_LABELS,
             Some(&mut *timer),
         );
         debug_assert_eq!(sorted, sorted_index);

@@ -149,20 +149,35 @@ fn each_stage_matches_its_cpu_twin() {
     }
     assert_eq!(visible, stats.visible as usize);
 
-    // prefix sum: offsets of the visible Gaussians' pairs (the tiles of their rectangles that
-    // their visible footprint reaches).
+    // depth order: the drawn Gaussians by (depth, index), using the GPU's own depths so that
+    // float differences between the twins cannot reorder near-equal depths.
+    let mut expected_order: Vec<u32> = cpu_splats.iter().map(|c| c.index).collect();
+    expected_order.sort_by_key(|&i| (mid.splats[i as usize].depth.to_bits(), i));
+    assert_eq!(mid.depth_order, expected_order, "depth order");
+
+    // tiles touched and the prefix sum over them in depth order: each drawn Gaussian's first
+    // pair (the tiles of its rectangle that its visible footprint reaches).
+    let by_index: std::collections::HashMap<u32, &reference::project::ProjectedSplat> =
+        cpu_splats.iter().map(|c| (c.index, c)).collect();
     let mut acc = 0u32;
-    let mut cpu_iter = cpu_splats.iter().peekable();
-    for i in 0..scene.len() {
-        assert_eq!(mid.offsets[i], acc, "offset of Gaussian {i}");
-        if let Some(c) = cpu_iter.next_if(|c| c.index as usize == i) {
-            let q_max = footprint_q_max(c.opacity);
-            for ty in c.rect[1]..c.rect[3] {
-                for tx in c.rect[0]..c.rect[2] {
-                    acc += footprint_touches_tile(c.uv, c.conic, q_max, tx, ty) as u32;
-                }
+    for (j, &i) in mid.depth_order.iter().enumerate() {
+        assert_eq!(
+            mid.offsets[j], acc,
+            "offset of Gaussian {i} (depth rank {j})"
+        );
+        let c = by_index[&i];
+        let q_max = footprint_q_max(c.opacity);
+        let mut touched = 0;
+        for ty in c.rect[1]..c.rect[3] {
+            for tx in c.rect[0]..c.rect[2] {
+                touched += footprint_touches_tile(c.uv, c.conic, q_max, tx, ty) as u32;
             }
         }
+        assert_eq!(
+            mid.tiles_touched[i as usize], touched,
+            "tiles touched by Gaussian {i}"
+        );
+        acc += touched;
     }
     assert_eq!(acc, stats.intersections);
 
@@ -175,7 +190,7 @@ fn each_stage_matches_its_cpu_twin() {
         assert_eq!(gpu_list, cpu_list, "tile {tile}: sorted list differs");
         assert!(mid.keys[start as usize..end as usize]
             .iter()
-            .all(|key| (key >> 32) as usize == tile));
+            .all(|&key| key as usize == tile));
     }
 
     // rasterize: the CPU compositor over the GPU's own projected splats and lists.

@@ -7,7 +7,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use rara::clip::{Clip, ClipMode, Plane};
-use rara::stages::sort::RadixSort;
+use rara::stages::sort::{RadixSort, TILE_SORT_LABELS};
 use rara::timing::PassTimer;
 use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
@@ -123,11 +123,14 @@ impl ModeResult {
         self.medians_by(|name| name)
     }
 
-    /// Medians of the groups shown in the table: the sort passes are summed into "sort".
+    /// Medians of the groups shown in the table: the passes of each sort are summed into "sort"
+    /// and "depth sort".
     fn group_medians(&self) -> Vec<(String, f64)> {
         self.medians_by(|name| {
             if name.starts_with("sort") {
                 "sort"
+            } else if name.starts_with("depth sort") {
+                "depth sort"
             } else {
                 name
             }
@@ -377,17 +380,16 @@ fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
     })
 }
 
-/// The radix sort alone on `n` random pairs (keys of 43 bits, as a 640x480 frame uses), GPU
-/// timestamps against `slice::sort_unstable_by_key` on the same data, medians of 5 runs each.
+/// The radix sort alone on `n` random pairs (full 32-bit keys, as the frame's depth sort uses),
+/// GPU timestamps against `slice::sort_unstable_by_key` on the same data, medians of 5 runs
+/// each.
 fn bench_sort(n: u64) -> Result<()> {
     const RUNS: usize = 5;
-    const KEY_BITS: u32 = 43;
+    const KEY_BITS: u32 = 32;
     let ctx = Context::from_env()?;
     let sort = RadixSort::new(&ctx)?;
     let mut rng = rara::synth::Rng::new(1);
-    let keys: Vec<u64> = (0..n)
-        .map(|_| rng.next_u64() & ((1u64 << KEY_BITS) - 1))
-        .collect();
+    let keys: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
     let values: Vec<u32> = (0..n as u32).collect();
     let bufs = sort.buffers(&ctx, n)?;
     let count = Buffer::from_slice(&ctx, "sort count", &[n as u32])?;
@@ -399,16 +401,24 @@ fn bench_sort(n: u64) -> Result<()> {
         bufs.values[0].upload(bytemuck::cast_slice(&values))?;
         let out = ctx.run_commands(|cmd| {
             timer.begin_frame(cmd);
-            sort.record(&ctx, cmd, &bufs, count.address, KEY_BITS, Some(&mut timer))
+            sort.record(
+                &ctx,
+                cmd,
+                &bufs,
+                count.address,
+                KEY_BITS,
+                &TILE_SORT_LABELS,
+                Some(&mut timer),
+            )
         })?;
         gpu_ms.push(timer.read()?.iter().map(|p| p.ms).sum::<f64>());
-        gpu_result = bufs.keys[out].download_as::<u64>(n as usize)?;
+        gpu_result = bufs.keys[out].download_as::<u32>(n as usize)?;
     }
     gpu_ms.remove(0); // warm-up
     let mut cpu_ms = Vec::new();
     let mut cpu_result = Vec::new();
     for _ in 0..RUNS {
-        let mut pairs: Vec<(u64, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
+        let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
         let start = std::time::Instant::now();
         pairs.sort_unstable_by_key(|p| p.0);
         cpu_ms.push(start.elapsed().as_secs_f64() * 1e3);
@@ -422,7 +432,7 @@ fn bench_sort(n: u64) -> Result<()> {
     let (g, c) = (median(&mut gpu_ms), median(&mut cpu_ms));
     let rate = |ms: f64| n as f64 / (ms * 1e-3) / 1e6;
     println!(
-        "sort of {n} random (43-bit key, u32 value) pairs on {} ({}), medians of {RUNS} runs:",
+        "sort of {n} random (u32 key, u32 value) pairs on {} ({}), medians of {RUNS} runs:",
         ctx.info().name,
         ctx.info().driver
     );

@@ -1,4 +1,5 @@
-//! Stage 3: emit one (tile, depth) key and splat index per touched tile (`glsl/emit.comp`).
+//! Stage 4: emit one (tile id, splat index) pair per touched tile, in depth order
+//! (`glsl/emit.comp`).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -15,9 +16,13 @@ pub struct EmitPush {
     pub frame: u64,
     /// `ProjectedSplat[]`.
     pub splats: u64,
-    /// Exclusive prefix sum of tiles touched.
+    /// `u32`: the number of drawn Gaussians.
+    pub drawn: u64,
+    /// Gaussian indices in depth order.
+    pub order: u64,
+    /// Exclusive prefix sum of tiles touched, in depth order.
     pub offsets: u64,
-    /// Out: keys.
+    /// Out: keys (tile ids).
     pub keys: u64,
     /// Out: values (splat indices).
     pub values: u64,
@@ -36,7 +41,8 @@ impl Emit {
         })
     }
 
-    /// Records the emission for `count` Gaussians.
+    /// Records the emission for a scene of `count` Gaussians (the drawn ones are read on the
+    /// GPU).
     pub fn record(&self, cmd: vk::CommandBuffer, push: &EmitPush, count: u32) {
         self.pipeline.dispatch(cmd, push, super::linear_grid(count));
     }

@@ -1,4 +1,4 @@
-//! Stage 2 (and a building block of the sort): exclusive prefix sum of `u32`s whose count is
+//! Stage 3 (and a building block of the depth order and the sort): exclusive prefix sum of `u32`s whose count is
 //! known only on the GPU. Reduce-then-scan over up to three levels of blocks, every pass an
 //! indirect dispatch; no workgroup ever waits on another.
 //!

@@ -22,6 +22,8 @@ pub struct ProjectPush {
     pub splats: u64,
     /// Out: tiles touched per Gaussian.
     pub tiles_touched: u64,
+    /// Out: 1 per Gaussian that touches a tile, else 0.
+    pub drawn: u64,
     /// Frame counters (visible count).
     pub counters: u64,
     /// `ClipParams`.

@@ -1,4 +1,4 @@
-//! Stage 6: composite each tile's sorted splats per pixel (`glsl/rasterize.comp`; CPU twin
+//! Stage 7: composite each tile's sorted splats per pixel (`glsl/rasterize.comp`; CPU twin
 //! `reference::rasterize`).
 
 use ash::vk;

@@ -1,4 +1,5 @@
-//! Stage 4: a stable GPU radix sort of (64-bit key, 32-bit value) pairs, a reusable component.
+//! Stage 5 (and part of stage 2): a stable GPU radix sort of (32-bit key, 32-bit value) pairs,
+//! a reusable component. The frame uses it twice: the visible Gaussians by depth, then their (tile, splat) pairs by tile.
 //!
 //! Least-significant-digit first, SORT_RADIX_BITS bits per pass, each pass reduce-then-scan:
 //! `sort_count` (block histograms) -> prefix sum over the digit-major histogram ->
@@ -7,6 +8,8 @@
 //! workgroup waits on another and nothing assumes a subgroup size.
 //!
 //! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_count.comp`, `glsl/sort_scatter.comp`.
+
+use std::ffi::CStr;
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -35,7 +38,7 @@ struct CountPush {
     info: u64,
     hist: u64,
     shift: u32,
-    pad: u32,
+    digit_mask: u32,
 }
 
 #[repr(C)]
@@ -48,7 +51,7 @@ struct ScatterPush {
     info: u64,
     hist: u64,
     shift: u32,
-    pad: u32,
+    digit_mask: u32,
 }
 
 /// Byte offset of `block_args` in `SortInfo`.
@@ -68,7 +71,7 @@ pub struct RadixSort {
 
 /// Ping-pong key/value buffers and scratch for sorting up to `capacity` pairs.
 pub struct SortBuffers {
-    /// Keys as `u64` (low word, high word), two buffers that passes alternate between.
+    /// Keys (`u32`), two buffers that passes alternate between.
     pub keys: [Buffer; 2],
     /// Values, alongside `keys`.
     pub values: [Buffer; 2],
@@ -96,28 +99,51 @@ impl SortBuffers {
     }
 }
 
-/// Debug labels / timing names of the radix passes (64-bit keys need at most 16).
-const SORT_PASS_LABELS: [&std::ffi::CStr; 16] = [
-    c"sort pass 0",
-    c"sort pass 1",
-    c"sort pass 2",
-    c"sort pass 3",
-    c"sort pass 4",
-    c"sort pass 5",
-    c"sort pass 6",
-    c"sort pass 7",
-    c"sort pass 8",
-    c"sort pass 9",
-    c"sort pass 10",
-    c"sort pass 11",
-    c"sort pass 12",
-    c"sort pass 13",
-    c"sort pass 14",
-    c"sort pass 15",
-];
+/// Most radix passes: 32-bit keys.
+const MAX_PASSES: usize = (32 / SORT_RADIX_BITS) as usize;
 
-/// Number of radix passes for `key_bits` significant key bits.
+/// Debug labels / timing names of one use of the sort: its setup and each radix pass.
+pub struct SortLabels {
+    /// The setup pass.
+    pub setup: &'static CStr,
+    /// Radix pass `k`.
+    pub passes: [&'static CStr; MAX_PASSES],
+}
+
+/// Labels of the frame's sort of (tile, splat) pairs by tile ("sort setup", "sort pass 0", ...),
+/// also used by `rara bench --sort`.
+pub const TILE_SORT_LABELS: SortLabels = SortLabels {
+    setup: c"sort setup",
+    passes: [
+        c"sort pass 0",
+        c"sort pass 1",
+        c"sort pass 2",
+        c"sort pass 3",
+        c"sort pass 4",
+        c"sort pass 5",
+        c"sort pass 6",
+        c"sort pass 7",
+    ],
+};
+
+/// Labels of the frame's sort of the visible Gaussians by depth ("depth sort setup", ...).
+pub const DEPTH_SORT_LABELS: SortLabels = SortLabels {
+    setup: c"depth sort setup",
+    passes: [
+        c"depth sort pass 0",
+        c"depth sort pass 1",
+        c"depth sort pass 2",
+        c"depth sort pass 3",
+        c"depth sort pass 4",
+        c"depth sort pass 5",
+        c"depth sort pass 6",
+        c"depth sort pass 7",
+    ],
+};
+
+/// Number of radix passes for `key_bits` (at most 32) significant key bits.
 pub fn passes_for(key_bits: u32) -> u32 {
+    assert!(key_bits <= 32, "keys are 32-bit, {key_bits} bits asked for");
     key_bits.div_ceil(SORT_RADIX_BITS)
 }
 
@@ -148,8 +174,8 @@ impl RadixSort {
         let gpu = MemoryLocation::GpuOnly;
         Ok(SortBuffers {
             keys: [
-                Buffer::new(ctx, "sort keys A", capacity * 8, gpu)?,
-                Buffer::new(ctx, "sort keys B", capacity * 8, gpu)?,
+                Buffer::new(ctx, "sort keys A", capacity * 4, gpu)?,
+                Buffer::new(ctx, "sort keys B", capacity * 4, gpu)?,
             ],
             values: [
                 Buffer::new(ctx, "sort values A", capacity * 4, gpu)?,
@@ -168,9 +194,10 @@ impl RadixSort {
 
     /// Records the sort of the pairs in `bufs.keys[0]` / `bufs.values[0]`. Their number is the
     /// `u32` at device address `count`, clamped to the capacity. Only the low `key_bits` bits
-    /// of the keys are sorted. Returns the index (0 or 1) of the buffers holding the result.
-    /// Ends with a barrier. With a `timer`, every radix pass is a timed pass of its own
-    /// ("sort setup", "sort pass 0", ...).
+    /// (at most 32) of the keys are sorted. Returns the index (0 or 1) of the buffers holding
+    /// the result. Ends with a barrier. With a `timer`, the setup and every radix pass are
+    /// timed passes of their own, named by `labels`.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,
@@ -178,10 +205,11 @@ impl RadixSort {
         bufs: &SortBuffers,
         count: u64,
         key_bits: u32,
+        labels: &SortLabels,
         mut timer: Option<&mut PassTimer>,
     ) -> usize {
         if let Some(t) = timer.as_deref_mut() {
-            t.begin_pass(cmd, c"sort setup");
+            t.begin_pass(cmd, labels.setup);
         }
         let info = bufs.info.address;
         let hist = info + SORT_HIST_OFFSET;
@@ -194,21 +222,22 @@ impl RadixSort {
         self.prepare.dispatch(cmd, &push, [1, 1, 1]);
         compute_barrier(ctx, cmd);
         if let Some(t) = timer.as_deref_mut() {
-            t.end_pass(cmd, c"sort setup");
+            t.end_pass(cmd, labels.setup);
         }
         let mut src = 0;
         for pass in 0..passes_for(key_bits) {
-            let label = SORT_PASS_LABELS[(pass as usize).min(SORT_PASS_LABELS.len() - 1)];
+            let label = labels.passes[pass as usize];
             if let Some(t) = timer.as_deref_mut() {
                 t.begin_pass(cmd, label);
             }
             let shift = pass * SORT_RADIX_BITS;
+            let digit_mask = (1u32 << SORT_RADIX_BITS.min(key_bits - shift)) - 1;
             let push = CountPush {
                 keys: bufs.keys[src].address,
                 info,
                 hist,
                 shift,
-                pad: 0,
+                digit_mask,
             };
             self.count
                 .dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
@@ -223,7 +252,7 @@ impl RadixSort {
                 info,
                 hist,
                 shift,
-                pad: 0,
+                digit_mask,
             };
             self.scatter
                 .dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
@@ -237,21 +266,30 @@ impl RadixSort {
     }
 
     /// Sorts `keys` with their `values` on the GPU (upload, sort, read back), comparing only the
-    /// low `key_bits` bits. Stable: equal keys keep their input order.
+    /// low `key_bits` bits (at most 32). Stable: equal keys keep their input order.
     pub fn sort_pairs(
         &self,
         ctx: &Context,
-        keys: &[u64],
+        keys: &[u32],
         values: &[u32],
         key_bits: u32,
-    ) -> Result<(Vec<u64>, Vec<u32>)> {
+    ) -> Result<(Vec<u32>, Vec<u32>)> {
         assert_eq!(keys.len(), values.len(), "one value per key");
         let bufs = self.buffers(ctx, keys.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(keys))?;
         bufs.values[0].upload(bytemuck::cast_slice(values))?;
         let count = Buffer::from_slice(ctx, "sort count", &[keys.len() as u32])?;
-        let out =
-            ctx.run_commands(|cmd| self.record(ctx, cmd, &bufs, count.address, key_bits, None))?;
+        let out = ctx.run_commands(|cmd| {
+            self.record(
+                ctx,
+                cmd,
+                &bufs,
+                count.address,
+                key_bits,
+                &TILE_SORT_LABELS,
+                None,
+            )
+        })?;
         Ok((
             bufs.keys[out].download_as(keys.len())?,
             bufs.values[out].download_as(values.len())?,

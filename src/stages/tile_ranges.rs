@@ -1,4 +1,4 @@
-//! Stage 5: where each tile's run of sorted pairs starts and ends (`glsl/tile_ranges.comp`).
+//! Stage 6: where each tile's run of sorted pairs starts and ends (`glsl/tile_ranges.comp`).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};

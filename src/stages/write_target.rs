@@ -1,4 +1,4 @@
-//! Stage 7: write the rasterizer's per-pixel state into the caller's target, over a background
+//! Stage 8: write the rasterizer's per-pixel state into the caller's target, over a background
 //! or over what the target holds (`glsl/write_target_*.comp`).
 
 use ash::vk;
