@@ -37,18 +37,21 @@ pub const MAX_GAUSSIANS: u64 = SCAN_BLOCK as u64 * LINEAR_GRID_X as u64;
 pub const SORT_RADIX_BITS: u32 = 4;
 /// Buckets per radix-sort digit.
 pub const SORT_RADIX: u32 = 1 << SORT_RADIX_BITS;
-/// Threads per workgroup of the radix-sort count and scatter kernels.
+/// Keys one radix-sort workgroup handles, in either sort layout.
+pub const SORT_BLOCK: u32 = 4096;
+/// Threads per workgroup of the radix-sort count and scatter kernels in the GPU layout
+/// (`SortLayout::ShortRuns`).
 pub const SORT_WORKGROUP: u32 = 256;
-/// Consecutive keys each sort thread owns within its block (the scatter keeps their order,
-/// which makes the sort stable).
-pub const SORT_ITEMS: u32 = 16;
+/// Consecutive keys each sort thread owns within its block in the GPU layout (the scatter
+/// keeps their order, which makes the sort stable).
+pub const SORT_ITEMS: u32 = SORT_BLOCK / SORT_WORKGROUP;
+/// Threads per sort workgroup in the CPU-driver layout (`SortLayout::LongRuns`).
+pub const SORT_LONG_RUN_WORKGROUP: u32 = 64;
+/// Consecutive keys each sort thread owns in the CPU-driver layout.
+pub const SORT_LONG_RUN_ITEMS: u32 = SORT_BLOCK / SORT_LONG_RUN_WORKGROUP;
 /// Smallest subgroup size the kernels support (real devices have 4 or more): the sort's
 /// scatter and the workgroup scan keep one shared-memory slot per subgroup.
 pub const MIN_SUBGROUP_SIZE: u32 = 4;
-/// Most subgroups in one sort workgroup.
-pub const SORT_MAX_SUBGROUPS: u32 = SORT_WORKGROUP / MIN_SUBGROUP_SIZE;
-/// Keys one sort workgroup handles.
-pub const SORT_BLOCK: u32 = SORT_WORKGROUP * SORT_ITEMS;
 
 /// Most (tile, splat) pairs one frame sorts: the sort dispatches one workgroup per
 /// `SORT_BLOCK` keys along X (268,431,360; 6.4 GB of sort buffers). A frame with more is drawn
@@ -102,8 +105,9 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("SORT_RADIX", SORT_RADIX),
     ("SORT_WORKGROUP", SORT_WORKGROUP),
     ("SORT_ITEMS", SORT_ITEMS),
+    ("SORT_LONG_RUN_WORKGROUP", SORT_LONG_RUN_WORKGROUP),
+    ("SORT_LONG_RUN_ITEMS", SORT_LONG_RUN_ITEMS),
     ("MIN_SUBGROUP_SIZE", MIN_SUBGROUP_SIZE),
-    ("SORT_MAX_SUBGROUPS", SORT_MAX_SUBGROUPS),
     ("SORT_BLOCK", SORT_BLOCK),
     ("COUNTER_INTERSECTIONS", COUNTER_INTERSECTIONS),
     ("COUNTER_MAX_TILE_LEN", COUNTER_MAX_TILE_LEN),

@@ -3,7 +3,10 @@
 mod common;
 
 use rara::constants::{SCAN_BLOCK, SORT_BLOCK, SORT_RADIX};
-use rara::stages::sort::RadixSort;
+use rara::stages::sort::{RadixSort, SortLayout};
+
+/// Both layouts run on every device, so the GPU one is checked here too.
+const LAYOUTS: [SortLayout; 2] = [SortLayout::ShortRuns, SortLayout::LongRuns];
 use rara::synth::Rng;
 
 fn check_sort(sorter: &RadixSort, ctx: &rara::Context, keys: Vec<u32>, key_bits: u32, what: &str) {
@@ -24,8 +27,9 @@ fn check_sort(sorter: &RadixSort, ctx: &rara::Context, keys: Vec<u32>, key_bits:
     {
         assert!(
             k == gk && v == gv,
-            "{what} (n = {}): position {i}: GPU ({gk:#x}, {gv}), expected ({k:#x}, {v})",
-            keys.len()
+            "{what} (n = {}, {:?}): position {i}: GPU ({gk:#x}, {gv}), expected ({k:#x}, {v})",
+            keys.len(),
+            sorter.layout()
         );
     }
     common::assert_no_validation_messages(ctx);
@@ -44,7 +48,13 @@ fn random_keys(n: usize, bits: u32, seed: u64) -> Vec<u32> {
 #[test]
 fn sort_sizes_around_block_boundaries() {
     let ctx = common::context();
-    let sorter = RadixSort::new(&ctx).unwrap();
+    for layout in LAYOUTS {
+        sort_sizes_in_layout(&ctx, layout);
+    }
+}
+
+fn sort_sizes_in_layout(ctx: &rara::Context, layout: SortLayout) {
+    let sorter = RadixSort::with_layout(ctx, layout).unwrap();
     let block = SORT_BLOCK as usize;
     // Histogram length is SORT_RADIX per block: its scan changes level at SCAN_BLOCK entries.
     let hist_level = (SCAN_BLOCK / SORT_RADIX) as usize * block;
@@ -55,7 +65,7 @@ fn sort_sizes_around_block_boundaries() {
     for (k, n) in sizes.into_iter().enumerate() {
         check_sort(
             &sorter,
-            &ctx,
+            ctx,
             random_keys(n, 32, k as u64),
             32,
             "random 32-bit keys",
@@ -66,48 +76,56 @@ fn sort_sizes_around_block_boundaries() {
 #[test]
 fn sort_key_patterns() {
     let ctx = common::context();
-    let sorter = RadixSort::new(&ctx).unwrap();
+    for layout in LAYOUTS {
+        key_patterns_in_layout(&ctx, layout);
+    }
+}
+
+fn key_patterns_in_layout(ctx: &rara::Context, layout: SortLayout) {
+    let sorter = RadixSort::with_layout(ctx, layout).unwrap();
     let n = 3 * SORT_BLOCK as usize + 17;
-    check_sort(&sorter, &ctx, vec![0x1234_5678; n], 32, "all-equal keys");
+    check_sort(&sorter, ctx, vec![0x1234_5678; n], 32, "all-equal keys");
     check_sort(
         &sorter,
-        &ctx,
+        ctx,
         (0..n as u32).map(|i| i * 3).collect(),
         32,
         "sorted keys",
     );
     check_sort(
         &sorter,
-        &ctx,
+        ctx,
         (0..n as u32).rev().map(|i| i << 14).collect(),
         32,
         "reverse-sorted keys",
     );
     // Few distinct keys: stability decides the order of the values.
-    check_sort(&sorter, &ctx, random_keys(n, 3, 5), 3, "3-bit keys");
+    check_sort(&sorter, ctx, random_keys(n, 3, 5), 3, "3-bit keys");
     // Bits above key_bits must be ignored.
     check_sort(
         &sorter,
-        &ctx,
+        ctx,
         random_keys(n, 32, 6),
         13,
         "32-bit keys sorted on 13 bits",
     );
     // Tile ids as a frame sorts them: few bits, long runs of equal keys.
-    check_sort(&sorter, &ctx, random_keys(n, 11, 7), 11, "11-bit keys");
+    check_sort(&sorter, ctx, random_keys(n, 11, 7), 11, "11-bit keys");
 }
 
 #[test]
 fn sort_two_million_pairs() {
     let ctx = common::context();
-    let sorter = RadixSort::new(&ctx).unwrap();
-    check_sort(
-        &sorter,
-        &ctx,
-        random_keys(2_000_000, 32, 99),
-        32,
-        "2M random pairs",
-    );
+    for layout in LAYOUTS {
+        let sorter = RadixSort::with_layout(&ctx, layout).unwrap();
+        check_sort(
+            &sorter,
+            &ctx,
+            random_keys(2_000_000, 32, 99),
+            32,
+            "2M random pairs",
+        );
+    }
 }
 
 #[test]

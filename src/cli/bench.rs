@@ -432,9 +432,11 @@ fn bench_sort(n: u64) -> Result<()> {
     let (g, c) = (median(&mut gpu_ms), median(&mut cpu_ms));
     let rate = |ms: f64| n as f64 / (ms * 1e-3) / 1e6;
     println!(
-        "sort of {n} random (u32 key, u32 value) pairs on {} ({}), medians of {RUNS} runs:",
+        "sort of {n} random (u32 key, u32 value) pairs on {} ({}), {:?} layout, medians of \
+         {RUNS} runs:",
         ctx.info().name,
-        ctx.info().driver
+        ctx.info().driver,
+        sort.layout()
     );
     println!(
         "  GPU radix sort (timestamps): {g:9.2} ms  {:8.1} Mkeys/s",
