@@ -1,6 +1,7 @@
-// Stage 7, rasterize, CPU-driver layout (16-pixel column strips), no rara clipping
+// Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows), no rara clipping
 // (see rasterize_body.glsl).
 #version 460
 #define PIXELS_PER_INVOCATION 16
+#define COLUMNS_PER_INVOCATION 2
 #define CUTOFF_WEIGHT 0
 #include "rasterize_body.glsl"

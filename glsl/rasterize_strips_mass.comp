@@ -1,6 +1,7 @@
-// Stage 7, rasterize, CPU-driver layout, rara clipping with the mass weight
+// Stage 7, rasterize, CPU-driver layout (2 x 16-pixel strips), rara clipping with the mass weight
 // (see rasterize_body.glsl).
 #version 460
 #define PIXELS_PER_INVOCATION 16
+#define COLUMNS_PER_INVOCATION 2
 #define CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1
 #include "rasterize_body.glsl"

@@ -45,8 +45,9 @@ const ROUND_FIRST: u32 = 1;
 pub enum RasterLayout {
     /// One invocation per pixel, 256 per tile (`rasterize.comp`): the layout for GPUs.
     PixelPerInvocation,
-    /// One invocation per 16-pixel column strip, 16 per tile (`rasterize_strips*.comp`): for
-    /// CPU drivers such as lavapipe, where each staged splat is then loaded once for 16 pixels.
+    /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*.comp`):
+    /// for CPU drivers such as lavapipe, where each staged splat is then loaded once for 32
+    /// pixels and a tile is one 8-lane SIMD vector.
     Strips,
 }
 
