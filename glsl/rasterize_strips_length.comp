@@ -1,6 +1,5 @@
-// Stage 7, rasterize, CPU-driver layout (2 x 16-pixel strips), rara clipping with the length
-// weight
-// (see rasterize_body.glsl).
+// Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows), rara clipping with
+// the length weight (see rasterize_body.glsl).
 #version 460
 #define PIXELS_PER_INVOCATION 16
 #define COLUMNS_PER_INVOCATION 2
