@@ -113,8 +113,10 @@ bool composite(uint k, vec4 co, bool cutoff) {
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
     // All C x P weights at once: the loop over the ends is outside the loops over the pixels
     // (one loop, not one per pixel or column), and a do-while, which a CPU driver leaves after
-    // its last taken iteration. (One loop per column would also take a round of RASTER_CHUNK
-    // entries past lavapipe's loop cap.)
+    // its last taken iteration. One loop per column would take up to six iterations per entry
+    // with two-ended rays, past lavapipe's loop cap for a full round of RASTER_CHUNK entries;
+    // a version written that way also put 15 pixels of a real-scene clip test off by up to 81
+    // on lavapipe, even with one-ended rays (not understood; this form matches the reference).
     float weight[NPX];
     if (cutoff) {
         WhitenedStrip strips[C];
