@@ -1,13 +1,18 @@
 //! Stage 5 (and part of stage 2): a stable GPU radix sort of (32-bit key, 32-bit value) pairs,
-//! a reusable component. The frame uses it twice: the visible Gaussians by depth, then their (tile, splat) pairs by tile.
+//! a reusable component. The frame uses it twice: the drawn Gaussians by depth, then their
+//! (tile, splat) pairs by tile.
 //!
 //! Least-significant-digit first, SORT_RADIX_BITS bits per pass, each pass reduce-then-scan:
 //! `sort_count` (block histograms) -> prefix sum over the digit-major histogram ->
-//! `sort_scatter` (stable, rank by per-invocation counters). Only the key bits in use are
-//! sorted. The number of pairs is read on the GPU, so a frame never waits on the host; no
-//! workgroup waits on another and nothing assumes a subgroup size.
+//! `sort_scatter` (stable: per-invocation digit counters, ranked with subgroup scans and a
+//! per-digit scan over the subgroups). Only the key bits in use are sorted. The number of pairs
+//! is read on the GPU, so a frame never waits on the host; no workgroup waits on another, and
+//! the kernels work at any subgroup size of
+//! [`MIN_SUBGROUP_SIZE`](crate::constants::MIN_SUBGROUP_SIZE) or more.
 //!
-//! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_count.comp`, `glsl/sort_scatter.comp`.
+//! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_count[_long_runs].comp`,
+//! `glsl/sort_scatter[_long_runs].comp` (bodies in `glsl/sort_*_body.glsl`), one pair per
+//! [`SortLayout`].
 
 use std::ffi::CStr;
 
