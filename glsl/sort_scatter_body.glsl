@@ -12,12 +12,7 @@
 #extension GL_KHR_shader_subgroup_basic : require
 #include "common.glsl"
 #include "sort_common.glsl"
-
-#if !defined(SORT_WG) || !defined(SORT_RUN) || SORT_WG * SORT_RUN != SORT_BLOCK
-#error "define SORT_WG (invocations) and SORT_RUN (keys each) with SORT_WG * SORT_RUN == SORT_BLOCK"
-#endif
-
-layout(local_size_x = SORT_WG) in;
+#include "sort_block_layout.glsl"
 
 layout(push_constant) uniform Push {
     U32s keys_in;
