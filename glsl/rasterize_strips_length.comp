@@ -4,4 +4,5 @@
 #define PIXELS_PER_INVOCATION 16
 #define COLUMNS_PER_INVOCATION 2
 #define CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1
+#define COOPERATIVE_RECORD
 #include "rasterize_body.glsl"

@@ -29,7 +29,8 @@ pub struct Requirements {
     /// buffers through device addresses.
     pub buffer_device_address: bool,
     /// Subgroup operations the kernels use in compute shaders (basic and arithmetic, for the
-    /// prefix sums); a property of the device, not something to enable.
+    /// prefix sums and the sort; vote and ballot, for the strips rasterizer's cooperative
+    /// loads); a property of the device, not something to enable.
     pub subgroup_operations: vk::SubgroupFeatureFlags,
 }
 
@@ -50,7 +51,10 @@ pub fn requirements() -> Requirements {
         api_version: vk::API_VERSION_1_2,
         device_extensions: Vec::new(),
         buffer_device_address: true,
-        subgroup_operations: vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
+        subgroup_operations: vk::SubgroupFeatureFlags::BASIC
+            | vk::SubgroupFeatureFlags::ARITHMETIC
+            | vk::SubgroupFeatureFlags::VOTE
+            | vk::SubgroupFeatureFlags::BALLOT,
     }
 }
 
