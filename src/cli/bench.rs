@@ -187,30 +187,38 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap(),
         )
         .with_message("bench");
-    let mut results = Vec::new();
-    for &mode in &args.modes {
-        bar.set_message(mode.name());
-        let mut frames = Vec::new();
-        for k in 0..args.warmup + args.frames {
-            // Warm-up frames use the first plane position; measured frames sweep.
-            let step = k.saturating_sub(args.warmup);
-            let t = if args.frames > 1 {
-                step as f32 / (args.frames - 1) as f32
-            } else {
-                0.0
-            };
-            let clip = clip_for(mode, &base, Plane::new(normal, d0 + (d1 - d0) * t)?);
+    // The modes take turns frame by frame (every mode renders plane position k before any
+    // renders k + 1): on a shared or throttling machine, speed drifts over a run, and taking
+    // turns lets the drift hit every mode alike instead of whichever ran last.
+    let mut results: Vec<ModeResult> = args
+        .modes
+        .iter()
+        .map(|&mode| ModeResult {
+            mode,
+            frames: Vec::new(),
+        })
+        .collect();
+    for k in 0..args.warmup + args.frames {
+        // Warm-up frames use the first plane position; measured frames sweep.
+        let step = k.saturating_sub(args.warmup);
+        let t = if args.frames > 1 {
+            step as f32 / (args.frames - 1) as f32
+        } else {
+            0.0
+        };
+        let moving = Plane::new(normal, d0 + (d1 - d0) * t)?;
+        for result in &mut results {
+            bar.set_message(result.mode.name());
             let options = RenderOptions {
-                clip,
+                clip: clip_for(result.mode, &base, moving),
                 ..RenderOptions::default()
             };
             let (_, stats) = renderer.render(&gpu_scene, &camera, &options)?;
             if k >= args.warmup {
-                frames.push(stats);
+                result.frames.push(stats);
             }
             bar.inc(1);
         }
-        results.push(ModeResult { mode, frames });
     }
     bar.finish_and_clear();
 
@@ -308,6 +316,23 @@ fn print_table(
     if let (Some(h), Some(r)) = (hard, results.iter().find(|r| r.mode == BenchMode::Rara)) {
         println!("rara / hard (median GPU): {:.3}", median(&mut r.gpu()) / h);
     }
+    if let Some(paired) = paired_ratio(results, BenchMode::Rara, BenchMode::Hard) {
+        println!("rara / hard, median of the per-frame ratios (same plane position): {paired:.3}");
+    }
+}
+
+/// Median over the frames of `num`'s GPU time over `den`'s at the same plane position: less
+/// sensitive than a ratio of medians to noise that comes and goes during a run.
+fn paired_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Option<f64> {
+    let find = |mode| results.iter().find(|r| r.mode == mode);
+    let (n, d) = (find(num)?, find(den)?);
+    let mut ratios: Vec<f64> = n
+        .frames
+        .iter()
+        .zip(&d.frames)
+        .map(|(a, b)| a.gpu_ms / b.gpu_ms)
+        .collect();
+    (!ratios.is_empty()).then(|| median(&mut ratios))
 }
 
 fn json_report(
@@ -344,20 +369,25 @@ fn json_report(
         "width": camera.width,
         "height": camera.height,
         "modes": modes,
+        "rara_over_hard_per_frame_median": paired_ratio(results, BenchMode::Rara, BenchMode::Hard),
     })
 }
 
 /// Chrome trace events: per mode a track, per frame its passes back to back (GPU durations),
-/// frames placed at their wall-clock spacing.
+/// frames in the order they were rendered (the modes taking turns) at their wall-clock spacing.
 fn trace(results: &[ModeResult]) -> serde_json::Value {
     let mut events = Vec::new();
-    let mut ts_us = 0.0;
     for (tid, r) in results.iter().enumerate() {
         events.push(serde_json::json!({
             "name": "thread_name", "ph": "M", "pid": 1, "tid": tid,
             "args": {"name": r.mode.name()}
         }));
-        for (k, f) in r.frames.iter().enumerate() {
+    }
+    let mut ts_us = 0.0;
+    let frames = results.iter().map(|r| r.frames.len()).max().unwrap_or(0);
+    for k in 0..frames {
+        for (tid, r) in results.iter().enumerate() {
+            let Some(f) = r.frames.get(k) else { continue };
             let mut t = ts_us;
             for p in &f.passes {
                 events.push(serde_json::json!({
