@@ -522,3 +522,107 @@ fn sweep_writes_frames_gif_and_stats() {
         lit(&last)
     );
 }
+
+#[test]
+fn bench_writes_table_json_and_trace() {
+    let (scene, cams) = good_scene();
+    let json = dir().join("bench.json");
+    let trace = dir().join("bench.trace.json");
+    let frames = 3;
+    let out = rara(&[
+        "bench",
+        scene.to_str().unwrap(),
+        "--cameras",
+        cams.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for needle in ["| original", "| hard", "| rara", "rasterize", "rara / hard"] {
+        assert!(stdout.contains(needle), "table lacks '{needle}':\n{stdout}");
+    }
+
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    for mode in ["original", "hard", "rara"] {
+        let m = &report["modes"][mode];
+        assert!(m["median_ms"].as_f64().unwrap() > 0.0, "{mode}: {m}");
+        assert!(m["wall_median_ms"].as_f64().unwrap() >= m["median_ms"].as_f64().unwrap() * 0.5);
+        for pass in ["project", "emit", "rasterize", "write target"] {
+            assert!(
+                m["passes"][pass].as_f64().unwrap() >= 0.0,
+                "{mode} lacks {pass}: {m}"
+            );
+        }
+        assert_eq!(m["cutoff_per_frame"].as_array().unwrap().len(), frames);
+    }
+    // The sweeping plane cuts the shell: rara has cutoff Gaussians, the other modes none.
+    let cutoffs = |mode: &str| -> u64 {
+        report["modes"][mode]["cutoff_per_frame"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c.as_u64().unwrap())
+            .sum()
+    };
+    assert!(cutoffs("rara") > 0);
+    assert_eq!(cutoffs("hard") + cutoffs("original"), 0);
+    assert!(report["rara_over_hard_per_frame_median"].as_f64().unwrap() > 0.0);
+
+    // One event per pass per frame, each mode on its own track, frames in the order they were
+    // rendered: frame k of every mode before frame k + 1 of any.
+    let trace: serde_json::Value = serde_json::from_slice(&std::fs::read(&trace).unwrap()).unwrap();
+    let events: Vec<&serde_json::Value> = trace["traceEvents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["ph"] == "X")
+        .collect();
+    let rasterize: Vec<(u64, u64, f64)> = events
+        .iter()
+        .filter(|e| e["name"] == "rasterize")
+        .map(|e| {
+            (
+                e["tid"].as_u64().unwrap(),
+                e["args"]["frame"].as_u64().unwrap(),
+                e["ts"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(rasterize.len(), 3 * frames, "{rasterize:?}");
+    let last_of = |k: u64| {
+        rasterize
+            .iter()
+            .filter(|r| r.1 == k)
+            .map(|r| r.2)
+            .fold(f64::MIN, f64::max)
+    };
+    let first_of = |k: u64| {
+        rasterize
+            .iter()
+            .filter(|r| r.1 == k)
+            .map(|r| r.2)
+            .fold(f64::MAX, f64::min)
+    };
+    for k in 1..frames as u64 {
+        assert!(last_of(k - 1) < first_of(k), "{rasterize:?}");
+    }
+
+    let out = rara(&["bench", "--sort", "5000"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("GPU / CPU throughput"));
+}
