@@ -59,7 +59,6 @@
 #define INVOCATIONS ((TILE_SIZE / C) * STRIPS)
 #define TILE_PIXELS (TILE_SIZE * TILE_SIZE)
 #define RASTER_BATCH TILE_PIXELS
-#define LOADS_PER_INVOCATION (RASTER_BATCH / INVOCATIONS)
 
 layout(local_size_x = TILE_SIZE / C, local_size_y = STRIPS) in;
 
@@ -332,7 +331,13 @@ void main() {
         if (pixels_done == TILE_PIXELS) {
             break;
         }
-        [[unroll]] for (uint j = 0u; j < LOADS_PER_INVOCATION; ++j) {
+        // Staging takes as many rounds as the batch needs, not all RASTER_BATCH / INVOCATIONS:
+        // a CPU driver pays every load of an unrolled round, masked or not, and most tiles'
+        // last (or only) batch is short (plant at 640x480: rasterize 2-3 % faster unclipped).
+        uint count = min(RASTER_BATCH, end - batch);
+        uint staging_rounds = (count + INVOCATIONS - 1u) / INVOCATIONS;
+        uint j = 0u;
+        do {
             uint slot = j * INVOCATIONS + lid;
             uint entry = batch + slot;
             if (entry < end) {
@@ -350,9 +355,9 @@ void main() {
                 batch_conic_opacity[slot] = vec4(p.conic, p.opacity);
 #endif
             }
-        }
+            ++j;
+        } while (j < staging_rounds);
         barrier();
-        uint count = min(RASTER_BATCH, end - batch);
         newly_done = 0u;
 #if CUTOFF_WEIGHT == 0
         for (uint k = 0u; k < count; ++k) {

@@ -12,9 +12,10 @@ pub const RASTER_WORKGROUP: u32 = TILE_SIZE * TILE_SIZE;
 /// loops after 65,535 iterations in total, and the rara rasterizer takes up to three loop
 /// iterations per entry (a cutoff splat in a run of them: its turn of the cutoff loop and two
 /// ends of its visible interval; a plain and a cutoff splat in turn take five between them,
-/// with the outer loop), so longer lists are split over several rounds (dispatches) that
-/// carry the per-pixel state in a buffer. (Four per entry before the cutoff runs got their
-/// own loop; 12,288 keeps a margin under the cap either way.)
+/// with the outer loop; the strips layout's staging adds one per 8 entries), so longer lists
+/// are split over several rounds (dispatches) that carry the per-pixel state in a buffer.
+/// (Four per entry before the cutoff runs got their own loop; 12,288 keeps a margin under the
+/// cap either way.)
 pub const RASTER_CHUNK: u32 = 12288;
 /// Threads per workgroup of the one-item-per-thread kernels (project, emit, tile ranges).
 pub const LINEAR_WORKGROUP: u32 = 256;
