@@ -162,8 +162,10 @@ impl Engine {
             chosen.ok_or("no Vulkan device meets rara's requirements")?;
 
         // The engine's own features, with rara's merged in.
+        let mut features = vk::PhysicalDeviceFeatures::default();
         let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
         if merge_rara_requirements {
+            requirements.enable_features(&mut features);
             requirements.enable_vulkan12_features(&mut features12);
         }
         let priorities = [1.0f32];
@@ -172,6 +174,7 @@ impl Engine {
             .queue_priorities(&priorities)];
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
+            .enabled_features(&features)
             .push_next(&mut features12);
         let device = unsafe { instance.create_device(physical_device, &info, None)? };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };

@@ -23,9 +23,9 @@ void main() {
     if (j >= pc.drawn.v[0]) {
         return;
     }
-    FrameParams f = pc.frame.p;
+    FrameParams f = load_frame_params(pc.frame);
     uint i = pc.order.v[j];
-    ProjectedSplat p = pc.splats.v[i];
+    ProjectedSplat p = load_splat(pc.splats, i);
     uvec4 rect = p.rect;
     float q_max = footprint_q_max(p.opacity);
     uint capacity = f.scene.w;

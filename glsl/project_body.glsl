@@ -40,13 +40,13 @@ void quat_rows(vec4 q, out vec3 r0, out vec3 r1, out vec3 r2) {
 void skip(uint i) {
     pc.tiles_touched.v[i] = 0u;
     pc.drawn.v[i] = 0u;
-    pc.splats.v[i].rect = uvec4(0u);
+    store_uvec4(splat_block(pc.splats, i, 3u), uvec4(0u));
 }
 
 // Projects Gaussian i; returns true when it is drawn as cutoff, with its side record in rec.
 bool project(uint i, out CutoffRecord rec) {
-    FrameParams f = pc.frame.p;
-    Gaussian g = pc.gaussians.v[i];
+    FrameParams f = load_frame_params(pc.frame);
+    Gaussian g = load_gaussian(pc.gaussians, i);
     vec3 mu = g.pos_opacity.xyz;
     uint kind = clip_classify(pc.clip, mu, g.scale.xyz);
     if (kind == CLASS_DROPPED) {
@@ -126,7 +126,7 @@ bool project(uint i, out CutoffRecord rec) {
     p.color = color;
     p.pad = 0u;
     p.rect = uvec4(x0, y0, x1, y1);
-    pc.splats.v[i] = p;
+    store_splat(pc.splats, i, p);
     pc.tiles_touched.v[i] = touched;
     pc.drawn.v[i] = 1u;
     if (kind != CLASS_CUTOFF) {
@@ -163,7 +163,10 @@ void main() {
     barrier();
     if (cutoff) {
         uint index = wg_cutoff_base + slot;
-        pc.cutoffs.v[index] = rec;
+        uint64_t record = uint64_t(pc.cutoffs) + uint64_t(index) * 48ul;
+        store_vec4(record, rec.m0);
+        store_vec4(record + 16ul, rec.m1);
+        store_vec4(record + 32ul, rec.m2);
         pc.splats.v[i].cutoff = index;
     }
 }

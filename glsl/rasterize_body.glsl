@@ -137,7 +137,10 @@ bool composite(uint k, vec4 co, bool cutoff) {
         rec.m2 = vec4(subgroupBroadcast(w2, 0u), subgroupBroadcast(w2, 1u),
                       subgroupBroadcast(w2, 2u), subgroupBroadcast(w2, 3u));
 #else
-        rec = pc.cutoffs.v[batch_cutoff[k]];
+        uint64_t record = uint64_t(pc.cutoffs) + uint64_t(batch_cutoff[k]) * 48ul;
+        rec.m0 = load_vec4(record);
+        rec.m1 = load_vec4(record + 16ul);
+        rec.m2 = load_vec4(record + 32ul);
 #endif
     }
 #endif
@@ -276,7 +279,7 @@ void strip_spans(vec3 eye) {
 #endif
 
 void main() {
-    FrameParams f = pc.frame.p;
+    FrameParams f = load_frame_params(pc.frame);
     uint lid = gl_LocalInvocationIndex;
     uvec2 tile = gl_WorkGroupID.xy;
     first_pixel = tile * TILE_SIZE + uvec2(gl_LocalInvocationID.x * C, gl_LocalInvocationID.y * P);
@@ -299,7 +302,7 @@ void main() {
         px_T[i] = 1.0;
         px_done[i] = !inside;
         if ((pc.flags & ROUND_FIRST) == 0u && inside) {
-            vec4 s = pc.state.v[pixel.y * f.size.x + pixel.x];
+            vec4 s = load_vec4(uint64_t(pc.state) + 16ul * uint64_t(pixel.y * f.size.x + pixel.x));
             px_color[i] = s.rgb;
             px_T[i] = abs(s.a);
             px_done[i] = s.a < 0.0;
@@ -342,7 +345,7 @@ void main() {
             uint entry = batch + slot;
             if (entry < end) {
                 uint s = pc.values.v[entry];
-                ProjectedSplat p = pc.splats.v[s];
+                ProjectedSplat p = load_splat(pc.splats, s);
                 batch_uv[slot] = p.uv;
                 batch_color[slot] = p.color;
 #if CUTOFF_WEIGHT != 0
@@ -408,6 +411,7 @@ void main() {
         if (pixel.x >= f.size.x || pixel.y >= f.size.y) {
             continue;
         }
-        pc.state.v[pixel.y * f.size.x + pixel.x] = vec4(px_color[i], px_done[i] ? -px_T[i] : px_T[i]);
+        store_vec4(uint64_t(pc.state) + 16ul * uint64_t(pixel.y * f.size.x + pixel.x),
+                   vec4(px_color[i], px_done[i] ? -px_T[i] : px_T[i]));
     }
 }

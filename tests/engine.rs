@@ -72,8 +72,8 @@ fn engine_example_frames_match_the_headless_renderer() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A device created without bufferDeviceAddress is refused with an error that names it, and so
-/// is a Vulkan 1.1 instance; the engine then destroys its device with no message.
+/// A device created without bufferDeviceAddress or shaderInt64 is refused with an error that
+/// names it, and so is a Vulkan 1.1 instance; the engine then destroys its device with no message.
 #[test]
 fn a_device_missing_a_required_feature_gets_a_clear_error() {
     let engine = engine_example::Engine::new(false).expect("engine device");
@@ -96,6 +96,15 @@ fn a_device_missing_a_required_feature_gets_a_clear_error() {
         }
         Err(e) => panic!("wrong error: {e}"),
         Ok(_) => panic!("a device without bufferDeviceAddress was accepted"),
+    }
+    let no_int64 = EnabledFeatures {
+        shader_int64: false,
+        ..EnabledFeatures::default()
+    };
+    match unsafe { Context::borrowed(lend(no_int64)) } {
+        Err(Error::MissingRequirement(m)) => assert!(m.contains("shaderInt64"), "{m}"),
+        Err(e) => panic!("wrong error: {e}"),
+        Ok(_) => panic!("a device without shaderInt64 was accepted"),
     }
     let old = EnabledFeatures {
         api_version: ash::vk::API_VERSION_1_1,

@@ -376,11 +376,12 @@ impl Context {
             .queue_priorities(&priorities)];
         let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
         super::requirements().enable_vulkan12_features(&mut features12);
-        let features = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(
+        let mut features = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(
             unsafe { instance.get_physical_device_features(physical_device) }
                 .pipeline_statistics_query
                 == vk::TRUE,
         );
+        super::requirements().enable_features(&mut features);
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&features)

@@ -14,10 +14,12 @@ use crate::error::{Error, Result};
 /// # use ash::vk;
 /// let req = rara::requirements();
 /// // Ask for at least req.api_version in VkApplicationInfo, then:
+/// let mut features = vk::PhysicalDeviceFeatures::default();
+/// req.enable_features(&mut features);
 /// let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
 /// req.enable_vulkan12_features(&mut features12);
-/// // ... push_next(&mut features12) onto the engine's VkDeviceCreateInfo, and list
-/// // req.device_extensions (none today) with the engine's own.
+/// // ... features as the engine's VkDeviceCreateInfo::pEnabledFeatures, push_next(&mut
+/// // features12) onto it, and list req.device_extensions (none today) with the engine's own.
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Requirements {
@@ -28,6 +30,10 @@ pub struct Requirements {
     /// `VkPhysicalDeviceVulkan12Features::bufferDeviceAddress`: every kernel reaches its
     /// buffers through device addresses.
     pub buffer_device_address: bool,
+    /// `VkPhysicalDeviceFeatures::shaderInt64`: the kernels move 16-byte records as two
+    /// 64-bit words, which halves the scalar per-lane loops a CPU driver makes of each load
+    /// and store (see `load_vec4` in `glsl/common.glsl`).
+    pub shader_int64: bool,
     /// Subgroup operations the kernels use in compute shaders (basic and arithmetic, for the
     /// prefix sums and the sort; vote and ballot, for the strips rasterizer's cooperative
     /// loads); a property of the device, not something to enable.
@@ -51,6 +57,7 @@ pub fn requirements() -> Requirements {
         api_version: vk::API_VERSION_1_2,
         device_extensions: Vec::new(),
         buffer_device_address: true,
+        shader_int64: true,
         subgroup_operations: vk::SubgroupFeatureFlags::BASIC
             | vk::SubgroupFeatureFlags::ARITHMETIC
             | vk::SubgroupFeatureFlags::VOTE
@@ -59,6 +66,14 @@ pub fn requirements() -> Requirements {
 }
 
 impl Requirements {
+    /// Turns on, in an engine's `VkPhysicalDeviceFeatures`, the Vulkan 1.0 features rara needs
+    /// (leaves the others as they are).
+    pub fn enable_features(&self, features: &mut vk::PhysicalDeviceFeatures) {
+        if self.shader_int64 {
+            features.shader_int64 = vk::TRUE;
+        }
+    }
+
     /// Turns on, in an engine's feature chain, the Vulkan 1.2 features rara needs (leaves the
     /// others as they are).
     pub fn enable_vulkan12_features(&self, features: &mut vk::PhysicalDeviceVulkan12Features) {
@@ -84,6 +99,7 @@ impl Requirements {
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
         instance.get_physical_device_features2(physical_device, &mut f2);
+        let shader_int64 = f2.features.shader_int64 == vk::TRUE;
         let name = props
             .device_name_as_c_str()
             .map(|n| n.to_string_lossy().into_owned())
@@ -100,6 +116,9 @@ impl Requirements {
         }
         if self.buffer_device_address && f12.buffer_device_address != vk::TRUE {
             missing.push("the bufferDeviceAddress feature".into());
+        }
+        if self.shader_int64 && !shader_int64 {
+            missing.push("the shaderInt64 feature".into());
         }
         if !subgroup
             .supported_stages
@@ -151,6 +170,9 @@ impl Requirements {
                     .to_string(),
             );
         }
+        if self.shader_int64 && !enabled.shader_int64 {
+            missing.push("VkPhysicalDeviceFeatures::shaderInt64 enabled at vkCreateDevice".into());
+        }
         if missing.is_empty() {
             Ok(())
         } else {
@@ -172,6 +194,8 @@ pub struct EnabledFeatures {
     pub api_version: u32,
     /// `VkPhysicalDeviceVulkan12Features::bufferDeviceAddress`.
     pub buffer_device_address: bool,
+    /// `VkPhysicalDeviceFeatures::shaderInt64`.
+    pub shader_int64: bool,
     /// Optional capabilities the engine enabled.
     pub optional: Optional,
 }
@@ -182,6 +206,7 @@ impl Default for EnabledFeatures {
         EnabledFeatures {
             api_version: vk::API_VERSION_1_2,
             buffer_device_address: true,
+            shader_int64: true,
             optional: Optional::default(),
         }
     }
