@@ -5,8 +5,8 @@
 // and a drawn flag that the depth-order stage scans into each drawn Gaussian's sort slot. Cutoff Gaussians also get a compact side record (CutoffRecord)
 // for the rasterizer's per-pixel weight; the others cost nothing extra.
 //
-// Included by project.comp (SH in 32-bit floats) and project_sh16.comp (SH_HALF: half floats,
-// two to a uint).
+// Included by project_deg<D>.comp (SH of degree D in 32-bit floats) and project_deg<D>_sh16.comp
+// (SH_HALF: half floats, two to a uint).
 #include "common.glsl"
 #include "sh.glsl"
 #include "clip.glsl"
@@ -115,7 +115,7 @@ bool project(uint i, out CutoffRecord rec) {
     }
     vec3 dir = normalize(rel);
     uint sh_stride = f.scene.z;
-    vec3 color = eval_sh(pc.sh, i * sh_stride, f.scene.y, dir);
+    vec3 color = eval_sh(pc.sh, i * sh_stride, dir);
 
     ProjectedSplat p;
     p.uv = uv;

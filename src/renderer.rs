@@ -589,7 +589,7 @@ impl Renderer {
             cutoffs: cutoffs_address,
         };
         self.project
-            .record(cmd, &push, scene.count, scene.sh_precision);
+            .record(cmd, &push, scene.count, scene.sh_degree, scene.sh_precision);
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"project");
 

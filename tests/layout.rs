@@ -64,13 +64,13 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuProjectedSplat, pad),
         offset_of!(GpuProjectedSplat, rect),
     ];
-    assert_layout(shaders::PROJECT, "ProjectedSplat", &projected);
+    assert_layout(shaders::PROJECT_DEG3, "ProjectedSplat", &projected);
     let gaussian = [
         offset_of!(GpuGaussian, pos_opacity),
         offset_of!(GpuGaussian, rot),
         offset_of!(GpuGaussian, scale),
     ];
-    assert_layout(shaders::PROJECT, "Gaussian", &gaussian);
+    assert_layout(shaders::PROJECT_DEG3, "Gaussian", &gaussian);
     let frame = [
         offset_of!(GpuFrameParams, world_to_cam),
         offset_of!(GpuFrameParams, world_to_cam) + 16,
@@ -81,7 +81,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuFrameParams, size),
         offset_of!(GpuFrameParams, scene),
     ];
-    assert_layout(shaders::PROJECT, "FrameParams", &frame);
+    assert_layout(shaders::PROJECT_DEG3, "FrameParams", &frame);
     let sort = [
         offset_of!(GpuSortInfo, num_keys),
         offset_of!(GpuSortInfo, num_blocks),
@@ -98,7 +98,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuClipParams, planes),
     ];
     for kernel in [
-        shaders::PROJECT,
+        shaders::PROJECT_DEG3,
         shaders::RASTERIZE_MASS,
         shaders::RASTERIZE_STRIPS_LENGTH,
     ] {
@@ -109,7 +109,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuCutoffRecord, m1),
         offset_of!(GpuCutoffRecord, m2),
     ];
-    assert_layout(shaders::PROJECT, "CutoffRecord", &cutoff);
+    assert_layout(shaders::PROJECT_DEG3, "CutoffRecord", &cutoff);
 }
 
 #[test]

@@ -1,4 +1,4 @@
-//! CPU twin of `glsl/project.comp` (SPEC sections 3 and 5).
+//! CPU twin of `glsl/project_body.glsl` (SPEC sections 3 and 5).
 
 use glam::{Quat, Vec2, Vec3};
 

@@ -1,7 +1,9 @@
 //! Stage 1: project every Gaussian (`glsl/project_body.glsl`; CPU twin `reference::project`).
 
 use ash::vk;
+
 use bytemuck::{Pod, Zeroable};
+use std::ffi::CStr;
 
 use crate::error::Result;
 use crate::precision::ShPrecision;
@@ -32,37 +34,52 @@ pub struct ProjectPush {
     pub cutoffs: u64,
 }
 
-/// The project kernel, in one variant per SH storage precision.
+/// The project kernel, in one variant per SH degree (0 to 3) and storage precision: a CPU
+/// driver runs every band's code under a mask whatever the scene's degree, so each scene gets
+/// the kernel that holds only its own bands.
 pub struct Project {
-    sh32: ComputePipeline,
-    sh16: ComputePipeline,
+    /// Indexed by SH degree.
+    sh32: [ComputePipeline; 4],
+    /// Indexed by SH degree.
+    sh16: [ComputePipeline; 4],
 }
 
 impl Project {
-    /// Builds the kernel.
+    /// Builds the kernels.
     pub fn new(ctx: &Context) -> Result<Self> {
+        let build = |name: &'static CStr, spirv: &[u32]| {
+            ComputePipeline::new::<ProjectPush>(ctx, name, spirv)
+        };
         Ok(Project {
-            sh32: ComputePipeline::new::<ProjectPush>(ctx, c"project", shaders::PROJECT)?,
-            sh16: ComputePipeline::new::<ProjectPush>(
-                ctx,
-                c"project (SH f16)",
-                shaders::PROJECT_SH16,
-            )?,
+            sh32: [
+                build(c"project (SH 0)", shaders::PROJECT_DEG0)?,
+                build(c"project (SH 1)", shaders::PROJECT_DEG1)?,
+                build(c"project (SH 2)", shaders::PROJECT_DEG2)?,
+                build(c"project (SH 3)", shaders::PROJECT_DEG3)?,
+            ],
+            sh16: [
+                build(c"project (SH 0, f16)", shaders::PROJECT_DEG0_SH16)?,
+                build(c"project (SH 1, f16)", shaders::PROJECT_DEG1_SH16)?,
+                build(c"project (SH 2, f16)", shaders::PROJECT_DEG2_SH16)?,
+                build(c"project (SH 3, f16)", shaders::PROJECT_DEG3_SH16)?,
+            ],
         })
     }
 
-    /// Records the projection of `count` Gaussians whose SH are stored at `precision`.
+    /// Records the projection of `count` Gaussians with SH of `degree` (0 to 3) stored at
+    /// `precision`.
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
         push: &ProjectPush,
         count: u32,
+        degree: u32,
         precision: ShPrecision,
     ) {
-        let pipeline = match precision {
+        let kernels = match precision {
             ShPrecision::F32 => &self.sh32,
             ShPrecision::F16 => &self.sh16,
         };
-        pipeline.dispatch(cmd, push, super::linear_grid(count));
+        kernels[degree.min(3) as usize].dispatch(cmd, push, super::linear_grid(count));
     }
 }
