@@ -4,5 +4,8 @@
 #if !defined(SORT_WG) || !defined(SORT_RUN) || SORT_WG * SORT_RUN != SORT_BLOCK
 #error "define SORT_WG (invocations) and SORT_RUN (keys each) with SORT_WG * SORT_RUN == SORT_BLOCK"
 #endif
+#if SORT_RUN % 4 != 0
+#error "SORT_RUN must be a multiple of 4: the pass kernels read keys and values four at a time"
+#endif
 
 layout(local_size_x = SORT_WG) in;

@@ -29,11 +29,29 @@ void main() {
     uint base = gl_WorkGroupID.x * SORT_BLOCK;
     // Count in registers (one counter per digit, unrolled compares: no per-key memory traffic
     // beyond the key), then add the subgroup's sums into shared memory, one atomic per digit
-    // and subgroup. Counting does not depend on order, so the reads are coalesced.
+    // and subgroup. Counting does not depend on order: the GPU layout reads coalesced (key
+    // k * SORT_WG + lid), the CPU layout (SORT_COUNT_OWN_RUNS) a run per invocation.
     uint counts[SORT_RADIX];
     [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
         counts[d] = 0u;
     }
+#ifdef SORT_COUNT_OWN_RUNS
+    // Each invocation counts its own run of SORT_RUN keys, four at a time (load_uvec4: half
+    // the lane loops of scalar loads on a CPU driver; see sort_scatter_body.glsl for why the
+    // groups stay inside the buffers).
+    [[unroll]] for (uint k = 0u; k < SORT_RUN; k += 4u) {
+        uint i = base + lid * SORT_RUN + k;
+        if (i < n) {
+            uvec4 four = load_uvec4(uint64_t(pc.keys) + 4ul * uint64_t(i));
+            [[unroll]] for (uint j = 0u; j < 4u; ++j) {
+                uint digit = key_digit(four[j], pc.shift, pc.digit_mask);
+                [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
+                    counts[d] += digit == d && i + j < n ? 1u : 0u;
+                }
+            }
+        }
+    }
+#else
     [[unroll]] for (uint k = 0u; k < SORT_RUN; ++k) {
         uint i = base + k * SORT_WG + lid;
         if (i < n) {
@@ -43,6 +61,7 @@ void main() {
             }
         }
     }
+#endif
     [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
         uint sum = subgroupAdd(counts[d]);
         if (subgroupElect() && sum > 0u) {

@@ -47,8 +47,20 @@ void main() {
     [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
         counts[d] = 0u;
     }
+    // Keys four at a time (load_uvec4: half the lane loops of four scalar loads on a CPU
+    // driver). A group that starts below n stays inside the buffers, which hold a multiple
+    // of 4 keys (RadixSort::buffers); keys at n or beyond are never counted or written.
+    [[unroll]] for (uint k = 0u; k < SORT_RUN; k += 4u) {
+        uvec4 four = uvec4(0u);
+        if (base + k < n) {
+            four = load_uvec4(uint64_t(pc.keys_in) + 4ul * uint64_t(base + k));
+        }
+        keys[k] = four.x;
+        keys[k + 1u] = four.y;
+        keys[k + 2u] = four.z;
+        keys[k + 3u] = four.w;
+    }
     [[unroll]] for (uint k = 0u; k < SORT_RUN; ++k) {
-        keys[k] = base + k < n ? pc.keys_in.v[base + k] : 0u;
         uint digit = key_digit(keys[k], pc.shift, pc.digit_mask);
         [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
             counts[d] += (digit == d && base + k < n) ? 1u : 0u;
@@ -81,8 +93,12 @@ void main() {
         counts[d] += sg_base[d * SG_SLOTS + gl_SubgroupID];
     }
 
+    uvec4 values = uvec4(0u);
     [[unroll]] for (uint k = 0u; k < SORT_RUN; ++k) {
         uint i = base + k;
+        if (k % 4u == 0u && i < n) {
+            values = load_uvec4(uint64_t(pc.values_in) + 4ul * uint64_t(i));
+        }
         if (i < n) {
             uint digit = key_digit(keys[k], pc.shift, pc.digit_mask);
             uint dst = 0u;
@@ -93,7 +109,7 @@ void main() {
                 }
             }
             pc.keys_out.v[dst] = keys[k];
-            pc.values_out.v[dst] = pc.values_in.v[i];
+            pc.values_out.v[dst] = values[k % 4u];
         }
     }
 }

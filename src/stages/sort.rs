@@ -221,9 +221,10 @@ impl RadixSort {
         self.layout
     }
 
-    /// Allocates buffers for up to `capacity` pairs.
+    /// Allocates buffers for up to `capacity` pairs (a multiple of 4 keys and values, since
+    /// the pass kernels read them four at a time).
     pub fn buffers(&self, ctx: &Context, capacity: u64) -> Result<SortBuffers> {
-        let capacity = capacity.max(1);
+        let capacity = capacity.max(1).next_multiple_of(4);
         let blocks = capacity.div_ceil(SORT_BLOCK as u64);
         let hist_len = blocks * SORT_RADIX as u64;
         let gpu = MemoryLocation::GpuOnly;
