@@ -77,9 +77,36 @@ layout(push_constant) uniform Push {
     uint flags;
 } pc;
 
-shared vec2 batch_uv[RASTER_BATCH];
-shared vec4 batch_conic_opacity[RASTER_BATCH];   // opacity negated for a cutoff splat
-shared vec3 batch_color[RASTER_BATCH];
+// A staged splat is 9 words: conic and opacity (negated for a cutoff splat), centre, colour.
+// The first 8 go in one 32-byte element of 64-bit words, the blue in a second array: a CPU
+// driver reads shared memory with one scalar loop over the lanes per load, however wide, so
+// this is two loops per splat and SIMD vector instead of three (vec4, vec2, vec3).
+shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
+shared float batch_blue[RASTER_BATCH];
+
+// The conic and opacity, centre and red and green of staged splat k (blue: batch_blue[k]).
+struct Staged {
+    vec4 co;
+    vec2 uv;
+    vec2 rg;
+};
+
+Staged staged(uint k) {
+    u64vec4 w = batch_words[k];
+    Staged s;
+    s.co = vec4(uintBitsToFloat(unpackUint2x32(w.x)), uintBitsToFloat(unpackUint2x32(w.y)));
+    s.uv = uintBitsToFloat(unpackUint2x32(w.z));
+    s.rg = uintBitsToFloat(unpackUint2x32(w.w));
+    return s;
+}
+
+void stage(uint slot, vec4 co, vec2 uv, vec3 color) {
+    batch_words[slot] = u64vec4(packUint2x32(floatBitsToUint(co.xy)),
+                                packUint2x32(floatBitsToUint(co.zw)),
+                                packUint2x32(floatBitsToUint(uv)),
+                                packUint2x32(floatBitsToUint(color.rg)));
+    batch_blue[slot] = color.b;
+}
 #if CUTOFF_WEIGHT != 0
 // The cutoff record index of a cutoff splat (its 48-byte record is read from the buffer when
 // the splat is composited: staging every slot's record would cost a masked 12-word copy per
@@ -115,11 +142,13 @@ float band2;
 #endif
 #endif
 
-// Composites staged splat k, with conic and opacity co, over the strip (SPEC section 4);
-// `cutoff` applies its clip weight. Returns whether any pixel of the strip was still open.
-bool composite(uint k, vec4 co, bool cutoff) {
-    vec2 uv = batch_uv[k];
-    vec3 rgb = batch_color[k];
+// Composites staged splat k (s = staged(k), with the opacity made positive) over the strip
+// (SPEC section 4); `cutoff` applies its clip weight. Returns whether any pixel of the strip
+// was still open.
+bool composite(uint k, Staged s, bool cutoff) {
+    vec4 co = s.co;
+    vec2 uv = s.uv;
+    vec3 rgb = vec3(s.rg, batch_blue[k]);
     bool any_open = false;
 #if CUTOFF_WEIGHT != 0
     CutoffRecord rec;
@@ -346,16 +375,14 @@ void main() {
             if (entry < end) {
                 uint s = pc.values.v[entry];
                 ProjectedSplat p = load_splat(pc.splats, s);
-                batch_uv[slot] = p.uv;
-                batch_color[slot] = p.color;
 #if CUTOFF_WEIGHT != 0
                 // The sign of the staged opacity marks a cutoff splat, so the loop that walks
                 // the plain ones learns it from a load it makes anyway.
                 bool cutoff = p.cutoff != NO_CUTOFF;
-                batch_conic_opacity[slot] = vec4(p.conic, cutoff ? -p.opacity : p.opacity);
+                stage(slot, vec4(p.conic, cutoff ? -p.opacity : p.opacity), p.uv, p.color);
                 batch_cutoff[slot] = p.cutoff;
 #else
-                batch_conic_opacity[slot] = vec4(p.conic, p.opacity);
+                stage(slot, vec4(p.conic, p.opacity), p.uv, p.color);
 #endif
             }
             ++j;
@@ -364,7 +391,7 @@ void main() {
         newly_done = 0u;
 #if CUTOFF_WEIGHT == 0
         for (uint k = 0u; k < count; ++k) {
-            if (!composite(k, batch_conic_opacity[k], false)) {
+            if (!composite(k, staged(k), false)) {
                 break;
             }
         }
@@ -375,28 +402,30 @@ void main() {
         // once no lane continues it. The loops are do-whiles, which such a driver leaves right
         // after the last splat of the run; a while loop would run its body once more, masked,
         // to find its end. (With one loop for the plain runs and a single cutoff splat after
-        // each, every cutoff splat after another paid a masked plain pass too.) co is always
-        // the conic and opacity of splat k (count >= 1 here).
+        // each, every cutoff splat after another paid a masked plain pass too.) s is always
+        // staged splat k (count >= 1 here).
         uint k = 0u;
         bool open = true;
-        vec4 co = batch_conic_opacity[0];
+        Staged s = staged(0u);
         do {
-            bool go = co.w >= 0.0;
+            bool go = s.co.w >= 0.0;
             do {
                 if (go) {
-                    open = LIST_OPEN(composite(k, co, false));
+                    open = LIST_OPEN(composite(k, s, false));
                     ++k;
-                    co = batch_conic_opacity[min(k, count - 1u)];
-                    go = open && k < count && co.w >= 0.0;
+                    s = staged(min(k, count - 1u));
+                    go = open && k < count && s.co.w >= 0.0;
                 }
             } while (go);
             go = open && k < count;
             do {
                 if (go) {
-                    open = LIST_OPEN(composite(k, vec4(co.xyz, -co.w), true));
+                    Staged positive = s;
+                    positive.co.w = -s.co.w;
+                    open = LIST_OPEN(composite(k, positive, true));
                     ++k;
-                    co = batch_conic_opacity[min(k, count - 1u)];
-                    go = open && k < count && co.w < 0.0;
+                    s = staged(min(k, count - 1u));
+                    go = open && k < count && s.co.w < 0.0;
                 }
             } while (go);
         } while (open && k < count);
