@@ -61,6 +61,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer FrameParams
 // the project pass 39 -> 31 ms from its frame and Gaussian loads alone). A GPU loads the two
 // words as it would the vec4. `address` must be 16-byte aligned.
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Words16 { u64vec2 w; };
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer U64s { uint64_t v[]; };
 
 uvec4 load_uvec4(uint64_t address) {
     u64vec2 w = Words16(address).w;

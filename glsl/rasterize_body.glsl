@@ -27,11 +27,12 @@
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
 // must not be in its kernel at all.
 //
-// COOPERATIVE_RECORD (the strips kernels): the subgroup loads a cutoff record together, lanes
-// 0-3 three words each, and broadcasts the words with constant lane ids (an element extract on
-// a CPU driver). lavapipe pays a buffer-reference load with a scalar loop over the lanes per
-// component, so this is 3 such loops per cutoff splat instead of 12 (plant at 640x480, rara:
-// about 15 ms, 7 %, off the rasterize pass). It needs every lane of the subgroup at the load:
+// COOPERATIVE_RECORD (the strips kernels): the subgroup loads a cutoff record together, as six
+// 64-bit words (lanes 0-3 one each, lanes 0-1 one more), and broadcasts them with constant
+// lane ids (an element extract on a CPU driver). lavapipe pays a buffer-reference load with a
+// scalar loop over the lanes per component, so this is 2 such loops per cutoff splat instead
+// of 12 (plant at 640x480, rara: the first version, 3 loops of 32-bit words, took about 15 ms,
+// 7 %, off the rasterize pass). It needs every lane of the subgroup at the load:
 // the rara loops then run while any lane of the subgroup has an open pixel (subgroupAny), so
 // the subgroup walks the list together, and the host uses the strips layout only where the
 // subgroup size divides the workgroup's 8 invocations, so its subgroups are whole.
@@ -77,14 +78,18 @@ layout(push_constant) uniform Push {
     uint flags;
 } pc;
 
-// A staged splat is 9 words: conic and opacity (negated for a cutoff splat), centre, colour.
-// The first 8 go in one 32-byte element of 64-bit words, the blue in a second array: a CPU
-// driver reads shared memory with one scalar loop over the lanes per load, however wide, so
-// this is two loops per splat and SIMD vector instead of three (vec4, vec2, vec3).
+// A staged splat is 9 words: conic and opacity (negated for a cutoff splat), centre, colour,
+// and with rara clipping its cutoff record index. The first 8 go in one 32-byte element of
+// 64-bit words, the blue and the record index in a second array: a CPU driver reads shared
+// memory with one scalar loop over the lanes per load, however wide, so this is two loops per
+// splat and SIMD vector (it was three, vec4 + vec2 + vec3, plus one for a cutoff splat's
+// record index). Staging a cutoff splat's 48-byte record too would cost a masked copy per
+// pair on such a driver, cutoff or not, so the record is read when the splat is composited.
 shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
-shared float batch_blue[RASTER_BATCH];
+shared uvec2 batch_tail[RASTER_BATCH];     // (blue bits, cutoff record index)
 
-// The conic and opacity, centre and red and green of staged splat k (blue: batch_blue[k]).
+// The conic and opacity, centre and red and green of staged splat k (blue and record index:
+// batch_tail[k]).
 struct Staged {
     vec4 co;
     vec2 uv;
@@ -100,19 +105,13 @@ Staged staged(uint k) {
     return s;
 }
 
-void stage(uint slot, vec4 co, vec2 uv, vec3 color) {
+void stage(uint slot, vec4 co, vec2 uv, vec3 color, uint cutoff) {
     batch_words[slot] = u64vec4(packUint2x32(floatBitsToUint(co.xy)),
                                 packUint2x32(floatBitsToUint(co.zw)),
                                 packUint2x32(floatBitsToUint(uv)),
                                 packUint2x32(floatBitsToUint(color.rg)));
-    batch_blue[slot] = color.b;
+    batch_tail[slot] = uvec2(floatBitsToUint(color.b), cutoff);
 }
-#if CUTOFF_WEIGHT != 0
-// The cutoff record index of a cutoff splat (its 48-byte record is read from the buffer when
-// the splat is composited: staging every slot's record would cost a masked 12-word copy per
-// pair on a CPU driver, cutoff or not).
-shared uint batch_cutoff[RASTER_BATCH];
-#endif
 
 shared uint pixels_done;
 
@@ -148,25 +147,23 @@ float band2;
 bool composite(uint k, Staged s, bool cutoff) {
     vec4 co = s.co;
     vec2 uv = s.uv;
-    vec3 rgb = vec3(s.rg, batch_blue[k]);
+    uvec2 tail = batch_tail[k];
+    vec3 rgb = vec3(s.rg, uintBitsToFloat(tail.x));
     bool any_open = false;
 #if CUTOFF_WEIGHT != 0
     CutoffRecord rec;
     if (cutoff) {
 #ifdef COOPERATIVE_RECORD
-        F32s words = F32s(pc.cutoffs);
-        uint first = batch_cutoff[k] * 12u + (gl_SubgroupInvocationID & 3u);
-        float w0 = words.v[first];
-        float w1 = words.v[first + 4u];
-        float w2 = words.v[first + 8u];
-        rec.m0 = vec4(subgroupBroadcast(w0, 0u), subgroupBroadcast(w0, 1u),
-                      subgroupBroadcast(w0, 2u), subgroupBroadcast(w0, 3u));
-        rec.m1 = vec4(subgroupBroadcast(w1, 0u), subgroupBroadcast(w1, 1u),
-                      subgroupBroadcast(w1, 2u), subgroupBroadcast(w1, 3u));
-        rec.m2 = vec4(subgroupBroadcast(w2, 0u), subgroupBroadcast(w2, 1u),
-                      subgroupBroadcast(w2, 2u), subgroupBroadcast(w2, 3u));
+        // The record's six 64-bit words: lanes 0-3 read words 0-3, lanes 0-1 words 4-5.
+        U64s words = U64s(uint64_t(pc.cutoffs) + uint64_t(tail.y) * 48ul);
+        uint lane = gl_SubgroupInvocationID;
+        uvec2 w0 = unpackUint2x32(words.v[lane & 3u]);
+        uvec2 w1 = unpackUint2x32(words.v[4u + (lane & 1u)]);
+        rec.m0 = uintBitsToFloat(uvec4(subgroupBroadcast(w0, 0u), subgroupBroadcast(w0, 1u)));
+        rec.m1 = uintBitsToFloat(uvec4(subgroupBroadcast(w0, 2u), subgroupBroadcast(w0, 3u)));
+        rec.m2 = uintBitsToFloat(uvec4(subgroupBroadcast(w1, 0u), subgroupBroadcast(w1, 1u)));
 #else
-        uint64_t record = uint64_t(pc.cutoffs) + uint64_t(batch_cutoff[k]) * 48ul;
+        uint64_t record = uint64_t(pc.cutoffs) + uint64_t(tail.y) * 48ul;
         rec.m0 = load_vec4(record);
         rec.m1 = load_vec4(record + 16ul);
         rec.m2 = load_vec4(record + 32ul);
@@ -379,10 +376,10 @@ void main() {
                 // The sign of the staged opacity marks a cutoff splat, so the loop that walks
                 // the plain ones learns it from a load it makes anyway.
                 bool cutoff = p.cutoff != NO_CUTOFF;
-                stage(slot, vec4(p.conic, cutoff ? -p.opacity : p.opacity), p.uv, p.color);
-                batch_cutoff[slot] = p.cutoff;
+                stage(slot, vec4(p.conic, cutoff ? -p.opacity : p.opacity), p.uv, p.color,
+                      p.cutoff);
 #else
-                stage(slot, vec4(p.conic, p.opacity), p.uv, p.color);
+                stage(slot, vec4(p.conic, p.opacity), p.uv, p.color, 0u);
 #endif
             }
             ++j;
