@@ -59,7 +59,8 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer FrameParams
 // component of a buffer-reference load or store into a scalar loop over the SIMD lanes, so a
 // vec4 costs four loops and the same 16 bytes as two 64-bit words cost two (plant at 640x480:
 // the project pass 39 -> 31 ms from its frame and Gaussian loads alone). A GPU loads the two
-// words as it would the vec4. `address` must be 16-byte aligned.
+// words as it would the vec4. `address` must be 16-byte aligned (vk::Buffer::new aligns every
+// buffer rara allocates to 16 bytes; engine targets are never read this way).
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Words16 { u64vec2 w; };
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer U64s { uint64_t v[]; };
 

@@ -14,9 +14,9 @@
 //
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
 // invocation after 65,535 loop iterations in total; the loops over r are unrolled, and the rara
-// variants take at most three iterations per entry, see RASTER_CHUNK in src/constants.rs). Longer lists take several rounds; between
-// rounds, and for the write-target stage after the last, the per-pixel state (colour,
-// transmittance, done) lives in `state`.
+// variants take at most three iterations per entry, see RASTER_CHUNK in src/constants.rs).
+// Longer lists take several rounds; between rounds, and for the write-target stage after the
+// last, the per-pixel state (colour, transmittance, done) lives in `state`.
 //
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that

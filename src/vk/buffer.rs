@@ -74,7 +74,10 @@ impl Buffer {
             )
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
-        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let mut requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        // The kernels move 16-byte records as 64-bit words at 16-byte aligned addresses
+        // (`load_vec4` in glsl/common.glsl); a driver may ask for less.
+        requirements.alignment = requirements.alignment.max(16);
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
             name,
             requirements,
