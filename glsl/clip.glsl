@@ -24,6 +24,24 @@ struct CutoffRecord {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer CutoffRecords { CutoffRecord v[]; };
 
+// Address of record i (48 bytes each), and the record moved as 64-bit words (load_vec4 in
+// common.glsl).
+uint64_t cutoff_record_address(CutoffRecords records, uint i) {
+    return uint64_t(records) + uint64_t(i) * 48ul;
+}
+
+CutoffRecord load_cutoff_record(CutoffRecords records, uint i) {
+    uint64_t a = cutoff_record_address(records, i);
+    return CutoffRecord(load_vec4(a), load_vec4(a + 16ul), load_vec4(a + 32ul));
+}
+
+void store_cutoff_record(CutoffRecords records, uint i, CutoffRecord rec) {
+    uint64_t a = cutoff_record_address(records, i);
+    store_vec4(a, rec.m0);
+    store_vec4(a + 16ul, rec.m1);
+    store_vec4(a + 32ul, rec.m2);
+}
+
 #define CLASS_DROPPED 0u
 #define CLASS_DRAWN 1u
 #define CLASS_CUTOFF 2u

@@ -81,6 +81,20 @@ void store_vec4(uint64_t address, vec4 v) {
     store_uvec4(address, floatBitsToUint(v));
 }
 
+// Words first .. first + 3 of a u32 array (first a multiple of 4).
+uvec4 load_u32x4(U32s words, uint first) {
+    return load_uvec4(uint64_t(words) + 4ul * uint64_t(first));
+}
+
+// Item i of a vec4 array.
+vec4 load_vec4_item(Vec4s items, uint i) {
+    return load_vec4(uint64_t(items) + 16ul * uint64_t(i));
+}
+
+void store_vec4_item(Vec4s items, uint i, vec4 v) {
+    store_vec4(uint64_t(items) + 16ul * uint64_t(i), v);
+}
+
 FrameParams load_frame_params(FrameParamsRef ref) {
     uint64_t a = uint64_t(ref);
     FrameParams f;

@@ -163,10 +163,7 @@ void main() {
     barrier();
     if (cutoff) {
         uint index = wg_cutoff_base + slot;
-        uint64_t record = uint64_t(pc.cutoffs) + uint64_t(index) * 48ul;
-        store_vec4(record, rec.m0);
-        store_vec4(record + 16ul, rec.m1);
-        store_vec4(record + 32ul, rec.m2);
+        store_cutoff_record(pc.cutoffs, index, rec);
         pc.splats.v[i].cutoff = index;
     }
 }

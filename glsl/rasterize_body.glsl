@@ -155,7 +155,7 @@ bool composite(uint k, Staged s, bool cutoff) {
     if (cutoff) {
 #ifdef COOPERATIVE_RECORD
         // The record's six 64-bit words: lanes 0-3 read words 0-3, lanes 0-1 words 4-5.
-        U64s words = U64s(uint64_t(pc.cutoffs) + uint64_t(tail.y) * 48ul);
+        U64s words = U64s(cutoff_record_address(pc.cutoffs, tail.y));
         uint lane = gl_SubgroupInvocationID;
         uvec2 w0 = unpackUint2x32(words.v[lane & 3u]);
         uvec2 w1 = unpackUint2x32(words.v[4u + (lane & 1u)]);
@@ -163,10 +163,7 @@ bool composite(uint k, Staged s, bool cutoff) {
         rec.m1 = uintBitsToFloat(uvec4(subgroupBroadcast(w0, 2u), subgroupBroadcast(w0, 3u)));
         rec.m2 = uintBitsToFloat(uvec4(subgroupBroadcast(w1, 0u), subgroupBroadcast(w1, 1u)));
 #else
-        uint64_t record = uint64_t(pc.cutoffs) + uint64_t(tail.y) * 48ul;
-        rec.m0 = load_vec4(record);
-        rec.m1 = load_vec4(record + 16ul);
-        rec.m2 = load_vec4(record + 32ul);
+        rec = load_cutoff_record(pc.cutoffs, tail.y);
 #endif
     }
 #endif
@@ -328,7 +325,7 @@ void main() {
         px_T[i] = 1.0;
         px_done[i] = !inside;
         if ((pc.flags & ROUND_FIRST) == 0u && inside) {
-            vec4 s = load_vec4(uint64_t(pc.state) + 16ul * uint64_t(pixel.y * f.size.x + pixel.x));
+            vec4 s = load_vec4_item(pc.state, pixel.y * f.size.x + pixel.x);
             px_color[i] = s.rgb;
             px_T[i] = abs(s.a);
             px_done[i] = s.a < 0.0;
@@ -437,7 +434,7 @@ void main() {
         if (pixel.x >= f.size.x || pixel.y >= f.size.y) {
             continue;
         }
-        store_vec4(uint64_t(pc.state) + 16ul * uint64_t(pixel.y * f.size.x + pixel.x),
-                   vec4(px_color[i], px_done[i] ? -px_T[i] : px_T[i]));
+        store_vec4_item(pc.state, pixel.y * f.size.x + pixel.x,
+                        vec4(px_color[i], px_done[i] ? -px_T[i] : px_T[i]));
     }
 }

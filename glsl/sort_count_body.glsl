@@ -36,13 +36,13 @@ void main() {
         counts[d] = 0u;
     }
 #ifdef SORT_COUNT_OWN_RUNS
-    // Each invocation counts its own run of SORT_RUN keys, four at a time (load_uvec4: half
+    // Each invocation counts its own run of SORT_RUN keys, four at a time (load_u32x4: half
     // the lane loops of scalar loads on a CPU driver; see sort_scatter_body.glsl for why the
     // groups stay inside the buffers).
     [[unroll]] for (uint k = 0u; k < SORT_RUN; k += 4u) {
         uint i = base + lid * SORT_RUN + k;
         if (i < n) {
-            uvec4 four = load_uvec4(uint64_t(pc.keys) + 4ul * uint64_t(i));
+            uvec4 four = load_u32x4(pc.keys, i);
             [[unroll]] for (uint j = 0u; j < 4u; ++j) {
                 uint digit = key_digit(four[j], pc.shift, pc.digit_mask);
                 [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {

@@ -47,13 +47,13 @@ void main() {
     [[unroll]] for (uint d = 0u; d < SORT_RADIX; ++d) {
         counts[d] = 0u;
     }
-    // Keys four at a time (load_uvec4: half the lane loops of four scalar loads on a CPU
+    // Keys four at a time (load_u32x4: half the lane loops of four scalar loads on a CPU
     // driver). A group that starts below n stays inside the buffers, which hold a multiple
     // of 4 keys (RadixSort::buffers); keys at n or beyond are never counted or written.
     [[unroll]] for (uint k = 0u; k < SORT_RUN; k += 4u) {
         uvec4 four = uvec4(0u);
         if (base + k < n) {
-            four = load_uvec4(uint64_t(pc.keys_in) + 4ul * uint64_t(base + k));
+            four = load_u32x4(pc.keys_in, base + k);
         }
         keys[k] = four.x;
         keys[k + 1u] = four.y;
@@ -97,7 +97,7 @@ void main() {
     [[unroll]] for (uint k = 0u; k < SORT_RUN; ++k) {
         uint i = base + k;
         if (k % 4u == 0u && i < n) {
-            values = load_uvec4(uint64_t(pc.values_in) + 4ul * uint64_t(i));
+            values = load_u32x4(pc.values_in, i);
         }
         if (i < n) {
             uint digit = key_digit(keys[k], pc.shift, pc.digit_mask);

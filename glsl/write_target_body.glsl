@@ -72,7 +72,7 @@ void main() {
         return;
     }
     uint index = p.y * pc.size.x + p.x;
-    vec4 s = load_vec4(uint64_t(pc.state) + 16ul * uint64_t(index));
+    vec4 s = load_vec4_item(pc.state, index);
     float T = abs(s.a);
     vec4 under = (pc.flags & TARGET_OVER) != 0u ? load_target(p, index) : pc.background;
     store_target(p, index, vec4(s.rgb + T * under.rgb, (1.0 - T) + T * under.a));

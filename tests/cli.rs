@@ -37,6 +37,15 @@ fn good_scene() -> (PathBuf, PathBuf) {
     (p, c)
 }
 
+/// Asserts that the command succeeded, showing its stderr if not.
+fn assert_success(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Asserts a clean failure whose stderr contains every one of `needles`.
 fn assert_error(out: &Output, needles: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -368,11 +377,7 @@ fn clip_options_and_clip_files_agree() {
         "2.5",
     ]);
     let out = rara(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("cutoff"), "{stdout}");
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -403,11 +408,7 @@ fn clip_options_and_clip_files_agree() {
     let mut args = render_args(scene, cams, out_plain.to_str().unwrap());
     args.extend(["--clip-plane", "-1,0.2,0,0.1", "--background", "-0,0,0.5"]);
     let out = rara(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
 
     // The sphere cutaway and hard mode parse and render.
     let mut args = render_args(scene, cams, out_plain.to_str().unwrap());
@@ -419,11 +420,7 @@ fn clip_options_and_clip_files_agree() {
         "hard",
     ]);
     let out = rara(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     assert!(String::from_utf8_lossy(&out.stderr).contains("hard clip by a sphere, inverted"));
 }
 
@@ -487,11 +484,7 @@ fn sweep_writes_frames_gif_and_stats() {
         "-o",
         out_dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     for k in 0..4 {
         let frame = image::open(out_dir.join(format!("frame_{k:04}.png"))).unwrap();
         assert_eq!(
@@ -529,13 +522,14 @@ fn bench_writes_table_json_and_trace() {
     let json = dir().join("bench.json");
     let trace = dir().join("bench.trace.json");
     let frames = 3;
+    let frames_arg = frames.to_string();
     let out = rara(&[
         "bench",
         scene.to_str().unwrap(),
         "--cameras",
         cams.to_str().unwrap(),
         "--frames",
-        "3",
+        &frames_arg,
         "--warmup",
         "1",
         "--json",
@@ -544,11 +538,7 @@ fn bench_writes_table_json_and_trace() {
         trace.to_str().unwrap(),
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     for needle in ["| original", "| hard", "| rara", "rasterize", "rara / hard"] {
         assert!(stdout.contains(needle), "table lacks '{needle}':\n{stdout}");
     }
@@ -619,10 +609,6 @@ fn bench_writes_table_json_and_trace() {
     }
 
     let out = rara(&["bench", "--sort", "5000"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     assert!(String::from_utf8_lossy(&out.stdout).contains("GPU / CPU throughput"));
 }
