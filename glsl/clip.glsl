@@ -254,4 +254,128 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
     return clamp(inside / (t2 - t1), 0.0, 1.0);
 }
 
+// Per-tile classes of a cutoff splat's pairs (emit_rara.comp). Across one 16x16 tile a cutoff
+// splat is often drawn with weight 1 at every pixel, or adds nothing at any (plant at 640x480:
+// 23-47 % and 24-41 % of its cutoff pairs), yet the rasterizer pays the per-pixel weight for
+// every pixel of every cutoff pair. Emit therefore bounds the weight over the tile's rays and
+// the splat's alpha over the tile's pixels: a FULL pair is drawn as a plain splat (its value
+// carries PAIR_WEIGHT_ONE), an EMPTY pair leaves every tile list (its key is the tile count,
+// which sorts after every tile), and only a PARTIAL pair takes the weight path.
+#define TILE_CLASS_PARTIAL 0u
+#define TILE_CLASS_FULL 1u
+#define TILE_CLASS_EMPTY 2u
+
+// A FULL pair's alpha differs from the weighted one by at most this at any pixel (64x below
+// the 8-bit output's half step, and far below the weight's own 1/255 skip threshold).
+#define TILE_FULL_TOLERANCE (1.0 / 65536.0)
+
+// Bounds (u_lo, u_hi) over the rays eye + t dir of a tile, dir in the convex hull of the four
+// corner rays dirs[k] (in order around the tile), of the argument u of the mass a half-space
+// pl = (n, d) leaves visible, Phi(u) (see clip_mass_ends: for one plane the visible mass is
+// Phi(u) with u = (t* - t_p) sqrt(a) sign(n.dir)). (-UNBOUNDED, UNBOUNDED) when the plane is
+// seen edge-on within the tile.
+//
+// u does not depend on the scale of dir, so each ray is scaled to n.dir = 1; in the Gaussian's
+// whitened frame its direction is then q = M dir, on the plane m.q = 1 with m = M^-T n, and
+// with h = n.eye + d (t_p = -h):
+//   u(q) = (h |q|^2 - o'.q) / |q|.
+// The tile's rays fill the convex quadrilateral spanned by the corners' q. The numerator is a
+// quadratic with the isotropic Hessian 2h I, so its extremes over the quadrilateral lie at a
+// corner, at the stationary point of an edge, or at its stationary point in the plane if that
+// lies inside: all of them are evaluated, so the bounds are exact up to rounding (slack below)
+// and to the division by |q|, bounded by |q| <= the largest corner's |q| (|q| is convex) and
+// |q| >= 1/|m| (the plane's distance from the origin).
+vec2 tile_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dirs[4]) {
+    vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
+    float h = dot(pl.xyz, eye) + pl.w;
+    vec3 q[4];
+    float nd_lo = UNBOUNDED;
+    float nd_hi = -UNBOUNDED;
+    for (uint k = 0u; k < 4u; ++k) {
+        float nd = dot(pl.xyz, dirs[k]);
+        nd_lo = min(nd_lo, nd);
+        nd_hi = max(nd_hi, nd);
+        vec3 d = dirs[k] / nd;
+        q[k] = vec3(dot(rec.m0.xyz, d), dot(rec.m1.xyz, d), dot(rec.m2.xyz, d));
+    }
+    if (!(nd_lo > 0.0 || nd_hi < 0.0)) {
+        return vec2(-UNBOUNDED, UNBOUNDED);
+    }
+    float f_lo = UNBOUNDED;
+    float f_hi = -UNBOUNDED;
+    float qq_hi = 0.0;
+    for (uint k = 0u; k < 4u; ++k) {
+        // Along the edge q[k] + t e, t in [0, 1]: f = f_k + t (slope + t curve).
+        vec3 a = q[k];
+        vec3 e = q[(k + 1u) & 3u] - a;
+        float aa = dot(a, a);
+        float f_k = h * aa - dot(o, a);
+        float curve = h * dot(e, e);
+        float slope = 2.0 * h * dot(a, e) - dot(o, e);
+        float t = curve != 0.0 ? clamp(-0.5 * slope / curve, 0.0, 1.0) : 0.0;
+        float f_e = f_k + t * (slope + t * curve);
+        f_lo = min(f_lo, min(f_k, f_e));
+        f_hi = max(f_hi, max(f_k, f_e));
+        qq_hi = max(qq_hi, aa);
+    }
+    // m = M^-T n = S R^T n: with rows M_j = (R^T)_j / s_j, m_j = (M_j . n) / |M_j|^2.
+    vec3 m = vec3(dot(rec.m0.xyz, pl.xyz) / dot(rec.m0.xyz, rec.m0.xyz),
+                  dot(rec.m1.xyz, pl.xyz) / dot(rec.m1.xyz, rec.m1.xyz),
+                  dot(rec.m2.xyz, pl.xyz) / dot(rec.m2.xyz, rec.m2.xyz));
+    float mm = dot(m, m);
+    if (h != 0.0) {
+        // The gradient 2h q - o' is normal to the plane there: q = (o' + l m) / 2h, m.q = 1.
+        vec3 s = (o + ((2.0 * h - dot(m, o)) / mm) * m) / (2.0 * h);
+        bool left = true;
+        bool right = true;
+        for (uint k = 0u; k < 4u; ++k) {
+            float side = dot(m, cross(q[(k + 1u) & 3u] - q[k], s - q[k]));
+            left = left && side >= 0.0;
+            right = right && side <= 0.0;
+        }
+        if (left || right) {
+            float f_s = h * dot(s, s) - dot(o, s);
+            f_lo = min(f_lo, f_s);
+            f_hi = max(f_hi, f_s);
+        }
+    }
+    float q_lo = inversesqrt(mm);
+    float q_hi = sqrt(qq_hi);
+    // f is a difference of terms up to |h| |q|^2 and |o'| |q|: allow for their rounding, here
+    // and in the rasterizer's own per-pixel u.
+    float slack = 1e-6 * (abs(h) * qq_hi + length(o) * q_hi) / q_lo;
+    return vec2(f_lo / (f_lo >= 0.0 ? q_hi : q_lo) - slack,
+                f_hi / (f_hi >= 0.0 ? q_lo : q_hi) + slack);
+}
+
+// TILE_CLASS_* of a cutoff splat's pair with the tile whose corner rays are dirs, for a region
+// of planes and the mass weight; peak_alpha bounds o exp(power) over the tile's pixels. Along
+// any ray the mass inside the intersection K of the half-spaces is at most that of each
+// half-space, min_k Phi(u_hi,k), and the mass outside K at most the sum of the masses outside
+// each, sum_k Phi(-u_lo,k); an inverted region swaps the two.
+uint cutoff_tile_class(ClipParamsRef clip, CutoffRecord rec, vec3 eye, vec3 dirs[4],
+                       float peak_alpha) {
+    uvec4 config = clip.p.config;
+    float u_keep = UNBOUNDED;
+    float lost = 0.0;
+    for (uint k = 0u; k < config.w; ++k) {
+        vec2 u = tile_plane_u_range(rec, clip.p.planes[k], eye, dirs);
+        u_keep = min(u_keep, u.y);
+        lost += normal_cdf(-u.x);
+    }
+    float inside_max = normal_cdf(u_keep);
+    float outside_max = min(lost, 1.0);
+    bool invert = (config.z & CLIP_FLAG_INVERT) != 0u;
+    float weight_max = invert ? outside_max : inside_max;
+    float deficit_max = invert ? inside_max : outside_max;
+    // The rasterizer skips alpha w < 1/255; a 1 % margin covers rounding.
+    if (peak_alpha * weight_max < 0.99 / 255.0) {
+        return TILE_CLASS_EMPTY;
+    }
+    if (peak_alpha * deficit_max <= TILE_FULL_TOLERANCE) {
+        return TILE_CLASS_FULL;
+    }
+    return TILE_CLASS_PARTIAL;
+}
+
 #endif

@@ -147,6 +147,13 @@ void store_splat(ProjectedSplats splats, uint i, ProjectedSplat p) {
     store_uvec4(splat_block(splats, i, 3u), p.rect);
 }
 
+// World-space direction of the ray through pixel centre `pixel` (SPEC section 2): camera-space
+// ((i - cx)/fx, (j - cy)/fy, 1) turned to world, not normalised.
+vec3 pixel_ray(FrameParams f, vec2 pixel) {
+    vec2 c = (pixel - f.focal.zw) / f.focal.xy;
+    return c.x * f.world_to_cam0.xyz + c.y * f.world_to_cam1.xyz + f.world_to_cam2.xyz;
+}
+
 // Indirect dispatch arguments with a 16-byte stride (x, y, z, unused).
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer DispatchArgs { uvec4 v[]; };
 
@@ -175,13 +182,13 @@ float footprint_q_max(float opacity) {
     return 2.0 * log(255.0 * opacity) * 1.0001 + 1e-3;
 }
 
-// Whether the ellipse q(p - uv) <= q_max reaches the pixel centres of tile (tx, ty): the
-// minimum of q over the tile's box of pixel centres, found on its edges when uv is outside.
-bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
+// The minimum of q(p - uv) over the pixel centres of tile (tx, ty): 0 when uv lies in their
+// box, else found on the box's edges.
+float footprint_q_min_in_tile(vec2 uv, vec3 conic, uint tx, uint ty) {
     vec2 lo = vec2(tx * TILE_SIZE, ty * TILE_SIZE) - uv;
     vec2 hi = lo + float(TILE_SIZE - 1u);
     if (lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0) {
-        return true;
+        return 0.0;
     }
     float q_min = 1e30;
     // Edges x = lo.x and x = hi.x: q is smallest at dy = -B dx / C, clamped to the edge.
@@ -193,7 +200,12 @@ bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) 
         float dx2 = clamp(-conic.y * dy2 / conic.x, lo.x, hi.x);
         q_min = min(q_min, conic.x * dx2 * dx2 + 2.0 * conic.y * dx2 * dy2 + conic.z * dy2 * dy2);
     }
-    return q_min <= q_max;
+    return q_min;
+}
+
+// Whether the ellipse q(p - uv) <= q_max reaches the pixel centres of tile (tx, ty).
+bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
+    return footprint_q_min_in_tile(uv, conic, tx, ty) <= q_max;
 }
 
 #endif

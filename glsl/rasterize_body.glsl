@@ -21,7 +21,8 @@
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
 // ray (clip.glsl), from its cutoff record (the batch stages the record's index). Splats that
-// are not cutoff take the plain path.
+// are not cutoff take the plain path, and so do cutoff splats in the tiles where emit found
+// their weight to be 1 at every pixel (PAIR_WEIGHT_ONE in the pair's value, emit_body.glsl).
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
 // + 1 or CLIP_WEIGHT_LENGTH + 1.
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
@@ -311,9 +312,7 @@ void main() {
 #endif
 
 #if CUTOFF_WEIGHT != 0
-    // Camera-space direction ((i - cx)/fx, (j - cy)/fy, 1) turned to world (SPEC section 2).
-    vec2 c0 = (vec2(first_pixel) - f.focal.zw) / f.focal.xy;
-    ray0 = c0.x * f.world_to_cam0.xyz + c0.y * f.world_to_cam1.xyz + f.world_to_cam2.xyz;
+    ray0 = pixel_ray(f, vec2(first_pixel));
     ray_across = f.world_to_cam0.xyz / f.focal.x;
     ray_step = f.world_to_cam1.xyz / f.focal.y;
 #endif
@@ -367,12 +366,13 @@ void main() {
             uint slot = j * INVOCATIONS + lid;
             uint entry = batch + slot;
             if (entry < end) {
-                uint s = pc.values.v[entry];
-                ProjectedSplat p = load_splat(pc.splats, s);
+                uint value = pc.values.v[entry];
+                ProjectedSplat p = load_splat(pc.splats, value & ~PAIR_WEIGHT_ONE);
 #if CUTOFF_WEIGHT != 0
                 // The sign of the staged opacity marks a cutoff splat, so the loop that walks
-                // the plain ones learns it from a load it makes anyway.
-                bool cutoff = p.cutoff != NO_CUTOFF;
+                // the plain ones learns it from a load it makes anyway. A pair that emit found
+                // to have weight 1 across the tile (PAIR_WEIGHT_ONE) is drawn as a plain one.
+                bool cutoff = p.cutoff != NO_CUTOFF && (value & PAIR_WEIGHT_ONE) == 0u;
                 stage(slot, vec4(p.conic, cutoff ? -p.opacity : p.opacity), p.uv, p.color,
                       p.cutoff);
 #else

@@ -1,5 +1,7 @@
 // Stage 6, tile ranges: one invocation per sorted pair marks where each tile's list starts and
-// ends (ranges[tile] = [start, end), zero-filled beforehand for empty tiles).
+// ends (ranges[tile] = [start, end), zero-filled beforehand for empty tiles). Keys of
+// tile_count and above (pairs emit_rara.comp found to add nothing) sort after every tile and
+// belong to none.
 #version 460
 #include "common.glsl"
 #include "sort_common.glsl"
@@ -10,6 +12,7 @@ layout(push_constant) uniform Push {
     U32s keys;          // sorted tile ids
     SortInfoRef info;   // num_keys
     UVec2s ranges;
+    uint tile_count;
 } pc;
 
 void main() {
@@ -19,6 +22,9 @@ void main() {
         return;
     }
     uint tile = pc.keys.v[i];
+    if (tile >= pc.tile_count) {
+        return;
+    }
     if (i == 0u || pc.keys.v[i - 1u] != tile) {
         pc.ranges.v[tile].x = i;
     }

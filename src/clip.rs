@@ -374,6 +374,20 @@ impl Clip {
         }
     }
 
+    /// Whether the frame's emit stage classifies cutoff splats' pairs by tile (weight 1 across
+    /// the tile, no contribution, or partial; `glsl/clip.glsl`, `cutoff_tile_class`): rara
+    /// clipping by planes with the mass weight. Not under `trace_all`, whose point is to trace
+    /// every Gaussian.
+    pub fn classifies_cutoff_tiles(&self) -> bool {
+        self.effective_mode() == ClipMode::Rara
+            && self.weight == ClipWeight::Mass
+            && !self.trace_all
+            && matches!(
+                self.region.as_ref().map(|r| &r.shape),
+                Some(ClipShape::HalfSpaces(_))
+            )
+    }
+
     /// Checks the band and the region's size.
     pub fn validate(&self) -> Result<()> {
         if !(self.band.is_finite() && self.band > 0.0) {

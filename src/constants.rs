@@ -36,6 +36,7 @@ pub const SCAN_LEVELS: u32 = 3;
 /// Most Gaussians a scene may have: the prefix sum over them dispatches one workgroup per
 /// `SCAN_BLOCK` elements along X (67,107,840).
 pub const MAX_GAUSSIANS: u64 = SCAN_BLOCK as u64 * LINEAR_GRID_X as u64;
+const _: () = assert!(MAX_GAUSSIANS <= PAIR_WEIGHT_ONE as u64);
 /// Bits per radix-sort digit.
 pub const SORT_RADIX_BITS: u32 = 4;
 /// Buckets per radix-sort digit.
@@ -72,8 +73,20 @@ pub const COUNTER_VISIBLE: u32 = 2;
 pub const COUNTER_CUTOFF: u32 = 3;
 /// Counter slot: entries the sort actually processes (`min(intersections, capacity)`).
 pub const COUNTER_SORT_COUNT: u32 = 4;
+/// Counter slot: cutoff splats' pairs that the cutoff-tiles stage classified (0 when it did not
+/// run).
+pub const COUNTER_CUTOFF_PAIRS: u32 = 5;
+/// Counter slot: of those, pairs drawn as plain splats (weight 1 across the tile).
+pub const COUNTER_CUTOFF_PAIRS_WEIGHT_ONE: u32 = 6;
+/// Counter slot: of those, pairs dropped from the tile lists (nothing added to the tile).
+pub const COUNTER_CUTOFF_PAIRS_EMPTY: u32 = 7;
 /// Number of counter slots.
 pub const COUNTER_SLOTS: u32 = 8;
+
+/// Bit of a pair's value (the splat index) that emit sets when a cutoff splat's clip weight is 1
+/// at every pixel of the pair's tile, so the rasterizer draws it there as a plain splat. Splat
+/// indices stay below `MAX_GAUSSIANS` < 2^31.
+pub const PAIR_WEIGHT_ONE: u32 = 1 << 31;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -117,6 +130,13 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("COUNTER_VISIBLE", COUNTER_VISIBLE),
     ("COUNTER_CUTOFF", COUNTER_CUTOFF),
     ("COUNTER_SORT_COUNT", COUNTER_SORT_COUNT),
+    ("COUNTER_CUTOFF_PAIRS", COUNTER_CUTOFF_PAIRS),
+    (
+        "COUNTER_CUTOFF_PAIRS_WEIGHT_ONE",
+        COUNTER_CUTOFF_PAIRS_WEIGHT_ONE,
+    ),
+    ("COUNTER_CUTOFF_PAIRS_EMPTY", COUNTER_CUTOFF_PAIRS_EMPTY),
+    ("PAIR_WEIGHT_ONE", PAIR_WEIGHT_ONE),
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),

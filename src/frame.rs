@@ -4,8 +4,9 @@ use ash::vk;
 
 use crate::camera::tile_grid;
 use crate::constants::{
-    COUNTER_CUTOFF, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS, COUNTER_VISIBLE,
-    MAX_INTERSECTIONS, RASTER_CHUNK,
+    COUNTER_CUTOFF, COUNTER_CUTOFF_PAIRS, COUNTER_CUTOFF_PAIRS_EMPTY,
+    COUNTER_CUTOFF_PAIRS_WEIGHT_ONE, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS,
+    COUNTER_VISIBLE, MAX_INTERSECTIONS, RASTER_CHUNK,
 };
 use crate::error::{Result, VkContext};
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
@@ -51,7 +52,8 @@ pub struct FrameMemory {
     /// pair offsets (4 B), the depth sort's keys and values (16 B) and histograms, plus the
     /// prefix sum's partial sums (4 B per 1,024).
     pub per_gaussian: u64,
-    /// Cutoff side records (48 B per Gaussian), allocated by the first rara-clipped frame.
+    /// Cutoff side records (48 B per Gaussian) and where their pairs start (8 B), allocated by
+    /// the first rara-clipped frame.
     pub cutoff_records: u64,
     /// Sort keys and values, double-buffered (16 B per pair), and the sort histograms, for
     /// `intersection_capacity` (tile, splat) pairs.
@@ -75,6 +77,11 @@ impl FrameMemory {
     }
 }
 
+/// Offset of the cutoff-tiles dispatch arguments in [`FrameResources::cutoff_pairs`].
+pub(crate) const CUTOFF_ARGS_OFFSET: u64 = 0;
+/// Offset of the (first pair, splat index) entries in [`FrameResources::cutoff_pairs`].
+pub(crate) const CUTOFF_PAIRS_OFFSET: u64 = 16;
+
 /// Buffers of one frame size, reused while the sizes fit.
 pub(crate) struct FrameResources {
     pub(crate) width: u32,
@@ -86,6 +93,10 @@ pub(crate) struct FrameResources {
     pub(crate) counters: Buffer,
     /// Cutoff side records, one slot per Gaussian; allocated on the first rara frame.
     pub(crate) cutoffs: Option<Buffer>,
+    /// With the records: the cutoff-tiles stage's dispatch arguments (16 B at
+    /// [`CUTOFF_ARGS_OFFSET`]), then per record its splat's (first pair, splat index) at
+    /// [`CUTOFF_PAIRS_OFFSET`].
+    pub(crate) cutoff_pairs: Option<Buffer>,
     pub(crate) splats: Buffer,
     pub(crate) tiles_touched: Buffer,
     /// Per Gaussian: project's drawn flags, scanned into each drawn Gaussian's slot in the
@@ -160,7 +171,8 @@ impl FrameSlot {
                 + r.slots.size
                 + r.slots_scan.device_bytes()
                 + r.depth_sort.device_bytes();
-            m.cutoff_records = r.cutoffs.as_ref().map_or(0, |b| b.size);
+            m.cutoff_records = r.cutoffs.as_ref().map_or(0, |b| b.size)
+                + r.cutoff_pairs.as_ref().map_or(0, |b| b.size);
             m.per_intersection = r.sort.device_bytes();
             m.intersection_capacity = r.capacity;
             m.per_pixel = r.ranges.size + r.state.size;
@@ -194,6 +206,9 @@ impl FrameSlot {
             intersections,
             visible: counters[COUNTER_VISIBLE as usize],
             cutoff: counters[COUNTER_CUTOFF as usize],
+            cutoff_pairs: counters[COUNTER_CUTOFF_PAIRS as usize],
+            cutoff_pairs_weight_one: counters[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE as usize],
+            cutoff_pairs_empty: counters[COUNTER_CUTOFF_PAIRS_EMPTY as usize],
             max_tile_len,
             complete,
             ..FrameStats::default()
@@ -254,6 +269,7 @@ impl FrameSlot {
                 )?,
                 counters: Buffer::new(ctx, "frame counters", COUNTER_SLOTS as u64 * 4, gpu)?,
                 cutoffs: None,
+                cutoff_pairs: None,
                 splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
                 tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
                 slots: Buffer::new(ctx, "depth sort slots / pair offsets", n * 4, gpu)?,
@@ -275,11 +291,19 @@ impl FrameSlot {
                 .as_ref()
                 .is_some_and(|b| b.size >= cutoff_bytes)
         {
-            frame.cutoffs = None; // free the old buffer first
+            // Free the old buffers first.
+            frame.cutoffs = None;
+            frame.cutoff_pairs = None;
             frame.cutoffs = Some(Buffer::new(
                 &self.ctx,
                 "cutoff records",
                 cutoff_bytes,
+                MemoryLocation::GpuOnly,
+            )?);
+            frame.cutoff_pairs = Some(Buffer::new(
+                &self.ctx,
+                "cutoff pairs",
+                CUTOFF_PAIRS_OFFSET + gaussians.max(1) as u64 * 8,
                 MemoryLocation::GpuOnly,
             )?);
         }

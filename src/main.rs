@@ -284,6 +284,15 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         stats.cutoff,
         stats.intersections
     );
+    if stats.cutoff_pairs > 0 {
+        println!(
+            "cutoff pairs by tile: {} in all, {} weight 1 (drawn plain), {} empty (left out), {} partial",
+            stats.cutoff_pairs,
+            stats.cutoff_pairs_weight_one,
+            stats.cutoff_pairs_empty,
+            stats.cutoff_pairs - stats.cutoff_pairs_weight_one - stats.cutoff_pairs_empty
+        );
+    }
     println!(
         "{}",
         cli::describe_memory(&gpu_scene, &renderer.headless_memory())

@@ -11,10 +11,11 @@ use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
 use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, COUNTER_VISIBLE, MAX_GAUSSIANS};
 use crate::error::{Error, Result};
-use crate::frame::{FrameMemory, FrameSlot};
+use crate::frame::{FrameMemory, FrameSlot, CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
 use crate::gpu_types::{GpuFrameParams, GpuGaussian};
 use crate::precision::{f32_to_f16_bits, ShPrecision};
 use crate::scene::Scene;
+use crate::stages::cutoff_tiles::{CutoffTiles, CutoffTilesPush};
 use crate::stages::depth_order::{DepthCountsPush, DepthKeysPush, DepthOrder};
 use crate::stages::emit::{Emit, EmitPush};
 use crate::stages::prefix_sum::PrefixSum;
@@ -193,6 +194,14 @@ pub struct FrameStats {
     pub visible: u32,
     /// Gaussians drawn as cutoff (per-pixel clip weight), among `visible`.
     pub cutoff: u32,
+    /// The cutoff splats' pairs, when the frame classified them by tile (rara clipping by
+    /// planes with the mass weight; else 0): all of them, ...
+    pub cutoff_pairs: u32,
+    /// ... those drawn as plain splats, their weight being 1 across the tile, ...
+    pub cutoff_pairs_weight_one: u32,
+    /// ... and those left out of the tile lists, adding nothing to the tile. The rest pay the
+    /// per-pixel weight.
+    pub cutoff_pairs_empty: u32,
     /// Longest tile list.
     pub max_tile_len: u32,
     /// Whether every tile pair and tile-list entry fitted the frame slot's buffers. `false`
@@ -238,6 +247,7 @@ pub struct Renderer {
     prefix_sum: PrefixSum,
     depth_order: DepthOrder,
     emit: Emit,
+    cutoff_tiles: CutoffTiles,
     sort: RadixSort,
     tile_ranges: TileRanges,
     rasterize: Rasterize,
@@ -254,11 +264,12 @@ struct HeadlessFrame {
     image: Option<(u32, u32, Buffer, Buffer)>,
 }
 
-/// Sort key bits of the frame's pair sort: enough bits for the tile id (the pairs are emitted in
-/// depth order, which the stable sort keeps within each tile).
+/// Sort key bits of the frame's pair sort: enough bits for the tile id and for the tile count,
+/// the key of pairs that add nothing (`glsl/emit_body.glsl`). The pairs are emitted in depth
+/// order, which the stable sort keeps within each tile.
 pub fn key_bits(width: u32, height: u32) -> u32 {
     let (gx, gy) = tile_grid(width, height);
-    (gx * gy).next_power_of_two().trailing_zeros()
+    (gx * gy + 1).next_power_of_two().trailing_zeros()
 }
 
 /// Key bits of the depth sort: all 32 bits of the (positive) float depth.
@@ -279,6 +290,7 @@ impl Renderer {
             prefix_sum: PrefixSum::new(ctx)?,
             depth_order: DepthOrder::new(ctx)?,
             emit: Emit::new(ctx)?,
+            cutoff_tiles: CutoffTiles::new(ctx)?,
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx)?,
             rasterize: Rasterize::new(ctx, layout)?,
@@ -556,6 +568,13 @@ impl Renderer {
         } else {
             0
         };
+        // Cutoff pairs are classified by tile only under rara clipping by planes with the mass
+        // weight (stages::cutoff_tiles).
+        let cutoff_pairs = if options.clip.classifies_cutoff_tiles() {
+            f.cutoff_pairs.as_ref()
+        } else {
+            None
+        };
         let ctx = &self.ctx;
         let device = ctx.device();
         let counters_at = |slot: u32| f.counters.address + 4 * slot as u64;
@@ -654,10 +673,33 @@ impl Renderer {
             offsets: f.slots.address,
             keys: f.sort.keys[0].address,
             values: f.sort.values[0].address,
+            counters: f.counters.address,
+            cutoff_args: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_ARGS_OFFSET),
+            cutoff_pairs: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
         };
-        self.emit.record(cmd, &push, scene.count);
+        self.emit
+            .record(cmd, &push, scene.count, cutoff_pairs.is_some());
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"emit");
+
+        if let Some(pairs) = cutoff_pairs {
+            timer.begin_pass(cmd, c"cutoff tiles");
+            let push = CutoffTilesPush {
+                frame: f.params.address,
+                splats: f.splats.address,
+                tiles_touched: f.tiles_touched.address,
+                counters: f.counters.address,
+                cutoff_pairs: pairs.address + CUTOFF_PAIRS_OFFSET,
+                clip: f.clip_params.address,
+                cutoffs: cutoffs_address,
+                keys: f.sort.keys[0].address,
+                values: f.sort.values[0].address,
+            };
+            self.cutoff_tiles
+                .record(cmd, &push, pairs.raw, CUTOFF_ARGS_OFFSET);
+            compute_barrier(ctx, cmd);
+            timer.end_pass(cmd, c"cutoff tiles");
+        }
 
         let sorted = self.sort.record(
             ctx,
@@ -675,6 +717,8 @@ impl Renderer {
             keys: f.sort.keys[sorted].address,
             info: f.sort.info.address,
             ranges: f.ranges.address,
+            tile_count: gx * gy,
+            pad: 0,
         };
         self.tile_ranges.record(cmd, &push, &f.sort.info);
         compute_barrier(ctx, cmd);

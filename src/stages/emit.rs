@@ -1,5 +1,7 @@
 //! Stage 4: emit one (tile id, splat index) pair per touched tile, in depth order
-//! (`glsl/emit.comp`).
+//! (`glsl/emit_body.glsl`). Under rara clipping by planes with the mass weight, the variant
+//! `emit_rara` also records where each cutoff splat's pairs start, for the cutoff-tiles stage
+//! ([`super::cutoff_tiles`]).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -26,24 +28,38 @@ pub struct EmitPush {
     pub keys: u64,
     /// Out: values (splat indices).
     pub values: u64,
+    /// The frame's counters (`emit_rara` only: the number of cutoff splats).
+    pub counters: u64,
+    /// Out (`emit_rara` only): the cutoff-tiles stage's indirect dispatch arguments.
+    pub cutoff_args: u64,
+    /// Out (`emit_rara` only): per cutoff record, its splat's (first pair, splat index).
+    pub cutoff_pairs: u64,
 }
 
-/// The emit kernel.
+/// The emit kernels: plain, and recording the cutoff splats' pairs.
 pub struct Emit {
-    pipeline: ComputePipeline,
+    plain: ComputePipeline,
+    cutoff_pairs: ComputePipeline,
 }
 
 impl Emit {
-    /// Builds the kernel.
+    /// Builds the kernels.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Emit {
-            pipeline: ComputePipeline::new::<EmitPush>(ctx, c"emit", shaders::EMIT)?,
+            plain: ComputePipeline::new::<EmitPush>(ctx, c"emit", shaders::EMIT)?,
+            cutoff_pairs: ComputePipeline::new::<EmitPush>(ctx, c"emit_rara", shaders::EMIT_RARA)?,
         })
     }
 
     /// Records the emission for a scene of `count` Gaussians (the drawn ones are read on the
-    /// GPU).
-    pub fn record(&self, cmd: vk::CommandBuffer, push: &EmitPush, count: u32) {
-        self.pipeline.dispatch(cmd, push, super::linear_grid(count));
+    /// GPU). With `cutoff_pairs`, the kernel also fills `push.cutoff_args` and
+    /// `push.cutoff_pairs` for [`super::cutoff_tiles::CutoffTiles::record`].
+    pub fn record(&self, cmd: vk::CommandBuffer, push: &EmitPush, count: u32, cutoff_pairs: bool) {
+        let pipeline = if cutoff_pairs {
+            &self.cutoff_pairs
+        } else {
+            &self.plain
+        };
+        pipeline.dispatch(cmd, push, super::linear_grid(count));
     }
 }

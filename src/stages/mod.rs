@@ -4,6 +4,7 @@
 
 use crate::constants::{LINEAR_GRID_X, LINEAR_WORKGROUP};
 
+pub mod cutoff_tiles;
 pub mod depth_order;
 pub mod emit;
 pub mod prefix_sum;

@@ -18,6 +18,10 @@ pub struct TileRangesPush {
     pub info: u64,
     /// Out: `[start, end)` per tile (zero-filled beforehand).
     pub ranges: u64,
+    /// Tiles in the grid: keys from here on (pairs that add nothing) belong to no tile.
+    pub tile_count: u32,
+    /// Padding to 8 bytes.
+    pub pad: u32,
 }
 
 /// The tile-ranges kernel.

@@ -1,0 +1,65 @@
+// Stage 4, emit: one invocation per drawn Gaussian, in depth order, writes a (tile id, splat
+// index) pair for every tile it touches, at the offset the prefix sum gave it. The pairs come
+// out in (depth, index) order, so the stable sort by tile id leaves every tile's list in that
+// order. Pairs past the capacity are not written: the host sees the total, grows the buffers
+// and renders the frame again.
+//
+// RECORD_CUTOFF_PAIRS (emit_rara.comp, rara clipping by planes with the mass weight): each
+// cutoff splat also records where its pairs start, and the first invocation writes the
+// dispatch of the cutoff-tiles stage (cutoff_tiles.comp), which classifies those pairs by tile.
+// That work runs only for cutoff splats: done here, every invocation of a SIMD vector would
+// pay it, masked, for every tile of its own (plant at 640x480: emit 13 -> 63 ms).
+#include "common.glsl"
+
+layout(local_size_x = LINEAR_WORKGROUP) in;
+
+layout(push_constant) uniform Push {
+    FrameParamsRef frame;
+    ProjectedSplats splats;
+    U32s drawn;         // drawn.v[0] = drawn Gaussians
+    U32s order;         // Gaussian indices in depth order
+    U32s offsets;       // exclusive prefix sum of tiles touched, in depth order
+    U32s keys;          // out: tile ids
+    U32s values;        // out: splat indices
+#ifdef RECORD_CUTOFF_PAIRS
+    U32s counters;
+    DispatchArgs cutoff_args;   // out: the cutoff-tiles dispatch
+    U64s cutoff_pairs;          // out: per cutoff record (first pair, splat index), packed
+#endif
+} pc;
+
+void main() {
+    uint j = linear_index();
+#ifdef RECORD_CUTOFF_PAIRS
+    if (j == 0u) {
+        pc.cutoff_args.v[0] = uvec4(linear_grid(pc.counters.v[COUNTER_CUTOFF]), 0u);
+    }
+#endif
+    if (j >= pc.drawn.v[0]) {
+        return;
+    }
+    FrameParams f = load_frame_params(pc.frame);
+    uint i = pc.order.v[j];
+    ProjectedSplat p = load_splat(pc.splats, i);
+    uvec4 rect = p.rect;
+    float q_max = footprint_q_max(p.opacity);
+    uint capacity = f.scene.w;
+    uint slot = pc.offsets.v[j];
+#ifdef RECORD_CUTOFF_PAIRS
+    if (p.cutoff != NO_CUTOFF) {
+        pc.cutoff_pairs.v[p.cutoff] = packUint2x32(uvec2(slot, i)); // one 64-bit store
+    }
+#endif
+    for (uint y = rect.y; y < rect.w; ++y) {
+        for (uint x = rect.x; x < rect.z; ++x) {
+            if (!footprint_touches_tile(p.uv, p.conic, q_max, x, y)) {
+                continue;
+            }
+            if (slot < capacity) {
+                pc.keys.v[slot] = y * f.size.z + x;
+                pc.values.v[slot] = i;
+            }
+            ++slot;
+        }
+    }
+}

@@ -1,0 +1,67 @@
+//! Stage 4b, rara clipping by planes with the mass weight only: classifies each cutoff splat's
+//! pairs by tile (`glsl/cutoff_tiles.comp`). A pair whose clip weight is 1 at every pixel of
+//! its tile is marked to be drawn as a plain splat ([`crate::constants::PAIR_WEIGHT_ONE`]), a
+//! pair that adds nothing to its tile leaves every tile list, and only the rest pay the
+//! rasterizer's per-pixel weight.
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use crate::error::Result;
+use crate::shaders;
+use crate::vk::{ComputePipeline, Context};
+
+/// Device addresses the cutoff-tiles kernel reads and writes.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct CutoffTilesPush {
+    /// `FrameParams`.
+    pub frame: u64,
+    /// `ProjectedSplat[]`.
+    pub splats: u64,
+    /// Tiles touched per Gaussian.
+    pub tiles_touched: u64,
+    /// The frame's counters (the number of cutoff splats).
+    pub counters: u64,
+    /// Per cutoff record: its splat's (first pair, splat index), from emit.
+    pub cutoff_pairs: u64,
+    /// `ClipParams`.
+    pub clip: u64,
+    /// `CutoffRecord[]`.
+    pub cutoffs: u64,
+    /// In and out: the pairs' keys (tile ids), as emitted.
+    pub keys: u64,
+    /// In and out: the pairs' values (splat indices).
+    pub values: u64,
+}
+
+/// The cutoff-tiles kernel.
+pub struct CutoffTiles {
+    pipeline: ComputePipeline,
+}
+
+impl CutoffTiles {
+    /// Builds the kernel.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(CutoffTiles {
+            pipeline: ComputePipeline::new::<CutoffTilesPush>(
+                ctx,
+                c"cutoff_tiles",
+                shaders::CUTOFF_TILES,
+            )?,
+        })
+    }
+
+    /// Records the kernel, one invocation per cutoff splat, dispatched indirectly from the
+    /// arguments emit wrote at `args` + `args_offset`.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &CutoffTilesPush,
+        args: vk::Buffer,
+        args_offset: u64,
+    ) {
+        self.pipeline
+            .dispatch_indirect(cmd, push, args, args_offset);
+    }
+}
