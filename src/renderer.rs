@@ -248,6 +248,8 @@ pub struct Renderer {
     depth_order: DepthOrder,
     emit: Emit,
     cutoff_tiles: CutoffTiles,
+    /// Whether frames that allow it classify cutoff pairs by tile (on unless switched off).
+    cutoff_tile_classes: bool,
     sort: RadixSort,
     tile_ranges: TileRanges,
     rasterize: Rasterize,
@@ -291,6 +293,7 @@ impl Renderer {
             depth_order: DepthOrder::new(ctx)?,
             emit: Emit::new(ctx)?,
             cutoff_tiles: CutoffTiles::new(ctx)?,
+            cutoff_tile_classes: true,
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx)?,
             rasterize: Rasterize::new(ctx, layout)?,
@@ -304,6 +307,13 @@ impl Renderer {
     /// engine's query pool ([`PassTimer::with_engine_pool`]). Returns the old one.
     pub fn set_timer(&mut self, timer: PassTimer) -> PassTimer {
         std::mem::replace(&mut self.timer, timer)
+    }
+
+    /// Switches the per-tile classes of cutoff pairs ([`crate::stages::cutoff_tiles`]) on (the
+    /// default) or off. They change no pixel by more than rounding and only save work; off is
+    /// for profiling what they save and for testing that they change nothing.
+    pub fn set_cutoff_tile_classes(&mut self, on: bool) {
+        self.cutoff_tile_classes = on;
     }
 
     /// The context the renderer was made with.
@@ -570,7 +580,7 @@ impl Renderer {
         };
         // Cutoff pairs are classified by tile only under rara clipping by planes with the mass
         // weight (stages::cutoff_tiles).
-        let cutoff_pairs = if options.clip.classifies_cutoff_tiles() {
+        let cutoff_pairs = if self.cutoff_tile_classes && options.clip.classifies_cutoff_tiles() {
             f.cutoff_pairs.as_ref()
         } else {
             None
