@@ -567,6 +567,14 @@ fn bench_writes_table_json_and_trace() {
     };
     assert!(cutoffs("rara") > 0);
     assert_eq!(cutoffs("hard") + cutoffs("original"), 0);
+    // rara's cutoff pairs were classified by tile (the bench clips by a plane, mass weight).
+    let classified: u64 = report["modes"]["rara"]["cutoff_pairs_per_frame"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c[0].as_u64().unwrap())
+        .sum();
+    assert!(classified > 0);
     assert!(report["rara_over_hard_per_frame_median"].as_f64().unwrap() > 0.0);
 
     // One event per pass per frame, each mode on its own track, frames in the order they were

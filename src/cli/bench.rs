@@ -265,10 +265,19 @@ fn print_table(
         ctx.info().name,
         ctx.info().driver
     );
-    let groups: Vec<String> = results
-        .first()
-        .map(|r| r.group_medians().into_iter().map(|g| g.0).collect())
-        .unwrap_or_default();
+    // Every mode's pass groups in pass order: rara frames have a pass the others lack.
+    let mut groups: Vec<String> = Vec::new();
+    for r in results {
+        let mine: Vec<String> = r.group_medians().into_iter().map(|g| g.0).collect();
+        for (i, name) in mine.iter().enumerate() {
+            if !groups.contains(name) {
+                let after = i
+                    .checked_sub(1)
+                    .and_then(|j| groups.iter().position(|g| g == &mine[j]));
+                groups.insert(after.map_or(0, |p| p + 1), name.clone());
+            }
+        }
+    }
     print!(
         "| {:<8} | {:>10} | {:>10} | {:>10} | {:>6} | {:>9} |",
         "mode", "median ms", "mean ms", "wall ms", "FPS", "cutoff"
@@ -305,8 +314,10 @@ fn print_table(
         );
         let medians = r.group_medians();
         for g in &groups {
-            let v = medians.iter().find(|m| &m.0 == g).map_or(f64::NAN, |m| m.1);
-            print!(" {v:>11.1} |");
+            match medians.iter().find(|m| &m.0 == g) {
+                Some(m) => print!(" {:>11.1} |", m.1),
+                None => print!(" {:>11} |", "-"),
+            }
         }
         println!();
     }
@@ -318,6 +329,23 @@ fn print_table(
     }
     if let Some(paired) = paired_ratio(results, BenchMode::Rara, BenchMode::Hard) {
         println!("rara / hard, median of the per-frame ratios (same plane position): {paired:.3}");
+    }
+    if let Some(r) = results.iter().find(|r| r.mode == BenchMode::Rara) {
+        let sum = |f: fn(&FrameStats) -> u32| r.frames.iter().map(|x| f(x) as f64).sum::<f64>();
+        let all = sum(|f| f.cutoff_pairs);
+        if all > 0.0 {
+            let (one, empty) = (
+                sum(|f| f.cutoff_pairs_weight_one),
+                sum(|f| f.cutoff_pairs_empty),
+            );
+            println!(
+                "rara cutoff pairs by tile: {:.0} per frame, {:.0} % weight 1 (drawn plain), {:.0} % empty (left out), {:.0} % partial",
+                all / r.frames.len() as f64,
+                100.0 * one / all,
+                100.0 * empty / all,
+                100.0 * (all - one - empty) / all
+            );
+        }
     }
 }
 
@@ -359,6 +387,9 @@ fn json_report(
                 "passes": passes,
                 "cutoff_per_frame": r.frames.iter().map(|f| f.cutoff).collect::<Vec<_>>(),
                 "intersections_per_frame": r.frames.iter().map(|f| f.intersections).collect::<Vec<_>>(),
+                "cutoff_pairs_per_frame": r.frames.iter()
+                    .map(|f| [f.cutoff_pairs, f.cutoff_pairs_weight_one, f.cutoff_pairs_empty])
+                    .collect::<Vec<_>>(),
             }),
         );
     }
