@@ -254,10 +254,10 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
     return clamp(inside / (t2 - t1), 0.0, 1.0);
 }
 
-// Per-tile classes of a cutoff splat's pairs (emit_rara.comp). Across one 16x16 tile a cutoff
+// Per-tile classes of a cutoff splat's pairs (cutoff_tiles.comp). Across one 16x16 tile a cutoff
 // splat is often drawn with weight 1 at every pixel, or adds nothing at any (plant at 640x480:
 // 23-47 % and 24-41 % of its cutoff pairs), yet the rasterizer pays the per-pixel weight for
-// every pixel of every cutoff pair. Emit therefore bounds the weight over the tile's rays and
+// every pixel of every cutoff pair. This stage therefore bounds the weight over the tile's rays and
 // the splat's alpha over the tile's pixels: a FULL pair is drawn as a plain splat (its value
 // carries PAIR_WEIGHT_ONE), an EMPTY pair leaves every tile list (its key is the tile count,
 // which sorts after every tile), and only a PARTIAL pair takes the weight path.
@@ -265,7 +265,7 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
 #define TILE_CLASS_FULL 1u
 #define TILE_CLASS_EMPTY 2u
 
-// A FULL pair's alpha differs from the weighted one by at most this at any pixel (64x below
+// A FULL pair's alpha differs from the weighted one by at most this at any pixel (128x below
 // the 8-bit output's half step, and far below the weight's own 1/255 skip threshold).
 #define TILE_FULL_TOLERANCE (1.0 / 65536.0)
 

@@ -21,8 +21,8 @@
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
 // ray (clip.glsl), from its cutoff record (the batch stages the record's index). Splats that
-// are not cutoff take the plain path, and so do cutoff splats in the tiles where emit found
-// their weight to be 1 at every pixel (PAIR_WEIGHT_ONE in the pair's value, emit_body.glsl).
+// are not cutoff take the plain path, and so do cutoff splats in the tiles where their weight
+// is 1 at every pixel (PAIR_WEIGHT_ONE in the pair's value, set by cutoff_tiles.comp).
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
 // + 1 or CLIP_WEIGHT_LENGTH + 1.
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
@@ -370,8 +370,9 @@ void main() {
                 ProjectedSplat p = load_splat(pc.splats, value & ~PAIR_WEIGHT_ONE);
 #if CUTOFF_WEIGHT != 0
                 // The sign of the staged opacity marks a cutoff splat, so the loop that walks
-                // the plain ones learns it from a load it makes anyway. A pair that emit found
-                // to have weight 1 across the tile (PAIR_WEIGHT_ONE) is drawn as a plain one.
+                // the plain ones learns it from a load it makes anyway. A pair that
+                // cutoff_tiles.comp found to have weight 1 across the tile (PAIR_WEIGHT_ONE) is
+                // drawn as a plain one.
                 bool cutoff = p.cutoff != NO_CUTOFF && (value & PAIR_WEIGHT_ONE) == 0u;
                 stage(slot, vec4(p.conic, cutoff ? -p.opacity : p.opacity), p.uv, p.color,
                       p.cutoff);

@@ -1,6 +1,6 @@
 // Stage 6, tile ranges: one invocation per sorted pair marks where each tile's list starts and
 // ends (ranges[tile] = [start, end), zero-filled beforehand for empty tiles). Keys of
-// tile_count and above (pairs emit_rara.comp found to add nothing) sort after every tile and
+// tile_count and above (pairs cutoff_tiles.comp found to add nothing) sort after every tile and
 // belong to none.
 #version 460
 #include "common.glsl"
