@@ -374,8 +374,9 @@ impl Clip {
         }
     }
 
-    /// Whether the frame's emit stage classifies cutoff splats' pairs by tile (weight 1 across
-    /// the tile, no contribution, or partial; `glsl/clip.glsl`, `cutoff_tile_class`): rara
+    /// Whether the frame classifies cutoff splats' pairs by tile in its cutoff-tiles stage
+    /// (weight 1 across the tile, no contribution, or partial; `glsl/clip.glsl`,
+    /// `cutoff_tile_class`): rara
     /// clipping by planes with the mass weight. Not under `trace_all`, whose point is to trace
     /// every Gaussian.
     pub fn classifies_cutoff_tiles(&self) -> bool {

@@ -290,7 +290,7 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             stats.cutoff_pairs,
             stats.cutoff_pairs_weight_one,
             stats.cutoff_pairs_empty,
-            stats.cutoff_pairs - stats.cutoff_pairs_weight_one - stats.cutoff_pairs_empty
+            stats.cutoff_pairs_partial()
         );
     }
     println!(

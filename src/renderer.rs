@@ -218,6 +218,14 @@ pub struct FrameStats {
     pub wall_ms: f64,
 }
 
+impl FrameStats {
+    /// The classified cutoff pairs that still pay the per-pixel weight: neither weight 1 nor
+    /// empty across their tile.
+    pub fn cutoff_pairs_partial(&self) -> u32 {
+        self.cutoff_pairs - self.cutoff_pairs_weight_one - self.cutoff_pairs_empty
+    }
+}
+
 /// The intermediate buffers of the last rendered frame, read back for tests and debugging.
 #[derive(Clone, Debug, Default)]
 pub struct Intermediates {

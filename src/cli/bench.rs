@@ -334,16 +334,17 @@ fn print_table(
         let sum = |f: fn(&FrameStats) -> u32| r.frames.iter().map(|x| f(x) as f64).sum::<f64>();
         let all = sum(|f| f.cutoff_pairs);
         if all > 0.0 {
-            let (one, empty) = (
+            let (one, empty, partial) = (
                 sum(|f| f.cutoff_pairs_weight_one),
                 sum(|f| f.cutoff_pairs_empty),
+                sum(FrameStats::cutoff_pairs_partial),
             );
             println!(
                 "rara cutoff pairs by tile: {:.0} per frame, {:.0} % weight 1 (drawn plain), {:.0} % empty (left out), {:.0} % partial",
                 all / r.frames.len() as f64,
                 100.0 * one / all,
                 100.0 * empty / all,
-                100.0 * (all - one - empty) / all
+                100.0 * partial / all
             );
         }
     }
