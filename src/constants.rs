@@ -37,11 +37,11 @@ pub const SCAN_LEVELS: u32 = 3;
 /// `SCAN_BLOCK` elements along X (67,107,840).
 pub const MAX_GAUSSIANS: u64 = SCAN_BLOCK as u64 * LINEAR_GRID_X as u64;
 const _: () = assert!(MAX_GAUSSIANS <= PAIR_WEIGHT_ONE as u64);
-/// Bits per radix-sort digit.
+/// Bits per radix-sort digit in the GPU layout (`SortLayout::ShortRuns`).
 pub const SORT_RADIX_BITS: u32 = 4;
-/// Buckets per radix-sort digit.
+/// Buckets per radix-sort digit in the GPU layout.
 pub const SORT_RADIX: u32 = 1 << SORT_RADIX_BITS;
-/// Keys one radix-sort workgroup handles, in either sort layout.
+/// Keys one radix-sort workgroup handles in the GPU layout (`SortLayout::ShortRuns`).
 pub const SORT_BLOCK: u32 = 4096;
 /// Threads per workgroup of the radix-sort count and scatter kernels in the GPU layout
 /// (`SortLayout::ShortRuns`).
@@ -49,16 +49,26 @@ pub const SORT_WORKGROUP: u32 = 256;
 /// Consecutive keys each sort thread owns within its block in the GPU layout (the scatter
 /// keeps their order, which makes the sort stable).
 pub const SORT_ITEMS: u32 = SORT_BLOCK / SORT_WORKGROUP;
-/// Threads per sort workgroup in the CPU-driver layout (`SortLayout::LongRuns`).
-pub const SORT_LONG_RUN_WORKGROUP: u32 = 64;
+/// Bits per radix-sort digit in the CPU-driver layout (`SortLayout::OwnCounts`).
+pub const SORT_OWN_RADIX_BITS: u32 = 8;
+/// Buckets per radix-sort digit in the CPU-driver layout.
+pub const SORT_OWN_RADIX: u32 = 1 << SORT_OWN_RADIX_BITS;
+/// Threads per sort workgroup in the CPU-driver layout: its shared memory holds one histogram
+/// per thread (8 KiB).
+pub const SORT_OWN_WORKGROUP: u32 = 8;
 /// Consecutive keys each sort thread owns in the CPU-driver layout.
-pub const SORT_LONG_RUN_ITEMS: u32 = SORT_BLOCK / SORT_LONG_RUN_WORKGROUP;
+pub const SORT_OWN_ITEMS: u32 = 2048;
+/// Keys one radix-sort workgroup handles in the CPU-driver layout: more than
+/// [`SORT_BLOCK`], since every block costs each thread a pass over its whole histogram.
+pub const SORT_OWN_BLOCK: u32 = SORT_OWN_WORKGROUP * SORT_OWN_ITEMS;
+const _: () = assert!(SORT_OWN_BLOCK >= SORT_BLOCK);
 /// Smallest subgroup size the kernels support (real devices have 4 or more): the sort's
 /// scatter and the workgroup scan keep one shared-memory slot per subgroup.
 pub const MIN_SUBGROUP_SIZE: u32 = 4;
 
 /// Most (tile, splat) pairs one frame sorts: the sort dispatches one workgroup per
-/// `SORT_BLOCK` keys along X (268,431,360; 6.4 GB of sort buffers). A frame with more is drawn
+/// `SORT_BLOCK` keys along X (268,431,360; 6.4 GB of sort buffers; the CPU layout's blocks are
+/// larger). A frame with more is drawn
 /// incomplete and flagged.
 pub const MAX_INTERSECTIONS: u64 = SORT_BLOCK as u64 * LINEAR_GRID_X as u64;
 /// Slots of the per-frame counters buffer (`uint` indices), written by the kernels and read
@@ -121,8 +131,11 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("SORT_RADIX", SORT_RADIX),
     ("SORT_WORKGROUP", SORT_WORKGROUP),
     ("SORT_ITEMS", SORT_ITEMS),
-    ("SORT_LONG_RUN_WORKGROUP", SORT_LONG_RUN_WORKGROUP),
-    ("SORT_LONG_RUN_ITEMS", SORT_LONG_RUN_ITEMS),
+    ("SORT_OWN_RADIX_BITS", SORT_OWN_RADIX_BITS),
+    ("SORT_OWN_RADIX", SORT_OWN_RADIX),
+    ("SORT_OWN_WORKGROUP", SORT_OWN_WORKGROUP),
+    ("SORT_OWN_ITEMS", SORT_OWN_ITEMS),
+    ("SORT_OWN_BLOCK", SORT_OWN_BLOCK),
     ("MIN_SUBGROUP_SIZE", MIN_SUBGROUP_SIZE),
     ("SORT_BLOCK", SORT_BLOCK),
     ("COUNTER_INTERSECTIONS", COUNTER_INTERSECTIONS),

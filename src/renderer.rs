@@ -466,7 +466,7 @@ impl Renderer {
         let drawn = stats.visible as usize;
         let m = stats.intersections as usize;
         let (gx, gy) = tile_grid(f.width, f.height);
-        let depth_sorted = crate::stages::sort::passes_for(DEPTH_KEY_BITS) as usize % 2;
+        let depth_sorted = self.sort.passes_for(DEPTH_KEY_BITS) as usize % 2;
         Ok(Intermediates {
             splats: f.splats.download_as(n)?,
             tiles_touched: f.tiles_touched.download_as(n)?,
@@ -550,7 +550,7 @@ impl Renderer {
             Target::Image { view, format, .. } => Some((slot.image_target_set(view)?, format)),
             Target::Buffer { .. } => None,
         };
-        let sorted_index = crate::stages::sort::passes_for(key_bits(w, h)) as usize % 2;
+        let sorted_index = self.sort.passes_for(key_bits(w, h)) as usize % 2;
         slot.resources.as_mut().unwrap().sorted = sorted_index;
         let f = slot.resources.as_ref().unwrap();
         let counters_readback = slot.counters_readback();

@@ -2,11 +2,11 @@
 
 mod common;
 
-use rara::constants::{SCAN_BLOCK, SORT_BLOCK, SORT_RADIX};
+use rara::constants::SCAN_BLOCK;
 use rara::stages::sort::{RadixSort, SortLayout};
 
 /// Both layouts run on every device, so the GPU one is checked here too.
-const LAYOUTS: [SortLayout; 2] = [SortLayout::ShortRuns, SortLayout::LongRuns];
+const LAYOUTS: [SortLayout; 2] = [SortLayout::ShortRuns, SortLayout::OwnCounts];
 use rara::synth::Rng;
 
 fn check_sort(sorter: &RadixSort, ctx: &rara::Context, keys: Vec<u32>, key_bits: u32, what: &str) {
@@ -55,11 +55,14 @@ fn sort_sizes_around_block_boundaries() {
 
 fn sort_sizes_in_layout(ctx: &rara::Context, layout: SortLayout) {
     let sorter = RadixSort::with_layout(ctx, layout).unwrap();
-    let block = SORT_BLOCK as usize;
-    // Histogram length is SORT_RADIX per block: its scan changes level at SCAN_BLOCK entries.
-    let hist_level = (SCAN_BLOCK / SORT_RADIX) as usize * block;
+    let block = layout.block() as usize;
+    // Histogram length is one entry per digit value per block: its scan changes level at
+    // SCAN_BLOCK entries.
+    let hist_level = (SCAN_BLOCK >> layout.radix_bits()) as usize * block;
+    // In the CPU layout each of 8 invocations owns an eighth of the block.
+    let run = block / 8;
     let mut sizes = vec![0, 1, 2, 255, 256, 257];
-    for b in [block, 2 * block, hist_level] {
+    for b in [run, run + 2, 3 * run, block, 2 * block, hist_level] {
         sizes.extend([b - 1, b, b + 1]);
     }
     for (k, n) in sizes.into_iter().enumerate() {
@@ -83,7 +86,7 @@ fn sort_key_patterns() {
 
 fn key_patterns_in_layout(ctx: &rara::Context, layout: SortLayout) {
     let sorter = RadixSort::with_layout(ctx, layout).unwrap();
-    let n = 3 * SORT_BLOCK as usize + 17;
+    let n = 3 * layout.block() as usize + 17;
     check_sort(&sorter, ctx, vec![0x1234_5678; n], 32, "all-equal keys");
     check_sort(
         &sorter,

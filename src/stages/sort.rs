@@ -2,17 +2,19 @@
 //! a reusable component. The frame uses it twice: the drawn Gaussians by depth, then their
 //! (tile, splat) pairs by tile.
 //!
-//! Least-significant-digit first, SORT_RADIX_BITS bits per pass, each pass reduce-then-scan:
-//! `sort_count` (block histograms) -> prefix sum over the digit-major histogram ->
-//! `sort_scatter` (stable: per-invocation digit counters, ranked with subgroup scans and a
-//! per-digit scan over the subgroups). Only the key bits in use are sorted. The number of pairs
-//! is read on the GPU, so a frame never waits on the host; no workgroup waits on another, and
-//! the kernels work at any subgroup size of
-//! [`MIN_SUBGROUP_SIZE`](crate::constants::MIN_SUBGROUP_SIZE) or more.
+//! Least-significant-digit first, each pass reduce-then-scan: a count kernel (block
+//! histograms) -> prefix sum over the digit-major histogram -> a scatter kernel (stable: each
+//! invocation writes its own run of keys in order, at positions the histogram scan and the
+//! block's counts give). Only the key bits in use are sorted. The number of pairs is read on
+//! the GPU, so a frame never waits on the host; no workgroup waits on another. Two layouts
+//! ([`SortLayout`]) do the same sort: one for GPUs (4-bit digits, counters in registers, ranks
+//! from subgroup scans, at any subgroup size of
+//! [`MIN_SUBGROUP_SIZE`](crate::constants::MIN_SUBGROUP_SIZE) or more) and one for CPU drivers
+//! (8-bit digits, one histogram per invocation in shared memory).
 //!
-//! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_count[_long_runs].comp`,
-//! `glsl/sort_scatter[_long_runs].comp` (bodies in `glsl/sort_*_body.glsl`), one pair per
-//! [`SortLayout`].
+//! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_{count,scatter}.comp` (GPU layout),
+//! `glsl/sort_{count,scatter}_own_counts.comp` (CPU layout, shared code in
+//! `glsl/sort_own_counts.glsl`).
 
 use std::ffi::CStr;
 
@@ -20,7 +22,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::prefix_sum::{PrefixSum, PrefixSumScratch};
-use crate::constants::{SORT_BLOCK, SORT_RADIX, SORT_RADIX_BITS};
+use crate::constants::{SORT_BLOCK, SORT_OWN_BLOCK, SORT_OWN_RADIX_BITS, SORT_RADIX_BITS};
 use crate::error::Result;
 use crate::gpu_types::SORT_HIST_OFFSET;
 use crate::shaders;
@@ -33,6 +35,8 @@ struct PreparePush {
     count: u64,
     info: u64,
     capacity: u32,
+    radix: u32,
+    block: u32,
     pad: u32,
 }
 
@@ -66,35 +70,60 @@ pub(crate) const LINEAR_ARGS_OFFSET: u64 = 32;
 /// Byte offset of `hist_len` in `SortInfo`.
 const HIST_LEN_OFFSET: u64 = 8;
 
-/// How the count and scatter kernels split a block of [`SORT_BLOCK`] keys among invocations.
-/// Both sort the same way (and are tested alike); they differ in speed by device.
+/// How the count and scatter kernels split the work. Both sort the same way (and are tested
+/// alike); they differ in speed by device.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SortLayout {
-    /// 256 invocations of 16 keys each (`sort_count.comp`, `sort_scatter.comp`): the layout for
-    /// GPUs, many threads with few registers each.
+    /// 4-bit digits; blocks of [`SORT_BLOCK`] keys, 256 invocations of 16 keys each with one
+    /// counter per digit in registers, ranked with subgroup scans (`sort_count.comp`,
+    /// `sort_scatter.comp`): the layout for GPUs, many threads with few registers each.
     ShortRuns,
-    /// 64 invocations of 64 keys each (`sort_*_long_runs.comp`): for CPU drivers such as
-    /// lavapipe, where an invocation's per-digit counters and its subgroup scans are paid per 8
-    /// lanes, so fewer invocations with longer runs do the same work in fewer instructions
-    /// (measured on `bench --sort 1000000`: 256 x 16 in 352-384 ms, 128 x 32 in 300-324 ms,
-    /// 64 x 64 in 211-269 ms).
-    LongRuns,
+    /// 8-bit digits (half the passes); blocks of [`SORT_OWN_BLOCK`] keys, 8 invocations of
+    /// 2,048 keys each, every invocation counting its run in a histogram of its own in shared
+    /// memory (`sort_*_own_counts.comp`): for CPU drivers such as lavapipe. There an indexed
+    /// shared-memory access costs one load per lane, while a counter in registers costs a
+    /// compare per digit per key, which 8-bit digits make 256. Measured on llvmpipe
+    /// (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with 64 invocations of 64 keys
+    /// each took 456 ms, this one 350 ms with 512-key runs and 280-293 ms with 2,048-key runs.
+    OwnCounts,
 }
 
 impl SortLayout {
-    /// The layout for a device: long runs on CPU devices, short runs elsewhere.
-    /// `RARA_SORT=short|long` overrides the choice.
+    /// The layout for a device: own counts on CPU devices, short runs elsewhere.
+    /// `RARA_SORT=short|own` overrides the choice.
     pub fn for_device(ctx: &Context) -> SortLayout {
         match std::env::var("RARA_SORT").as_deref() {
             Ok("short") => return SortLayout::ShortRuns,
-            Ok("long") => return SortLayout::LongRuns,
+            Ok("own") => return SortLayout::OwnCounts,
             _ => {}
         }
         if ctx.info().device_type == vk::PhysicalDeviceType::CPU {
-            SortLayout::LongRuns
+            SortLayout::OwnCounts
         } else {
             SortLayout::ShortRuns
         }
+    }
+
+    /// Bits per digit: one radix pass sorts this many key bits.
+    pub fn radix_bits(self) -> u32 {
+        match self {
+            SortLayout::ShortRuns => SORT_RADIX_BITS,
+            SortLayout::OwnCounts => SORT_OWN_RADIX_BITS,
+        }
+    }
+
+    /// Keys per block: one workgroup's share of a pass.
+    pub fn block(self) -> u32 {
+        match self {
+            SortLayout::ShortRuns => SORT_BLOCK,
+            SortLayout::OwnCounts => SORT_OWN_BLOCK,
+        }
+    }
+
+    /// Number of radix passes for `key_bits` (at most 32) significant key bits.
+    pub fn passes_for(self, key_bits: u32) -> u32 {
+        assert!(key_bits <= 32, "keys are 32-bit, {key_bits} bits asked for");
+        key_bits.div_ceil(self.radix_bits())
     }
 }
 
@@ -137,7 +166,7 @@ impl SortBuffers {
     }
 }
 
-/// Most radix passes: 32-bit keys.
+/// Most radix passes: 32-bit keys in the GPU layout's 4-bit digits.
 const MAX_PASSES: usize = (32 / SORT_RADIX_BITS) as usize;
 
 /// Debug labels / timing names of one use of the sort: its setup and each radix pass.
@@ -179,12 +208,6 @@ pub const DEPTH_SORT_LABELS: SortLabels = SortLabels {
     ],
 };
 
-/// Number of radix passes for `key_bits` (at most 32) significant key bits.
-pub fn passes_for(key_bits: u32) -> u32 {
-    assert!(key_bits <= 32, "keys are 32-bit, {key_bits} bits asked for");
-    key_bits.div_ceil(SORT_RADIX_BITS)
-}
-
 impl RadixSort {
     /// Builds the kernels in the layout that suits the device ([`SortLayout::for_device`]).
     pub fn new(ctx: &Context) -> Result<Self> {
@@ -198,9 +221,9 @@ impl RadixSort {
                 (c"sort_count", shaders::SORT_COUNT),
                 (c"sort_scatter", shaders::SORT_SCATTER),
             ),
-            SortLayout::LongRuns => (
-                (c"sort_count_long_runs", shaders::SORT_COUNT_LONG_RUNS),
-                (c"sort_scatter_long_runs", shaders::SORT_SCATTER_LONG_RUNS),
+            SortLayout::OwnCounts => (
+                (c"sort_count_own_counts", shaders::SORT_COUNT_OWN_COUNTS),
+                (c"sort_scatter_own_counts", shaders::SORT_SCATTER_OWN_COUNTS),
             ),
         };
         Ok(RadixSort {
@@ -221,12 +244,18 @@ impl RadixSort {
         self.layout
     }
 
+    /// Number of radix passes for `key_bits` (at most 32) significant key bits; the result of
+    /// [`RadixSort::record`] is in buffer `passes % 2`.
+    pub fn passes_for(&self, key_bits: u32) -> u32 {
+        self.layout.passes_for(key_bits)
+    }
+
     /// Allocates buffers for up to `capacity` pairs (a multiple of 4 keys and values, since
     /// the pass kernels read them four at a time).
     pub fn buffers(&self, ctx: &Context, capacity: u64) -> Result<SortBuffers> {
         let capacity = capacity.max(1).next_multiple_of(4);
-        let blocks = capacity.div_ceil(SORT_BLOCK as u64);
-        let hist_len = blocks * SORT_RADIX as u64;
+        let blocks = capacity.div_ceil(self.layout.block() as u64);
+        let hist_len = blocks << self.layout.radix_bits();
         let gpu = MemoryLocation::GpuOnly;
         Ok(SortBuffers {
             keys: [
@@ -273,6 +302,8 @@ impl RadixSort {
             count,
             info,
             capacity: bufs.capacity.min(u32::MAX as u64) as u32,
+            radix: 1 << self.layout.radix_bits(),
+            block: self.layout.block(),
             pad: 0,
         };
         self.prepare.dispatch(cmd, &push, [1, 1, 1]);
@@ -281,13 +312,14 @@ impl RadixSort {
             t.end_pass(cmd, labels.setup);
         }
         let mut src = 0;
-        for pass in 0..passes_for(key_bits) {
+        let bits = self.layout.radix_bits();
+        for pass in 0..self.passes_for(key_bits) {
             let label = labels.passes[pass as usize];
             if let Some(t) = timer.as_deref_mut() {
                 t.begin_pass(cmd, label);
             }
-            let shift = pass * SORT_RADIX_BITS;
-            let digit_mask = (1u32 << SORT_RADIX_BITS.min(key_bits - shift)) - 1;
+            let shift = pass * bits;
+            let digit_mask = (1u32 << bits.min(key_bits - shift)) - 1;
             let push = CountPush {
                 keys: bufs.keys[src].address,
                 info,

@@ -1,6 +1,0 @@
-// Radix sort, scatter step, CPU-driver layout (SortLayout::LongRuns): SORT_LONG_RUN_WORKGROUP
-// invocations of SORT_LONG_RUN_ITEMS keys each (see sort_scatter_body.glsl).
-#version 460
-#define SORT_WG SORT_LONG_RUN_WORKGROUP
-#define SORT_RUN SORT_LONG_RUN_ITEMS
-#include "sort_scatter_body.glsl"
