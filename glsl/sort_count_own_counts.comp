@@ -1,5 +1,5 @@
-// Radix sort, count step, CPU-driver layout (SortLayout::OwnCounts; see sort_own_counts.glsl
-// and sort_count_body.glsl for the histogram's digit-major order).
+// Radix sort, count step, CPU-driver layout (SortLayout::OwnCounts; see sort_own_counts.glsl):
+// each invocation counts the digits of its run and writes them to its column of the histogram.
 #version 460
 #include "sort_own_counts.glsl"
 
@@ -13,14 +13,22 @@ layout(push_constant) uniform Push {
 
 void main() {
     uvec2 run = own_run(pc.info.s.num_keys);
-    count_own_run(pc.keys, run.x, run.y, pc.shift, pc.digit_mask);
-    barrier();
-    uint num_blocks = pc.info.s.num_blocks;
-    for (uint d = gl_LocalInvocationIndex; d < SORT_OWN_RADIX; d += SORT_OWN_WORKGROUP) {
-        uint sum = 0u;
-        [[unroll]] for (uint l = 0u; l < SORT_OWN_WORKGROUP; ++l) {
-            sum += own_counts[d * SORT_OWN_WORKGROUP + l];
+    for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
+        own_counts[own_slot(d)] = 0u;
+    }
+    // Four keys at a time: a group that starts below the run's end stays inside the buffer,
+    // which holds a multiple of 4 keys (RadixSort::buffers).
+    for (uint i = run.x; i < run.y; i += 4u) {
+        uvec4 four = load_u32x4(pc.keys, i);
+        [[unroll]] for (uint j = 0u; j < 4u; ++j) {
+            if (i + j < run.y) {
+                uint slot = own_slot(key_digit(four[j], pc.shift, pc.digit_mask));
+                own_counts[slot] += 1u;
+            }
         }
-        pc.hist.v[d * num_blocks + gl_WorkGroupID.x] = sum;
+    }
+    uint num_blocks = pc.info.s.num_blocks;
+    for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
+        pc.hist.v[hist_index(d, num_blocks)] = own_counts[own_slot(d)];
     }
 }

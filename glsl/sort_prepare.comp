@@ -10,7 +10,7 @@ layout(push_constant) uniform Push {
     U32s count;         // count.v[0] = keys to sort (may exceed the capacity)
     SortInfoRef info;   // out
     uint capacity;
-    uint radix;         // buckets per digit of the layout
+    uint hist_per_block; // histogram entries per block in the layout
     uint block;         // keys per block (workgroup) of the layout
 } pc;
 
@@ -19,7 +19,7 @@ void main() {
     uint blocks = div_ceil(n, pc.block);
     pc.info.s.num_keys = n;
     pc.info.s.num_blocks = blocks;
-    pc.info.s.hist_len = blocks * pc.radix;
+    pc.info.s.hist_len = blocks * pc.hist_per_block;
     pc.info.s.block_args = uvec4(blocks, 1u, 1u, 0u);
     pc.info.s.linear_args = uvec4(linear_grid(n), 0u);
 }

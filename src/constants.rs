@@ -53,13 +53,13 @@ pub const SORT_ITEMS: u32 = SORT_BLOCK / SORT_WORKGROUP;
 pub const SORT_OWN_RADIX_BITS: u32 = 8;
 /// Buckets per radix-sort digit in the CPU-driver layout.
 pub const SORT_OWN_RADIX: u32 = 1 << SORT_OWN_RADIX_BITS;
-/// Threads per sort workgroup in the CPU-driver layout: its shared memory holds one histogram
-/// per thread (8 KiB).
+/// Threads per sort workgroup in the CPU-driver layout (one SIMD vector on lavapipe): its
+/// shared memory holds one histogram per thread (8 KiB).
 pub const SORT_OWN_WORKGROUP: u32 = 8;
 /// Consecutive keys each sort thread owns in the CPU-driver layout.
-pub const SORT_OWN_ITEMS: u32 = 2048;
-/// Keys one radix-sort workgroup handles in the CPU-driver layout: more than
-/// [`SORT_BLOCK`], since every block costs each thread a pass over its whole histogram.
+pub const SORT_OWN_ITEMS: u32 = 4096;
+/// Keys one radix-sort workgroup handles in the CPU-driver layout: more than [`SORT_BLOCK`],
+/// since every run costs its thread two passes over its whole histogram.
 pub const SORT_OWN_BLOCK: u32 = SORT_OWN_WORKGROUP * SORT_OWN_ITEMS;
 const _: () = assert!(SORT_OWN_BLOCK >= SORT_BLOCK);
 /// Smallest subgroup size the kernels support (real devices have 4 or more): the sort's

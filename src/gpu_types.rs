@@ -65,9 +65,9 @@ pub struct GpuFrameParams {
 pub struct GpuSortInfo {
     /// Keys being sorted (clamped to capacity).
     pub num_keys: u32,
-    /// Blocks of SORT_BLOCK keys.
+    /// Blocks of the layout's keys per block.
     pub num_blocks: u32,
-    /// SORT_RADIX * num_blocks.
+    /// Histogram entries per block (the layout's) times num_blocks.
     pub hist_len: u32,
     /// Unused.
     pub pad: u32,

@@ -2,10 +2,10 @@
 //! a reusable component. The frame uses it twice: the drawn Gaussians by depth, then their
 //! (tile, splat) pairs by tile.
 //!
-//! Least-significant-digit first, each pass reduce-then-scan: a count kernel (block
-//! histograms) -> prefix sum over the digit-major histogram -> a scatter kernel (stable: each
-//! invocation writes its own run of keys in order, at positions the histogram scan and the
-//! block's counts give). Only the key bits in use are sorted. The number of pairs is read on
+//! Least-significant-digit first, each pass reduce-then-scan: a count kernel (histograms per
+//! block, or per run of keys) -> prefix sum over the digit-major histogram -> a scatter kernel
+//! (stable: each invocation writes its own run of keys in order, at positions the histogram
+//! scan gives). Only the key bits in use are sorted. The number of pairs is read on
 //! the GPU, so a frame never waits on the host; no workgroup waits on another. Two layouts
 //! ([`SortLayout`]) do the same sort: one for GPUs (4-bit digits, counters in registers, ranks
 //! from subgroup scans, at any subgroup size of
@@ -22,7 +22,10 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::prefix_sum::{PrefixSum, PrefixSumScratch};
-use crate::constants::{SORT_BLOCK, SORT_OWN_BLOCK, SORT_OWN_RADIX_BITS, SORT_RADIX_BITS};
+use crate::constants::{
+    SORT_BLOCK, SORT_OWN_BLOCK, SORT_OWN_RADIX, SORT_OWN_RADIX_BITS, SORT_OWN_WORKGROUP,
+    SORT_RADIX, SORT_RADIX_BITS,
+};
 use crate::error::Result;
 use crate::gpu_types::SORT_HIST_OFFSET;
 use crate::shaders;
@@ -35,7 +38,7 @@ struct PreparePush {
     count: u64,
     info: u64,
     capacity: u32,
-    radix: u32,
+    hist_per_block: u32,
     block: u32,
     pad: u32,
 }
@@ -78,13 +81,17 @@ pub enum SortLayout {
     /// counter per digit in registers, ranked with subgroup scans (`sort_count.comp`,
     /// `sort_scatter.comp`): the layout for GPUs, many threads with few registers each.
     ShortRuns,
-    /// 8-bit digits (half the passes); blocks of [`SORT_OWN_BLOCK`] keys, 8 invocations of
-    /// 2,048 keys each, every invocation counting its run in a histogram of its own in shared
-    /// memory (`sort_*_own_counts.comp`): for CPU drivers such as lavapipe. There an indexed
-    /// shared-memory access costs one load per lane, while a counter in registers costs a
-    /// compare per digit per key, which 8-bit digits make 256. Measured on llvmpipe
-    /// (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with 64 invocations of 64 keys
-    /// each took 456 ms, this one 350 ms with 512-key runs and 280-293 ms with 2,048-key runs.
+    /// 8-bit digits (half the passes); every invocation owns a run of 4,096 keys (8 runs per
+    /// workgroup, [`SORT_OWN_BLOCK`] keys), counts it in a histogram of its own in shared
+    /// memory and writes that to its own column of the global histogram, whose scan then gives
+    /// each run its output positions: the scatter neither counts again nor waits on the other
+    /// invocations (`sort_*_own_counts.comp`). For CPU drivers such as lavapipe, where an
+    /// indexed shared-memory access costs one load per lane, while a counter in registers
+    /// costs a compare per digit value per key, which 8-bit digits make 256. Measured on
+    /// llvmpipe (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with 64 invocations of
+    /// 64 keys each took 456 ms; a block histogram that the scatter counted again took 350 ms
+    /// with 512-key runs and 280-293 ms with 2,048; a column per run 224-238 ms with 2,048-key
+    /// runs, 206-214 ms with 4,096 and 261-276 ms with 1,024.
     OwnCounts,
 }
 
@@ -120,6 +127,15 @@ impl SortLayout {
         }
     }
 
+    /// Histogram entries per block: a count per digit value for the whole block (GPU layout)
+    /// or for each invocation's run (CPU layout).
+    pub fn hist_per_block(self) -> u32 {
+        match self {
+            SortLayout::ShortRuns => SORT_RADIX,
+            SortLayout::OwnCounts => SORT_OWN_RADIX * SORT_OWN_WORKGROUP,
+        }
+    }
+
     /// Number of radix passes for `key_bits` (at most 32) significant key bits.
     pub fn passes_for(self, key_bits: u32) -> u32 {
         assert!(key_bits <= 32, "keys are 32-bit, {key_bits} bits asked for");
@@ -142,7 +158,7 @@ pub struct SortBuffers {
     pub keys: [Buffer; 2],
     /// Values, alongside `keys`.
     pub values: [Buffer; 2],
-    /// `SortInfo` header followed by the block histograms.
+    /// `SortInfo` header followed by the histograms (per block or per run, by layout).
     pub info: Buffer,
     scan: PrefixSumScratch,
     capacity: u64,
@@ -255,7 +271,7 @@ impl RadixSort {
     pub fn buffers(&self, ctx: &Context, capacity: u64) -> Result<SortBuffers> {
         let capacity = capacity.max(1).next_multiple_of(4);
         let blocks = capacity.div_ceil(self.layout.block() as u64);
-        let hist_len = blocks << self.layout.radix_bits();
+        let hist_len = blocks * self.layout.hist_per_block() as u64;
         let gpu = MemoryLocation::GpuOnly;
         Ok(SortBuffers {
             keys: [
@@ -302,7 +318,7 @@ impl RadixSort {
             count,
             info,
             capacity: bufs.capacity.min(u32::MAX as u64) as u32,
-            radix: 1 << self.layout.radix_bits(),
+            hist_per_block: self.layout.hist_per_block(),
             block: self.layout.block(),
             pad: 0,
         };
