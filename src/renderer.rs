@@ -49,9 +49,14 @@ fn scene_buffer_sizes(scene: &Scene, precision: ShPrecision) -> (u64, u64) {
     let n = scene.len() as u64;
     (
         n * std::mem::size_of::<GpuGaussian>() as u64,
-        scene.sh.len() as u64 * precision.bytes(),
+        scene.sh.len() as u64 * precision.bytes() + SH_READ_PAST,
     )
 }
+
+/// Bytes the SH buffer holds past the last coefficient: the project kernels read a Gaussian's
+/// coefficients as whole aligned 64-bit words (`load_sh` in `glsl/sh.glsl`), up to 10 bytes
+/// past its last one (half floats, 27 values starting on a word: 8 words of 4).
+const SH_READ_PAST: u64 = 16;
 
 /// A scene uploaded to the GPU: a resource of its own, which any number of renderers of the
 /// same device can draw. Dropping it frees its memory; frames that read it must have completed.
@@ -103,7 +108,8 @@ impl GpuScene {
 
     /// Writes `scene` into the buffers (which are large enough), chunk by chunk.
     fn upload(&mut self, scene: &Scene) -> Result<()> {
-        let (gaussian_bytes, sh_bytes) = scene_buffer_sizes(scene, self.sh_precision);
+        let (gaussian_bytes, _) = scene_buffer_sizes(scene, self.sh_precision);
+        let sh_bytes = scene.sh.len() as u64 * self.sh_precision.bytes();
         let record = std::mem::size_of::<GpuGaussian>();
         self.gaussians
             .upload_with(gaussian_bytes, record as u64, |offset, chunk| {
