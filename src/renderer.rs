@@ -49,14 +49,9 @@ fn scene_buffer_sizes(scene: &Scene, precision: ShPrecision) -> (u64, u64) {
     let n = scene.len() as u64;
     (
         n * std::mem::size_of::<GpuGaussian>() as u64,
-        scene.sh.len() as u64 * precision.bytes() + SH_READ_PAST,
+        scene.sh.len() as u64 * precision.bytes() + GpuScene::SH_TAIL_BYTES,
     )
 }
-
-/// Bytes the SH buffer holds past the last coefficient: the project kernels read a Gaussian's
-/// coefficients as whole aligned 64-bit words (`load_sh` in `glsl/sh.glsl`), up to 10 bytes
-/// past its last one (half floats, 27 values starting on a word: 8 words of 4).
-const SH_READ_PAST: u64 = 16;
 
 /// A scene uploaded to the GPU: a resource of its own, which any number of renderers of the
 /// same device can draw. Dropping it frees its memory; frames that read it must have completed.
@@ -73,6 +68,12 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// Bytes the SH buffer holds past the last coefficient, counted in
+    /// [`GpuScene::device_bytes`]: the project kernels read a Gaussian's coefficients as whole
+    /// aligned 64-bit words (`load_sh` in `glsl/sh.glsl`), up to 10 bytes past its last one
+    /// (half floats, 27 values starting on a word: 8 words of 4).
+    pub const SH_TAIL_BYTES: u64 = 16;
+
     /// Uploads `scene` to the device of `ctx` with 32-bit SH coefficients (on the context's
     /// queue, in chunks through one staging buffer; returns once the copies are done).
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {

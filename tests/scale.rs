@@ -90,7 +90,7 @@ fn six_million_sh3_gaussians_match_the_reference() {
     let uploaded = t.elapsed();
     assert_eq!(
         gpu_scene.device_bytes(),
-        count as u64 * GpuScene::bytes_per_gaussian(3, ShPrecision::F32)
+        count as u64 * GpuScene::bytes_per_gaussian(3, ShPrecision::F32) + GpuScene::SH_TAIL_BYTES
     );
     let camera = shell_cameras(160, 120)[0];
     let t = Instant::now();
@@ -138,12 +138,15 @@ fn half_precision_sh() {
     let half = GpuScene::with_sh_precision(&ctx, &scene, ShPrecision::F16).unwrap();
     let full = GpuScene::new(&ctx, &scene).unwrap();
     assert_eq!(half.sh_precision(), ShPrecision::F16);
-    // 48 bytes of Gaussian and 48 halves of SH each; the SH buffer rounds up to whole words.
+    // 48 bytes of Gaussian and 48 halves of SH each, and the SH buffer's tail.
     assert_eq!(
         half.device_bytes(),
-        30_001 * 48 + (30_001 * 96_u64).next_multiple_of(4)
+        30_001 * 48 + 30_001 * 96 + GpuScene::SH_TAIL_BYTES
     );
-    assert_eq!(full.device_bytes(), 30_001 * (48 + 192));
+    assert_eq!(
+        full.device_bytes(),
+        30_001 * (48 + 192) + GpuScene::SH_TAIL_BYTES
+    );
     let rounded = ShPrecision::F16.round_scene(&scene);
     assert_ne!(rounded.sh, scene.sh, "rounding changed nothing");
     for (k, camera) in shell_cameras(320, 240).iter().step_by(3).enumerate() {
