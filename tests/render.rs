@@ -6,7 +6,7 @@ use glam::{Quat, Vec3};
 use rara::constants::RASTER_CHUNK;
 use rara::reference::project::{footprint_q_max, footprint_touches_tile, project_one};
 use rara::reference::{self, rasterize::tile_lists};
-use rara::{Camera, Clip, ClipRegion, RenderOptions, Renderer, Scene};
+use rara::{Camera, Clip, ClipRegion, GpuScene, RenderOptions, Renderer, Scene, ShPrecision};
 
 /// Two views of `scene` at `width` pixels: from its orbit cameras, or around its percentile box.
 fn two_cameras(scene: &Scene, cams: Option<&std::path::Path>, width: u32) -> Vec<Camera> {
@@ -87,6 +87,15 @@ fn synthetic_scenes_every_sh_degree() {
             let cpu = reference::render(&scene, cam, &RenderOptions::default());
             common::check_images(&format!("shell_sh{degree}_view{k}"), &gpu, &cpu, 50.0, 4);
         }
+        // Half floats too: with 3 or 27 values per Gaussian (degrees 0 and 2) its coefficients
+        // start at every offset within the 64-bit words the kernels read (glsl/sh.glsl).
+        let half = GpuScene::with_sh_precision(&ctx, &scene, ShPrecision::F16).unwrap();
+        let rounded = ShPrecision::F16.round_scene(&scene);
+        let (gpu, _) = renderer
+            .render(&half, &cams[0], &RenderOptions::default())
+            .unwrap();
+        let cpu = reference::render(&rounded, &cams[0], &RenderOptions::default());
+        common::check_images(&format!("shell_sh{degree}_f16"), &gpu, &cpu, 50.0, 4);
     }
     let demo = rara::synth::demo_scene();
     let gpu_scene = renderer.upload(&demo).unwrap();
