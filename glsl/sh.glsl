@@ -21,7 +21,7 @@ const float SH_C3[7] = float[7](-0.5900435899266435, 2.890611442640554, -0.45704
 // quarter for half floats). A Gaussian's values need not start on a word: the words from the
 // one holding value `base` are loaded, and `skip` (the values of that word before `base`)
 // picks each value. The last Gaussian's words may reach up to 10 bytes past its values, which
-// the buffer holds (scene_buffer_sizes in src/renderer.rs).
+// the buffer holds (GpuScene::SH_TAIL_BYTES in src/renderer.rs).
 #ifdef SH_HALF
 // Half floats, four to a 64-bit word.
 #define ShCoefficients U32s

@@ -68,8 +68,7 @@ pub const MIN_SUBGROUP_SIZE: u32 = 4;
 
 /// Most (tile, splat) pairs one frame sorts: the sort dispatches one workgroup per
 /// `SORT_BLOCK` keys along X (268,431,360; 6.4 GB of sort buffers; the CPU layout's blocks are
-/// larger). A frame with more is drawn
-/// incomplete and flagged.
+/// larger). A frame with more is drawn incomplete and flagged.
 pub const MAX_INTERSECTIONS: u64 = SORT_BLOCK as u64 * LINEAR_GRID_X as u64;
 /// Slots of the per-frame counters buffer (`uint` indices), written by the kernels and read
 /// back by the host after the frame.
