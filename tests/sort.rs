@@ -2,7 +2,7 @@
 
 mod common;
 
-use rara::constants::SCAN_BLOCK;
+use rara::constants::{SCAN_BLOCK, SORT_OWN_WORKGROUP};
 use rara::stages::sort::{RadixSort, SortLayout};
 
 /// Both layouts run on every device, so the GPU one is checked here too.
@@ -56,11 +56,18 @@ fn sort_sizes_around_block_boundaries() {
 fn sort_sizes_in_layout(ctx: &rara::Context, layout: SortLayout) {
     let sorter = RadixSort::with_layout(ctx, layout).unwrap();
     let block = layout.block() as usize;
-    // Histogram length is one entry per digit value per block: its scan changes level at
-    // SCAN_BLOCK entries.
-    let hist_level = (SCAN_BLOCK >> layout.radix_bits()) as usize * block;
-    // In the CPU layout each of 8 invocations owns an eighth of the block.
-    let run = block / 8;
+    // The histogram's scan changes level at SCAN_BLOCK entries: a whole number of blocks in
+    // the GPU layout. The CPU layout's histogram has more than SCAN_BLOCK entries per block
+    // (one column per run), so it spans levels from the first block and gets a size of a few
+    // blocks instead.
+    let per_block = layout.hist_per_block();
+    let hist_level = if per_block < SCAN_BLOCK {
+        (SCAN_BLOCK / per_block) as usize * block
+    } else {
+        4 * block
+    };
+    // In the CPU layout each of the workgroup's invocations owns a run of the block.
+    let run = block / SORT_OWN_WORKGROUP as usize;
     let mut sizes = vec![0, 1, 2, 255, 256, 257];
     for b in [run, run + 2, 3 * run, block, 2 * block, hist_level] {
         sizes.extend([b - 1, b, b + 1]);
