@@ -211,41 +211,33 @@ bool composite(uint k, Staged s, bool cutoff) {
 #endif
         [[unroll]] for (uint r = 0u; r < P; ++r) {
             uint i = c * P + r;
-            if (px_done[i]) {
-                continue;
-            }
-            any_open = true;
+            // Branch-free: a CPU driver runs every branch under a mask anyway, and the masks
+            // of `continue`s cost more than the selects (plant at 640x480: rasterize 0.9x).
+            bool open_px = !px_done[i];
+            any_open = any_open || open_px;
             float power2 = q.x + float(r) * (q.y + float(r) * q.z);
-            if (power2 > 0.0) {
-                continue;
-            }
-            float alpha = co.w * exp2(power2);
-            if (alpha < 1.0 / 255.0) {
-                continue; // w <= 1 cannot lift it over the threshold
-            }
+            float alpha = co.w * exp2(min(power2, 0.0));
+            bool use = open_px && power2 <= 0.0 && alpha >= 1.0 / 255.0;
 #if CUTOFF_WEIGHT != 0
-            if (cutoff) {
+            // Only the weight can take alpha back under the threshold (min(0.99, .) cannot);
+            // a GPU skips the weight where w <= 1 cannot lift alpha over it.
+            if (cutoff && use) {
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
                 alpha *= clamp(weight[i], 0.0, 1.0);
 #else
                 alpha *= cutoff_weight_length(strip, float(r), px_spans[i], band2);
 #endif
-                // Only the weight can take alpha back under the threshold (min(0.99, .)
-                // cannot).
-                if (alpha < 1.0 / 255.0) {
-                    continue;
-                }
+                use = alpha >= 1.0 / 255.0;
             }
 #endif
             alpha = min(0.99, alpha);
             float next_T = px_T[i] * (1.0 - alpha);
-            if (next_T < 1e-4) {
-                px_done[i] = true;
-                newly_done += 1u;
-                continue;
-            }
-            px_color[i] += alpha * px_T[i] * rgb;
-            px_T[i] = next_T;
+            bool finish = use && next_T < 1e-4;
+            px_done[i] = px_done[i] || finish;
+            newly_done += finish ? 1u : 0u;
+            bool add = use && !finish;
+            px_color[i] += (add ? alpha * px_T[i] : 0.0) * rgb;
+            px_T[i] = add ? next_T : px_T[i];
         }
     }
     return any_open;
