@@ -87,7 +87,7 @@ layout(push_constant) uniform Push {
 // record index). Staging a cutoff splat's 48-byte record too would cost a masked copy per
 // pair on such a driver, cutoff or not, so the record is read when the splat is composited.
 shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
-shared uvec2 batch_tail[RASTER_BATCH];     // (blue bits, cutoff record index)
+shared uint64_t batch_tail[RASTER_BATCH];  // (blue bits, cutoff record index)
 
 // The conic and opacity, centre and red and green of staged splat k (blue and record index:
 // batch_tail[k]).
@@ -111,7 +111,7 @@ void stage(uint slot, vec4 co, vec2 uv, vec3 color, uint cutoff) {
                                 packUint2x32(floatBitsToUint(co.zw)),
                                 packUint2x32(floatBitsToUint(uv)),
                                 packUint2x32(floatBitsToUint(color.rg)));
-    batch_tail[slot] = uvec2(floatBitsToUint(color.b), cutoff);
+    batch_tail[slot] = packUint2x32(uvec2(floatBitsToUint(color.b), cutoff));
 }
 
 shared uint pixels_done;
@@ -148,7 +148,7 @@ float band2;
 bool composite(uint k, Staged s, bool cutoff) {
     vec4 co = s.co;
     vec2 uv = s.uv;
-    uvec2 tail = batch_tail[k];
+    uvec2 tail = unpackUint2x32(batch_tail[k]);
     vec3 rgb = vec3(s.rg, uintBitsToFloat(tail.x));
     bool any_open = false;
 #if CUTOFF_WEIGHT != 0
