@@ -84,7 +84,9 @@ layout(push_constant) uniform Push {
 // 64-bit words, the blue and the record index in a second array: a CPU driver reads shared
 // memory with one scalar loop over the lanes per load, however wide, so this is two loops per
 // splat and SIMD vector (it was three, vec4 + vec2 + vec3, plus one for a cutoff splat's
-// record index). Staging a cutoff splat's 48-byte record too would cost a masked copy per
+// record index). Inside the loop each lane's value goes into the vector component by
+// component, through the stack, so the tail is one 64-bit word rather than a uvec2: five
+// such inserts per lane instead of six. Staging a cutoff splat's 48-byte record too would cost a masked copy per
 // pair on such a driver, cutoff or not, so the record is read when the splat is composited.
 shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
 shared uint64_t batch_tail[RASTER_BATCH];  // (blue bits, cutoff record index)
