@@ -28,18 +28,13 @@
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
 // must not be in its kernel at all.
 //
-// COOPERATIVE_RECORD (the strips kernels): the subgroup loads a cutoff record together, as six
-// 64-bit words (lanes 0-3 one each, lanes 0-1 one more), and broadcasts them with constant
-// lane ids (an element extract on a CPU driver). lavapipe pays a buffer-reference load with a
-// scalar loop over the lanes per component, so this is 2 such loops per cutoff splat instead
-// of 12 (plant at 640x480, rara: the first version, 3 loops of 32-bit words, took about 15 ms,
-// 7 %, off the rasterize pass). It needs every lane of the subgroup at the load:
-// the rara loops then run while any lane of the subgroup has an open pixel (subgroupAny), so
-// the subgroup walks the list together, and the host uses the strips layout only where the
-// subgroup size divides the workgroup's 8 invocations, so its subgroups are whole.
+// A cutoff splat's record is loaded by each invocation on its own (six 64-bit words). The
+// strips kernels used to load it across the subgroup, one or two words per lane, and broadcast
+// them; that needed every lane at the load, so the rara loops then ran while any lane of the
+// subgroup had an open pixel (subgroupAny). On lavapipe that vote is a scalar loop over the
+// lanes for every splat, and it cost more than it saved: plant at 640x480 under a plane,
+// rasterize 145 -> 126 ms without it (0.87x), the same image.
 #extension GL_EXT_control_flow_attributes : require
-#extension GL_KHR_shader_subgroup_vote : require
-#extension GL_KHR_shader_subgroup_ballot : require
 #include "common.glsl"
 #include "clip.glsl"
 
@@ -48,13 +43,6 @@
 #define COLUMNS_PER_INVOCATION 1
 #endif
 #define C COLUMNS_PER_INVOCATION
-// Whether an invocation goes on down the tile's list after a splat, from whether any of its
-// pixels was open: with COOPERATIVE_RECORD the whole subgroup goes on together.
-#ifdef COOPERATIVE_RECORD
-#define LIST_OPEN(any_open) subgroupAny(any_open)
-#else
-#define LIST_OPEN(any_open) (any_open)
-#endif
 // The invocation's pixels: px_*[c * P + r].
 #define NPX (C * P)
 #define STRIPS (TILE_SIZE / P)
@@ -167,18 +155,7 @@ bool composite(uint k, Staged s, bool cutoff) {
 #if CUTOFF_WEIGHT != 0
     CutoffRecord rec;
     if (cutoff) {
-#ifdef COOPERATIVE_RECORD
-        // The record's six 64-bit words: lanes 0-3 read words 0-3, lanes 0-1 words 4-5.
-        U64s words = U64s(cutoff_record_address(pc.cutoffs, tail.y));
-        uint lane = gl_SubgroupInvocationID;
-        uvec2 w0 = unpackUint2x32(words.v[lane & 3u]);
-        uvec2 w1 = unpackUint2x32(words.v[4u + (lane & 1u)]);
-        rec.m0 = uintBitsToFloat(uvec4(subgroupBroadcast(w0, 0u), subgroupBroadcast(w0, 1u)));
-        rec.m1 = uintBitsToFloat(uvec4(subgroupBroadcast(w0, 2u), subgroupBroadcast(w0, 3u)));
-        rec.m2 = uintBitsToFloat(uvec4(subgroupBroadcast(w1, 0u), subgroupBroadcast(w1, 1u)));
-#else
         rec = load_cutoff_record(pc.cutoffs, tail.y);
-#endif
     }
 #endif
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
@@ -407,7 +384,7 @@ void main() {
             bool go = s.co.w >= 0.0;
             do {
                 if (go) {
-                    open = LIST_OPEN(composite(k, s, false));
+                    open = composite(k, s, false);
                     ++k;
                     s = staged(min(k, count - 1u));
                     go = open && k < count && s.co.w >= 0.0;
@@ -418,7 +395,7 @@ void main() {
                 if (go) {
                     Staged positive = s;
                     positive.co.w = -s.co.w;
-                    open = LIST_OPEN(composite(k, positive, true));
+                    open = composite(k, positive, true);
                     ++k;
                     s = staged(min(k, count - 1u));
                     go = open && k < count && s.co.w < 0.0;

@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
 use crate::clip::ClipWeight;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::shaders;
 use crate::vk::{compute_barrier, ComputePipeline, Context};
 
@@ -47,9 +47,7 @@ pub enum RasterLayout {
     PixelPerInvocation,
     /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*.comp`):
     /// for CPU drivers such as lavapipe, where each staged splat is then loaded once for 32
-    /// pixels and a tile is one 8-lane SIMD vector. Its rara kernels load cutoff records
-    /// across the subgroup, so it needs a subgroup size that divides
-    /// [`STRIPS_WORKGROUP_SIZE`] (4 or 8 on lavapipe).
+    /// pixels and a tile is one 8-lane SIMD vector.
     Strips,
 }
 
@@ -57,8 +55,8 @@ pub enum RasterLayout {
 pub const STRIPS_WORKGROUP_SIZE: u32 = 8;
 
 impl RasterLayout {
-    /// The layout for a device: strips on CPU devices whose subgroup size allows it
-    /// ([`RasterLayout::Strips`]), a pixel per invocation elsewhere.
+    /// The layout for a device: strips on CPU devices ([`RasterLayout::Strips`]), a pixel per
+    /// invocation elsewhere.
     /// `RARA_RASTER=pixels|strips` overrides the choice.
     pub fn for_device(ctx: &Context) -> RasterLayout {
         match std::env::var("RARA_RASTER").as_deref() {
@@ -66,18 +64,12 @@ impl RasterLayout {
             Ok("strips") => return RasterLayout::Strips,
             _ => {}
         }
-        if ctx.info().device_type == vk::PhysicalDeviceType::CPU && strips_fit(ctx) {
+        if ctx.info().device_type == vk::PhysicalDeviceType::CPU {
             RasterLayout::Strips
         } else {
             RasterLayout::PixelPerInvocation
         }
     }
-}
-
-/// Whether the device's subgroups tile a strips workgroup exactly, as its cooperative
-/// cutoff-record load needs (every lane of a subgroup present, lanes 0-3 among them).
-fn strips_fit(ctx: &Context) -> bool {
-    STRIPS_WORKGROUP_SIZE % ctx.info().subgroup_size == 0
 }
 
 /// The rasterize kernels of one layout: without rara clipping, and with each cutoff weight.
@@ -91,17 +83,8 @@ pub struct Rasterize {
 }
 
 impl Rasterize {
-    /// Builds the kernels in `layout`. Fails with [`Error::MissingRequirement`] for
-    /// [`RasterLayout::Strips`] on a device whose subgroup size does not divide
-    /// [`STRIPS_WORKGROUP_SIZE`].
+    /// Builds the kernels in `layout`.
     pub fn new(ctx: &Context, layout: RasterLayout) -> Result<Self> {
-        if layout == RasterLayout::Strips && !strips_fit(ctx) {
-            return Err(Error::MissingRequirement(format!(
-                "the strips rasterizer layout needs a subgroup size that divides \
-                 {STRIPS_WORKGROUP_SIZE} (the device has {}); use RARA_RASTER=pixels",
-                ctx.info().subgroup_size
-            )));
-        }
         let build = |name: &'static CStr, spirv: &[u32]| {
             ComputePipeline::new::<RasterizePush>(ctx, name, spirv)
         };

@@ -35,8 +35,7 @@ pub struct Requirements {
     /// and store (see `load_vec4` in `glsl/common.glsl`).
     pub shader_int64: bool,
     /// Subgroup operations the kernels use in compute shaders (basic and arithmetic, for the
-    /// prefix sums and the sort; vote and ballot, for the strips rasterizer's cooperative
-    /// loads); a property of the device, not something to enable.
+    /// prefix sums and the sort); a property of the device, not something to enable.
     pub subgroup_operations: vk::SubgroupFeatureFlags,
 }
 
@@ -58,10 +57,7 @@ pub fn requirements() -> Requirements {
         device_extensions: Vec::new(),
         buffer_device_address: true,
         shader_int64: true,
-        subgroup_operations: vk::SubgroupFeatureFlags::BASIC
-            | vk::SubgroupFeatureFlags::ARITHMETIC
-            | vk::SubgroupFeatureFlags::VOTE
-            | vk::SubgroupFeatureFlags::BALLOT,
+        subgroup_operations: vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
     }
 }
 
