@@ -372,35 +372,34 @@ void main() {
         // Runs of plain splats and runs of cutoff splats each go through a loop of their own,
         // so that the weight code runs once per cutoff splat rather than for every splat: CPU
         // drivers execute an if's body under a mask whatever the condition, but leave a loop
-        // once no lane continues it. The loops are do-whiles, which such a driver leaves right
-        // after the last splat of the run; a while loop would run its body once more, masked,
-        // to find its end. (With one loop for the plain runs and a single cutoff splat after
-        // each, every cutoff splat after another paid a masked plain pass too.) s is always
-        // staged splat k (count >= 1 here).
+        // once no lane continues it. Each run's loop has the shape of the plain kernel's (a
+        // for loop that breaks), which such a driver runs faster than a do-while over a
+        // predicated body: on a frame with almost no cutoff splats the rara kernel took 13 %
+        // longer than the plain one written that way (lavapipe, plant at 640x480).
         uint k = 0u;
         bool open = true;
-        Staged s = staged(0u);
         do {
-            bool go = s.co.w >= 0.0;
-            do {
-                if (go) {
-                    open = composite(k, s, false);
-                    ++k;
-                    s = staged(min(k, count - 1u));
-                    go = open && k < count && s.co.w >= 0.0;
+            for (; k < count; ++k) {
+                Staged s = staged(k);
+                if (s.co.w < 0.0) {
+                    break;
                 }
-            } while (go);
-            go = open && k < count;
-            do {
-                if (go) {
-                    Staged positive = s;
-                    positive.co.w = -s.co.w;
-                    open = composite(k, positive, true);
-                    ++k;
-                    s = staged(min(k, count - 1u));
-                    go = open && k < count && s.co.w < 0.0;
+                if (!composite(k, s, false)) {
+                    open = false;
+                    break;
                 }
-            } while (go);
+            }
+            for (; open && k < count; ++k) {
+                Staged s = staged(k);
+                if (s.co.w >= 0.0) {
+                    break;
+                }
+                s.co.w = -s.co.w;
+                if (!composite(k, s, true)) {
+                    open = false;
+                    break;
+                }
+            }
         } while (open && k < count);
 #endif
         // Counted once per batch rather than as pixels finish: two instructions per pixel and
