@@ -14,7 +14,7 @@
 //
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
 // invocation after 65,535 loop iterations in total; the loops over r are unrolled, and the rara
-// variants take at most three iterations per entry, see RASTER_CHUNK in src/constants.rs).
+// variants take at most 3.5 passes per entry, see RASTER_CHUNK in src/constants.rs).
 // Longer lists take several rounds; between rounds, and for the write-target stage after the
 // last, the per-pixel state (colour, transmittance, done) lives in `state`.
 //
