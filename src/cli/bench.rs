@@ -386,6 +386,7 @@ fn json_report(
                 "wall_mean_ms": mean(&r.wall()),
                 "fps": 1000.0 / median(&mut r.wall()),
                 "passes": passes,
+                "frame_ms": r.gpu(),
                 "cutoff_per_frame": r.frames.iter().map(|f| f.cutoff).collect::<Vec<_>>(),
                 "intersections_per_frame": r.frames.iter().map(|f| f.intersections).collect::<Vec<_>>(),
                 "cutoff_pairs_per_frame": r.frames.iter()
