@@ -4,18 +4,21 @@
 //   over:       out = (C + T dst.rgb, (1 - T) + T dst.a), dst = what the target holds
 // i.e. the splats composited front to back, then "over" the background or the target
 // (premultiplied alpha). The kernels write_target_image_<format>.comp (a storage image at
-// set 0, binding 0; GLSL needs its format to load it) and write_target_buffer.comp (a buffer
-// reached by device address, rows tightly packed) include this file.
+// set 0, binding 0; GLSL needs its format to load it) and write_target_buffer_<format>.comp (a
+// buffer reached by device address, rows tightly packed) include this file. A buffer's format
+// is a kernel of its own rather than a branch: a CPU driver runs every branch's loads and
+// stores under a mask, each a scalar loop over the SIMD lanes (lavapipe, plant at 640x480:
+// write target 10.4 -> 6.0 ms for the rgba8 buffer, the same image).
 #include "common.glsl"
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 
 #define TARGET_OVER 1u
 
-// Buffer formats, as TargetFormat on the host.
-#define BUFFER_RGBA8 0u
-#define BUFFER_RGBA16F 1u
-#define BUFFER_RGBA32F 2u
+// Buffer formats (TARGET_BUFFER_FORMAT of the buffer kernels), as TargetFormat on the host.
+#define BUFFER_RGBA8 0
+#define BUFFER_RGBA16F 1
+#define BUFFER_RGBA32F 2
 
 layout(push_constant) uniform Push {
     Vec4s state;        // per pixel (C, T), T negated once the pixel was done
@@ -23,7 +26,7 @@ layout(push_constant) uniform Push {
     vec4 background;    // rgba, with mode background
     uvec2 size;         // W, H
     uint flags;         // TARGET_OVER
-    uint buffer_format; // BUFFER_*
+    uint padding;
 } pc;
 
 #ifdef TARGET_IMAGE_FORMAT
@@ -36,33 +39,38 @@ vec4 load_target(uvec2 p, uint index) {
 void store_target(uvec2 p, uint index, vec4 c) {
     imageStore(target, ivec2(p), c);
 }
+#elif TARGET_BUFFER_FORMAT == BUFFER_RGBA8
+vec4 load_target(uvec2 p, uint index) {
+    return unpackUnorm4x8(pc.buffer_target.v[index]);
+}
+
+void store_target(uvec2 p, uint index, vec4 c) {
+    // Round to nearest, as the CPU reference does (SPEC section 4).
+    uvec4 b = uvec4(floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5));
+    pc.buffer_target.v[index] = b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
+}
+#elif TARGET_BUFFER_FORMAT == BUFFER_RGBA16F
+vec4 load_target(uvec2 p, uint index) {
+    return vec4(unpackHalf2x16(pc.buffer_target.v[2u * index]),
+                unpackHalf2x16(pc.buffer_target.v[2u * index + 1u]));
+}
+
+void store_target(uvec2 p, uint index, vec4 c) {
+    pc.buffer_target.v[2u * index] = packHalf2x16(c.rg);
+    pc.buffer_target.v[2u * index + 1u] = packHalf2x16(c.ba);
+}
 #else
 vec4 load_target(uvec2 p, uint index) {
-    if (pc.buffer_format == BUFFER_RGBA8) {
-        return unpackUnorm4x8(pc.buffer_target.v[index]);
-    } else if (pc.buffer_format == BUFFER_RGBA16F) {
-        return vec4(unpackHalf2x16(pc.buffer_target.v[2u * index]),
-                    unpackHalf2x16(pc.buffer_target.v[2u * index + 1u]));
-    }
     return uintBitsToFloat(uvec4(pc.buffer_target.v[4u * index], pc.buffer_target.v[4u * index + 1u],
                                  pc.buffer_target.v[4u * index + 2u], pc.buffer_target.v[4u * index + 3u]));
 }
 
 void store_target(uvec2 p, uint index, vec4 c) {
-    if (pc.buffer_format == BUFFER_RGBA8) {
-        // Round to nearest, as the CPU reference does (SPEC section 4).
-        uvec4 b = uvec4(floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5));
-        pc.buffer_target.v[index] = b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
-    } else if (pc.buffer_format == BUFFER_RGBA16F) {
-        pc.buffer_target.v[2u * index] = packHalf2x16(c.rg);
-        pc.buffer_target.v[2u * index + 1u] = packHalf2x16(c.ba);
-    } else {
-        uvec4 u = floatBitsToUint(c);
-        pc.buffer_target.v[4u * index] = u.x;
-        pc.buffer_target.v[4u * index + 1u] = u.y;
-        pc.buffer_target.v[4u * index + 2u] = u.z;
-        pc.buffer_target.v[4u * index + 3u] = u.w;
-    }
+    uvec4 u = floatBitsToUint(c);
+    pc.buffer_target.v[4u * index] = u.x;
+    pc.buffer_target.v[4u * index + 1u] = u.y;
+    pc.buffer_target.v[4u * index + 2u] = u.z;
+    pc.buffer_target.v[4u * index + 3u] = u.w;
 }
 #endif
 

@@ -554,7 +554,7 @@ impl Renderer {
         let (_capacity, rounds) =
             slot.prepare(&self.prefix_sum, &self.sort, w, h, scene.count, rara)?;
         let image_set = match *target {
-            Target::Image { view, format, .. } => Some((slot.image_target_set(view)?, format)),
+            Target::Image { view, .. } => Some(slot.image_target_set(view)?),
             Target::Buffer { .. } => None,
         };
         let sorted_index = self.sort.passes_for(key_bits(w, h)) as usize % 2;
@@ -776,9 +776,10 @@ impl Renderer {
             background: [bg.x, bg.y, bg.z, 1.0],
             size: [w, h],
             flags: WriteTargetPush::flags_for(options.composite),
-            buffer_format: WriteTargetPush::buffer_format_for(target.format()),
+            padding: 0,
         };
-        self.write_target.record(cmd, &push, image_set);
+        self.write_target
+            .record(cmd, &push, target.format(), image_set);
         timer.end_pass(cmd, c"write target");
 
         // The counters, for FrameSlot::stats once the frame completed.

@@ -557,7 +557,10 @@ fn bench_writes_table_json_and_trace() {
         assert_eq!(m["cutoff_per_frame"].as_array().unwrap().len(), frames);
         let frame_ms = m["frame_ms"].as_array().unwrap();
         assert_eq!(frame_ms.len(), frames);
-        assert!(frame_ms.iter().all(|t| t.as_f64().unwrap() > 0.0), "{mode}: {m}");
+        assert!(
+            frame_ms.iter().all(|t| t.as_f64().unwrap() > 0.0),
+            "{mode}: {m}"
+        );
     }
     // The sweeping plane cuts the shell: rara has cutoff Gaussians, the other modes none.
     let cutoffs = |mode: &str| -> u64 {

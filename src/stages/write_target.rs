@@ -24,8 +24,8 @@ pub struct WriteTargetPush {
     pub size: [u32; 2],
     /// 1 for [`Composite::Over`].
     pub flags: u32,
-    /// A buffer target's format: 0 rgba8, 1 rgba16f, 2 rgba32f.
-    pub buffer_format: u32,
+    /// Padding to the struct's 8-byte alignment (always 0).
+    pub padding: u32,
 }
 
 impl WriteTargetPush {
@@ -34,15 +34,6 @@ impl WriteTargetPush {
         match composite {
             Composite::Background => 0,
             Composite::Over => 1,
-        }
-    }
-
-    /// The buffer-format word for `format`.
-    pub fn buffer_format_for(format: TargetFormat) -> u32 {
-        match format {
-            TargetFormat::Rgba8Unorm => 0,
-            TargetFormat::Rgba16Float => 1,
-            TargetFormat::Rgba32Float => 2,
         }
     }
 }
@@ -62,13 +53,15 @@ pub fn image_target_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout>
 }
 
 /// The write-target kernels: one per storage-image format (GLSL must name the format to load
-/// an image) and one for buffers.
+/// an image) and one per buffer format (a CPU driver would run every format's branch).
 pub struct WriteTarget {
     set_layout: vk::DescriptorSetLayout,
     image_rgba8: ComputePipeline,
     image_rgba16f: ComputePipeline,
     image_rgba32f: ComputePipeline,
-    buffer: ComputePipeline,
+    buffer_rgba8: ComputePipeline,
+    buffer_rgba16f: ComputePipeline,
+    buffer_rgba32f: ComputePipeline,
     ctx: Context,
 }
 
@@ -97,16 +90,39 @@ impl WriteTarget {
                     shaders::WRITE_TARGET_IMAGE_RGBA32F,
                     Some(set_layout),
                 )?,
-                build(c"write_target_buffer", shaders::WRITE_TARGET_BUFFER, None)?,
+                build(
+                    c"write_target_buffer_rgba8",
+                    shaders::WRITE_TARGET_BUFFER_RGBA8,
+                    None,
+                )?,
+                build(
+                    c"write_target_buffer_rgba16f",
+                    shaders::WRITE_TARGET_BUFFER_RGBA16F,
+                    None,
+                )?,
+                build(
+                    c"write_target_buffer_rgba32f",
+                    shaders::WRITE_TARGET_BUFFER_RGBA32F,
+                    None,
+                )?,
             ))
         })();
         match pipelines {
-            Ok((image_rgba8, image_rgba16f, image_rgba32f, buffer)) => Ok(WriteTarget {
+            Ok((
+                image_rgba8,
+                image_rgba16f,
+                image_rgba32f,
+                buffer_rgba8,
+                buffer_rgba16f,
+                buffer_rgba32f,
+            )) => Ok(WriteTarget {
                 set_layout,
                 image_rgba8,
                 image_rgba16f,
                 image_rgba32f,
-                buffer,
+                buffer_rgba8,
+                buffer_rgba16f,
+                buffer_rgba32f,
                 ctx: ctx.clone(),
             }),
             Err(e) => {
@@ -116,22 +132,30 @@ impl WriteTarget {
         }
     }
 
-    /// Records the kernel for an image target of `format` (`set` holds its view) or, with
-    /// `set == None`, for the buffer at `push.buffer_target`.
+    /// Records the kernel for a target of `format`: the storage image whose view `image_set`
+    /// holds or, with `image_set == None`, the buffer at `push.buffer_target`.
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
         push: &WriteTargetPush,
-        image: Option<(vk::DescriptorSet, TargetFormat)>,
+        format: TargetFormat,
+        image_set: Option<vk::DescriptorSet>,
     ) {
         let groups = [
             push.size[0].div_ceil(TILE_SIZE),
             push.size[1].div_ceil(TILE_SIZE),
             1,
         ];
-        match image {
-            None => self.buffer.dispatch(cmd, push, groups),
-            Some((set, format)) => {
+        match image_set {
+            None => {
+                let pipeline = match format {
+                    TargetFormat::Rgba8Unorm => &self.buffer_rgba8,
+                    TargetFormat::Rgba16Float => &self.buffer_rgba16f,
+                    TargetFormat::Rgba32Float => &self.buffer_rgba32f,
+                };
+                pipeline.dispatch(cmd, push, groups);
+            }
+            Some(set) => {
                 let pipeline = match format {
                     TargetFormat::Rgba8Unorm => &self.image_rgba8,
                     TargetFormat::Rgba16Float => &self.image_rgba16f,
