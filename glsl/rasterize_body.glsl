@@ -374,8 +374,8 @@ void main() {
         // drivers execute an if's body under a mask whatever the condition, but leave a loop
         // once no lane continues it. Each run's loop has the shape of the plain kernel's (a
         // for loop that breaks), which such a driver runs faster than a do-while over a
-        // predicated body: on a frame with almost no cutoff splats the rara kernel took 13 %
-        // longer than the plain one written that way (lavapipe, plant at 640x480).
+        // predicated body (lavapipe, plant at 640x480 with almost no cutoff splats: rasterize
+        // 105 -> 96 ms; 95 ms with the plain loop alone).
         uint k = 0u;
         bool open = true;
         do {
