@@ -51,9 +51,6 @@ pub enum RasterLayout {
     Strips,
 }
 
-/// Invocations of a strips-layout workgroup (one tile).
-pub const STRIPS_WORKGROUP_SIZE: u32 = 8;
-
 impl RasterLayout {
     /// The layout for a device: strips on CPU devices ([`RasterLayout::Strips`]), a pixel per
     /// invocation elsewhere.
