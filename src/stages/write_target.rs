@@ -3,6 +3,7 @@
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
+use std::ffi::CStr;
 
 use crate::constants::TILE_SIZE;
 use crate::error::{Result, VkContext};
@@ -52,16 +53,48 @@ pub fn image_target_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout>
         .vk("vkCreateDescriptorSetLayout")
 }
 
+/// One write-target kernel per [`TargetFormat`], for one kind of target.
+struct FormatKernels {
+    rgba8: ComputePipeline,
+    rgba16f: ComputePipeline,
+    rgba32f: ComputePipeline,
+}
+
+impl FormatKernels {
+    /// Builds the three kernels from `(name, SPIR-V)` in format order (rgba8, rgba16f,
+    /// rgba32f), with `set_layout` for an image target.
+    fn new(
+        ctx: &Context,
+        kernels: [(&'static CStr, &[u32]); 3],
+        set_layout: Option<vk::DescriptorSetLayout>,
+    ) -> Result<Self> {
+        let build = |(name, spirv): (&'static CStr, &[u32])| {
+            ComputePipeline::with_set_layout::<WriteTargetPush>(ctx, name, spirv, set_layout)
+        };
+        let [rgba8, rgba16f, rgba32f] = kernels;
+        Ok(FormatKernels {
+            rgba8: build(rgba8)?,
+            rgba16f: build(rgba16f)?,
+            rgba32f: build(rgba32f)?,
+        })
+    }
+
+    /// The kernel for `format`.
+    fn get(&self, format: TargetFormat) -> &ComputePipeline {
+        match format {
+            TargetFormat::Rgba8Unorm => &self.rgba8,
+            TargetFormat::Rgba16Float => &self.rgba16f,
+            TargetFormat::Rgba32Float => &self.rgba32f,
+        }
+    }
+}
+
 /// The write-target kernels: one per storage-image format (GLSL must name the format to load
 /// an image) and one per buffer format (a CPU driver would run every format's branch).
 pub struct WriteTarget {
     set_layout: vk::DescriptorSetLayout,
-    image_rgba8: ComputePipeline,
-    image_rgba16f: ComputePipeline,
-    image_rgba32f: ComputePipeline,
-    buffer_rgba8: ComputePipeline,
-    buffer_rgba16f: ComputePipeline,
-    buffer_rgba32f: ComputePipeline,
+    image: FormatKernels,
+    buffer: FormatKernels,
     ctx: Context,
 }
 
@@ -70,59 +103,50 @@ impl WriteTarget {
     pub fn new(ctx: &Context) -> Result<Self> {
         let set_layout = image_target_set_layout(ctx)?;
         // The layout is destroyed by Drop once `stage` exists; until then by hand on failure.
-        let build = |name, spirv: &[u32], set: Option<vk::DescriptorSetLayout>| {
-            ComputePipeline::with_set_layout::<WriteTargetPush>(ctx, name, spirv, set)
-        };
-        let pipelines = (|| {
-            Ok((
-                build(
-                    c"write_target_image_rgba8",
-                    shaders::WRITE_TARGET_IMAGE_RGBA8,
-                    Some(set_layout),
-                )?,
-                build(
-                    c"write_target_image_rgba16f",
-                    shaders::WRITE_TARGET_IMAGE_RGBA16F,
-                    Some(set_layout),
-                )?,
-                build(
-                    c"write_target_image_rgba32f",
-                    shaders::WRITE_TARGET_IMAGE_RGBA32F,
-                    Some(set_layout),
-                )?,
-                build(
-                    c"write_target_buffer_rgba8",
-                    shaders::WRITE_TARGET_BUFFER_RGBA8,
-                    None,
-                )?,
-                build(
-                    c"write_target_buffer_rgba16f",
-                    shaders::WRITE_TARGET_BUFFER_RGBA16F,
-                    None,
-                )?,
-                build(
-                    c"write_target_buffer_rgba32f",
-                    shaders::WRITE_TARGET_BUFFER_RGBA32F,
-                    None,
-                )?,
-            ))
+        let kernels = (|| {
+            let image = FormatKernels::new(
+                ctx,
+                [
+                    (
+                        c"write_target_image_rgba8",
+                        shaders::WRITE_TARGET_IMAGE_RGBA8,
+                    ),
+                    (
+                        c"write_target_image_rgba16f",
+                        shaders::WRITE_TARGET_IMAGE_RGBA16F,
+                    ),
+                    (
+                        c"write_target_image_rgba32f",
+                        shaders::WRITE_TARGET_IMAGE_RGBA32F,
+                    ),
+                ],
+                Some(set_layout),
+            )?;
+            let buffer = FormatKernels::new(
+                ctx,
+                [
+                    (
+                        c"write_target_buffer_rgba8",
+                        shaders::WRITE_TARGET_BUFFER_RGBA8,
+                    ),
+                    (
+                        c"write_target_buffer_rgba16f",
+                        shaders::WRITE_TARGET_BUFFER_RGBA16F,
+                    ),
+                    (
+                        c"write_target_buffer_rgba32f",
+                        shaders::WRITE_TARGET_BUFFER_RGBA32F,
+                    ),
+                ],
+                None,
+            )?;
+            Ok((image, buffer))
         })();
-        match pipelines {
-            Ok((
-                image_rgba8,
-                image_rgba16f,
-                image_rgba32f,
-                buffer_rgba8,
-                buffer_rgba16f,
-                buffer_rgba32f,
-            )) => Ok(WriteTarget {
+        match kernels {
+            Ok((image, buffer)) => Ok(WriteTarget {
                 set_layout,
-                image_rgba8,
-                image_rgba16f,
-                image_rgba32f,
-                buffer_rgba8,
-                buffer_rgba16f,
-                buffer_rgba32f,
+                image,
+                buffer,
                 ctx: ctx.clone(),
             }),
             Err(e) => {
@@ -147,22 +171,11 @@ impl WriteTarget {
             1,
         ];
         match image_set {
-            None => {
-                let pipeline = match format {
-                    TargetFormat::Rgba8Unorm => &self.buffer_rgba8,
-                    TargetFormat::Rgba16Float => &self.buffer_rgba16f,
-                    TargetFormat::Rgba32Float => &self.buffer_rgba32f,
-                };
-                pipeline.dispatch(cmd, push, groups);
-            }
-            Some(set) => {
-                let pipeline = match format {
-                    TargetFormat::Rgba8Unorm => &self.image_rgba8,
-                    TargetFormat::Rgba16Float => &self.image_rgba16f,
-                    TargetFormat::Rgba32Float => &self.image_rgba32f,
-                };
-                pipeline.dispatch_with_set(cmd, push, set, groups);
-            }
+            None => self.buffer.get(format).dispatch(cmd, push, groups),
+            Some(set) => self
+                .image
+                .get(format)
+                .dispatch_with_set(cmd, push, set, groups),
         }
     }
 }
