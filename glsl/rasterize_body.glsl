@@ -1,16 +1,28 @@
-// Stage 7, rasterize (SPEC section 4): one workgroup per 16x16 tile. The tile's splats, sorted
-// front to back, are staged through shared memory in batches of RASTER_BATCH; each pixel
-// composites them until its transmittance runs out, and the workgroup stops once every pixel is
-// done.
+// Stage 7, rasterize (SPEC section 4): one workgroup per 16x16 tile. Each pixel composites the
+// tile's splats, sorted front to back, until its transmittance runs out.
 //
 // PIXELS_PER_INVOCATION (P) and COLUMNS_PER_INVOCATION (C) set how pixels map to invocations:
 // invocation (x, y) owns the C x P pixels (x C + c, y P + r), c < C, r < P: C columns of a
 // strip of P rows. The kernels rasterize*.comp (P = C = 1, for GPUs: 256 threads per tile) and
 // rasterize_strips*.comp (P = 16, C = 2, for CPU drivers such as lavapipe) include this file.
-// On lavapipe every load of a staged splat costs a scalar loop over the 8 SIMD lanes, paid once
-// per 8 invocations, so sharing it among more pixels pays: on plant 16 rows measured fastest of
-// 1, 2, 4, 8, 16, and then 2 columns (8 invocations per tile, one SIMD vector) cut the
-// unclipped rasterize time by a further 20-25 % (268-283 -> 200-215 ms).
+// On lavapipe every load of a splat is paid once per SIMD vector of 8 invocations, so sharing
+// it among more pixels pays: on plant 16 rows measured fastest of 1, 2, 4, 8, 16, and then 2
+// columns (8 invocations per tile, one SIMD vector) cut the unclipped rasterize time by a
+// further 20-25 % (268-283 -> 200-215 ms).
+//
+// How the splats are read (SPLAT_TEXELS selects):
+// - The GPU kernels stage them through shared memory in batches of RASTER_BATCH, each
+//   invocation loading a few, and the workgroup stops once every pixel is done.
+// - The strips kernels (SPLAT_TEXELS) fetch each splat from uniform texel buffers of the sorted
+//   pair values, the projected splats and the cutoff records (descriptor set 0). Mesa's
+//   gallivm turns a load from shared memory or a storage buffer into a scalar loop over the
+//   lanes that moves each lane's value into the vector through the stack (a stalled store
+//   forward per lane and component), but a texel fetch into unmasked scalar loads gathered in
+//   registers. Every lane of a vector fetches the same splat, from the cache. lavapipe, plant at
+//   640x480, `render --repeat 10`: rasterize 131-137 -> 60-94 ms unclipped, 91 -> 42 ms hard
+//   clipped and 125 -> 63-88 ms under rara (a plane at d = 0.05), the same images. Each
+//   invocation stops once its own pixels are done, so the strips kernels need no shared memory
+//   and no barrier.
 //
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
 // invocation after 65,535 loop iterations in total; the loops over r are unrolled, and the rara
@@ -67,8 +79,57 @@ layout(push_constant) uniform Push {
     uint flags;
 } pc;
 
-// A staged splat is 9 words: conic and opacity (negated for a cutoff splat), centre, colour,
-// and with rara clipping its cutoff record index. The first 8 go in one 32-byte element of
+// A splat as the compositing loop takes it: conic and opacity (negated for a cutoff splat),
+// centre, colour and, with rara clipping, its cutoff record index.
+struct Staged {
+    vec4 co;
+    vec2 uv;
+    vec3 rgb;
+    uint cutoff;
+};
+
+#ifdef SPLAT_TEXELS
+layout(set = 0, binding = 0) uniform utextureBuffer sorted_values;  // R32_UINT, per pair
+layout(set = 0, binding = 1) uniform utextureBuffer splat_texels;   // RGBA32_UINT, 4 per splat
+layout(set = 0, binding = 2) uniform utextureBuffer cutoff_texels;  // RGBA32_UINT, 3 per record
+
+// Cutoff record i (CutoffRecord: three texels).
+CutoffRecord fetch_cutoff_record(uint i) {
+    int t = int(i) * 3;
+    return CutoffRecord(uintBitsToFloat(texelFetch(cutoff_texels, t)),
+                        uintBitsToFloat(texelFetch(cutoff_texels, t + 1)),
+                        uintBitsToFloat(texelFetch(cutoff_texels, t + 2)));
+}
+
+// The splat of the pair at `entry` of the sorted pairs: the first three of its four texels
+// (uv, depth, opacity | conic, cutoff | colour, pad; the rect is not needed).
+Staged fetch_splat(uint entry) {
+    uint value = texelFetch(sorted_values, int(entry)).x;
+    int t = int(value & ~PAIR_WEIGHT_ONE) * 4;
+    uvec4 b0 = texelFetch(splat_texels, t);
+    uvec4 b1 = texelFetch(splat_texels, t + 1);
+    uvec4 b2 = texelFetch(splat_texels, t + 2);
+    float opacity = uintBitsToFloat(b0.w);
+#if CUTOFF_WEIGHT != 0
+    // As in staging below: the sign of the opacity marks a cutoff splat, and a pair of weight
+    // 1 across the tile is drawn as a plain one.
+    bool cutoff = b1.w != NO_CUTOFF && (value & PAIR_WEIGHT_ONE) == 0u;
+    opacity = cutoff ? -opacity : opacity;
+#endif
+    Staged s;
+    s.co = vec4(uintBitsToFloat(b1.xyz), opacity);
+    s.uv = uintBitsToFloat(b0.xy);
+    s.rgb = uintBitsToFloat(b2.xyz);
+    s.cutoff = b1.w;
+    return s;
+}
+
+// Splat k of the entries from `base`.
+Staged splat_at(uint base, uint k) {
+    return fetch_splat(base + k);
+}
+#else
+// A staged splat is 9 words. The first 8 go in one 32-byte element of
 // 64-bit words, the blue and the record index in a second array: a CPU driver reads shared
 // memory with one scalar loop over the lanes per load, however wide, so this is two loops per
 // splat and SIMD vector (it was three, vec4 + vec2 + vec3, plus one for a cutoff splat's
@@ -80,20 +141,15 @@ layout(push_constant) uniform Push {
 shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
 shared uint64_t batch_tail[RASTER_BATCH];  // (blue bits, cutoff record index)
 
-// The conic and opacity, centre and red and green of staged splat k (blue and record index:
-// batch_tail[k]).
-struct Staged {
-    vec4 co;
-    vec2 uv;
-    vec2 rg;
-};
-
-Staged staged(uint k) {
+// Staged splat k of the batch.
+Staged splat_at(uint base, uint k) {
     u64vec4 w = batch_words[k];
+    uvec2 tail = unpackUint2x32(batch_tail[k]);
     Staged s;
     s.co = vec4(uintBitsToFloat(unpackUint2x32(w.x)), uintBitsToFloat(unpackUint2x32(w.y)));
     s.uv = uintBitsToFloat(unpackUint2x32(w.z));
-    s.rg = uintBitsToFloat(unpackUint2x32(w.w));
+    s.rgb = vec3(uintBitsToFloat(unpackUint2x32(w.w)), uintBitsToFloat(tail.x));
+    s.cutoff = tail.y;
     return s;
 }
 
@@ -105,7 +161,13 @@ void stage(uint slot, vec4 co, vec2 uv, vec3 color, uint cutoff) {
     batch_tail[slot] = packUint2x32(uvec2(floatBitsToUint(color.b), cutoff));
 }
 
+// Cutoff record i.
+CutoffRecord fetch_cutoff_record(uint i) {
+    return load_cutoff_record(pc.cutoffs, i);
+}
+
 shared uint pixels_done;
+#endif
 
 // The invocation's strip: first pixel, and per pixel the compositing state and, for rara,
 // the ray (SPEC section 2) and its visible intervals: as ends for the mass weight (MassEnds in
@@ -115,8 +177,6 @@ uvec2 first_pixel;
 vec3 px_color[NPX];
 float px_T[NPX];
 bool px_done[NPX];
-// Done pixels of the strip as of the last count (done_count).
-uint strip_done;
 #if CUTOFF_WEIGHT != 0
 // The ray of pixel (c, r) of the strip is eye + t (ray0 + c ray_across + r ray_step), not
 // normalised (the weights do not depend on the scale of t): three vectors instead of C x P keep
@@ -134,6 +194,10 @@ float band2;
 #endif
 #endif
 
+#ifndef SPLAT_TEXELS
+// Done pixels of the strip as of the last count (done_count).
+uint strip_done;
+
 // How many of the strip's pixels are done.
 uint done_count() {
     uint n = 0u;
@@ -142,20 +206,20 @@ uint done_count() {
     }
     return n;
 }
+#endif
 
-// Composites staged splat k (s = staged(k), with the opacity made positive) over the strip
+// Composites splat s (with the opacity made positive) over the strip
 // (SPEC section 4); `cutoff` applies its clip weight. Returns whether any pixel of the strip
 // was still open.
-bool composite(uint k, Staged s, bool cutoff) {
+bool composite(Staged s, bool cutoff) {
     vec4 co = s.co;
     vec2 uv = s.uv;
-    uvec2 tail = unpackUint2x32(batch_tail[k]);
-    vec3 rgb = vec3(s.rg, uintBitsToFloat(tail.x));
+    vec3 rgb = s.rgb;
     bool any_open = false;
 #if CUTOFF_WEIGHT != 0
     CutoffRecord rec;
     if (cutoff) {
-        rec = load_cutoff_record(pc.cutoffs, tail.y);
+        rec = fetch_cutoff_record(s.cutoff);
     }
 #endif
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
@@ -284,6 +348,51 @@ void strip_spans(vec3 eye) {
 }
 #endif
 
+// Composites splats [0, count) of splat_at(base, .) over the strip, in order, until every
+// pixel of the strip is done.
+void composite_entries(uint base, uint count) {
+#if CUTOFF_WEIGHT == 0
+    for (uint k = 0u; k < count; ++k) {
+        if (!composite(splat_at(base, k), false)) {
+            break;
+        }
+    }
+#else
+    // Runs of plain splats and runs of cutoff splats each go through a loop of their own, so
+    // that the weight code runs once per cutoff splat rather than for every splat: CPU drivers
+    // execute an if's body under a mask whatever the condition, but leave a loop once no lane
+    // continues it. Each run's loop has the shape of the plain kernel's (a for loop that
+    // breaks), which such a driver runs faster than a do-while over a predicated body
+    // (lavapipe, plant at 640x480 with almost no cutoff splats: rasterize 105 -> 96 ms; 95 ms
+    // with the plain loop alone).
+    uint k = 0u;
+    bool open = true;
+    do {
+        for (; k < count; ++k) {
+            Staged s = splat_at(base, k);
+            if (s.co.w < 0.0) {
+                break;
+            }
+            if (!composite(s, false)) {
+                open = false;
+                break;
+            }
+        }
+        for (; open && k < count; ++k) {
+            Staged s = splat_at(base, k);
+            if (s.co.w >= 0.0) {
+                break;
+            }
+            s.co.w = -s.co.w;
+            if (!composite(s, true)) {
+                open = false;
+                break;
+            }
+        }
+    } while (open && k < count);
+#endif
+}
+
 void main() {
     FrameParams f = load_frame_params(pc.frame);
     uint lid = gl_LocalInvocationIndex;
@@ -311,7 +420,6 @@ void main() {
             px_done[i] = s.a < 0.0;
         }
     }
-    strip_done = done_count();
 #if CUTOFF_WEIGHT != 0
     strip_spans(f.cam_pos.xyz);
 #endif
@@ -319,11 +427,15 @@ void main() {
     uvec2 range = pc.ranges.v[tile.y * f.size.z + tile.x];
     uint start = min(range.x + pc.round_index * RASTER_CHUNK, range.y);
     uint end = min(start + RASTER_CHUNK, range.y);
+    if (lid == 0u && pc.round_index == 0u) {
+        atomicMax(pc.counters.v[COUNTER_MAX_TILE_LEN], range.y - range.x);
+    }
+#ifdef SPLAT_TEXELS
+    composite_entries(start, end - start);
+#else
+    strip_done = done_count();
     if (lid == 0u) {
         pixels_done = 0u;
-        if (pc.round_index == 0u) {
-            atomicMax(pc.counters.v[COUNTER_MAX_TILE_LEN], range.y - range.x);
-        }
     }
     barrier();
     if (strip_done > 0u) {
@@ -362,46 +474,7 @@ void main() {
             ++j;
         } while (j < staging_rounds);
         barrier();
-#if CUTOFF_WEIGHT == 0
-        for (uint k = 0u; k < count; ++k) {
-            if (!composite(k, staged(k), false)) {
-                break;
-            }
-        }
-#else
-        // Runs of plain splats and runs of cutoff splats each go through a loop of their own,
-        // so that the weight code runs once per cutoff splat rather than for every splat: CPU
-        // drivers execute an if's body under a mask whatever the condition, but leave a loop
-        // once no lane continues it. Each run's loop has the shape of the plain kernel's (a
-        // for loop that breaks), which such a driver runs faster than a do-while over a
-        // predicated body (lavapipe, plant at 640x480 with almost no cutoff splats: rasterize
-        // 105 -> 96 ms; 95 ms with the plain loop alone).
-        uint k = 0u;
-        bool open = true;
-        do {
-            for (; k < count; ++k) {
-                Staged s = staged(k);
-                if (s.co.w < 0.0) {
-                    break;
-                }
-                if (!composite(k, s, false)) {
-                    open = false;
-                    break;
-                }
-            }
-            for (; open && k < count; ++k) {
-                Staged s = staged(k);
-                if (s.co.w >= 0.0) {
-                    break;
-                }
-                s.co.w = -s.co.w;
-                if (!composite(k, s, true)) {
-                    open = false;
-                    break;
-                }
-            }
-        } while (open && k < count);
-#endif
+        composite_entries(batch, count);
         // Counted once per batch rather than as pixels finish: two instructions per pixel and
         // splat fewer.
         uint now_done = done_count();
@@ -410,6 +483,7 @@ void main() {
             strip_done = now_done;
         }
     }
+#endif
 
     [[unroll]] for (uint i = 0u; i < NPX; ++i) {
         uvec2 pixel = first_pixel + uvec2(i / P, i % P);

@@ -12,6 +12,7 @@ use crate::error::{Result, VkContext};
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
 use crate::renderer::FrameStats;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
+use crate::stages::rasterize::splat_texels_set_layout;
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::write_target::image_target_set_layout;
 use crate::vk::{Buffer, Context, MemoryLocation};
@@ -42,6 +43,7 @@ pub struct FrameSlot {
     /// What the last recorded frame had, to judge its counters.
     recorded: Option<(u64, u32)>,
     image_set: Option<ImageTargetSet>,
+    splat_texels: Option<SplatTexelsSet>,
 }
 
 /// The device memory of a [`FrameSlot`], grouped by what it scales with: the per-frame
@@ -115,6 +117,16 @@ pub(crate) struct FrameResources {
     pub(crate) sorted: usize,
 }
 
+/// The descriptor pool and set of the strips rasterizer: texel-buffer views of the projected
+/// splats and of the sorted pair values, made for the buffers in `viewed`.
+struct SplatTexelsSet {
+    layout: vk::DescriptorSetLayout,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    views: [vk::BufferView; 3],
+    viewed: [vk::Buffer; 3],
+}
+
 /// The descriptor pool and set that hold an image target's view.
 struct ImageTargetSet {
     layout: vk::DescriptorSetLayout,
@@ -139,6 +151,7 @@ impl FrameSlot {
             rounds: 1,
             recorded: None,
             image_set: None,
+            splat_texels: None,
         })
     }
 
@@ -215,17 +228,17 @@ impl FrameSlot {
         })
     }
 
-    /// Makes the buffers fit a `width` x `height` frame of `gaussians` Gaussians (with the
-    /// cutoff records when `rara`); returns the intersection capacity and rasterizer rounds
-    /// the frame gets.
+    /// Makes the buffers fit a frame of `(width, height)` and `gaussians` Gaussians (with the
+    /// cutoff records when `rara`) and at most `pair_limit` tile pairs; returns the
+    /// intersection capacity and rasterizer rounds the frame gets.
     pub(crate) fn prepare(
         &mut self,
         prefix_sum: &PrefixSum,
         sort: &RadixSort,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
         gaussians: u32,
         rara: bool,
+        pair_limit: u64,
     ) -> Result<(u64, u32)> {
         if self.recorded.is_some() {
             // The previous frame of this slot has completed (the slot's contract): learn from
@@ -236,7 +249,7 @@ impl FrameSlot {
             .capacity
             .max((gaussians as u64 * FIRST_INTERSECTIONS_PER_GAUSSIAN).min(MAX_INTERSECTIONS))
             .max(MIN_CAPACITY);
-        let capacity = self.capacity;
+        let capacity = self.capacity.min(pair_limit);
         let fits = self.resources.as_ref().is_some_and(|f| {
             f.width == width
                 && f.height == height
@@ -316,6 +329,92 @@ impl FrameSlot {
         &self.counters_readback
     }
 
+    /// The strips rasterizer's descriptor set ([`splat_texels_set_layout`]) for the frame
+    /// `prepare` sized, whose sorted pairs are in sort buffer `sorted`: views are remade only
+    /// when the buffers changed (the slot is idle, so the set is not in use).
+    pub(crate) fn splat_texels_set(&mut self, sorted: usize) -> Result<vk::DescriptorSet> {
+        let device = self.ctx.device();
+        if self.splat_texels.is_none() {
+            let layout = splat_texels_set_layout(&self.ctx)?;
+            let sizes = [vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+                descriptor_count: 3,
+            }];
+            let info = vk::DescriptorPoolCreateInfo::default()
+                .max_sets(1)
+                .pool_sizes(&sizes);
+            let pool = match unsafe { device.create_descriptor_pool(&info, None) } {
+                Ok(p) => p,
+                Err(e) => {
+                    unsafe { device.destroy_descriptor_set_layout(layout, None) };
+                    return Err(e).vk("vkCreateDescriptorPool");
+                }
+            };
+            let layouts = [layout];
+            let alloc = vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(pool)
+                .set_layouts(&layouts);
+            let set = match unsafe { device.allocate_descriptor_sets(&alloc) } {
+                Ok(s) => s[0],
+                Err(e) => {
+                    unsafe {
+                        device.destroy_descriptor_pool(pool, None);
+                        device.destroy_descriptor_set_layout(layout, None);
+                    }
+                    return Err(e).vk("vkAllocateDescriptorSets");
+                }
+            };
+            self.splat_texels = Some(SplatTexelsSet {
+                layout,
+                pool,
+                set,
+                views: [vk::BufferView::null(); 3],
+                viewed: [vk::Buffer::null(); 3],
+            });
+        }
+        let f = self.resources.as_ref().unwrap();
+        let buffers = [
+            Some(&f.sort.values[sorted]),
+            Some(&f.splats),
+            f.cutoffs.as_ref(),
+        ];
+        let formats = [
+            vk::Format::R32_UINT,
+            vk::Format::R32G32B32A32_UINT,
+            vk::Format::R32G32B32A32_UINT,
+        ];
+        let texel_bytes = [4u64, 16, 16];
+        let max_texels = self.ctx.info().max_texel_buffer_elements as u64;
+        let texels = self.splat_texels.as_mut().unwrap();
+        for b in 0..3 {
+            let Some(buffer) = buffers[b] else { continue };
+            if texels.viewed[b] == buffer.raw {
+                continue;
+            }
+            let range = (buffer.size / texel_bytes[b]).min(max_texels) * texel_bytes[b];
+            let info = vk::BufferViewCreateInfo::default()
+                .buffer(buffer.raw)
+                .format(formats[b])
+                .offset(0)
+                .range(range);
+            let view =
+                unsafe { device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+            if texels.views[b] != vk::BufferView::null() {
+                unsafe { device.destroy_buffer_view(texels.views[b], None) };
+            }
+            texels.views[b] = view;
+            texels.viewed[b] = buffer.raw;
+            let views = [view];
+            let write = vk::WriteDescriptorSet::default()
+                .dst_set(texels.set)
+                .dst_binding(b as u32)
+                .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                .texel_buffer_view(&views);
+            unsafe { device.update_descriptor_sets(&[write], &[]) };
+        }
+        Ok(texels.set)
+    }
+
     /// The descriptor set holding `view` as the storage image at binding 0 (updated only when
     /// the view changed; the slot is idle, so the set is not in use).
     pub(crate) fn image_target_set(&mut self, view: vk::ImageView) -> Result<vk::DescriptorSet> {
@@ -376,6 +475,17 @@ impl FrameSlot {
 
 impl Drop for FrameSlot {
     fn drop(&mut self) {
+        if let Some(s) = self.splat_texels.take() {
+            unsafe {
+                for v in s.views {
+                    self.ctx.device().destroy_buffer_view(v, None);
+                }
+                self.ctx.device().destroy_descriptor_pool(s.pool, None);
+                self.ctx
+                    .device()
+                    .destroy_descriptor_set_layout(s.layout, None);
+            }
+        }
         if let Some(s) = self.image_set.take() {
             unsafe {
                 self.ctx.device().destroy_descriptor_pool(s.pool, None);

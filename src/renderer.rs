@@ -551,14 +551,25 @@ impl Renderer {
         };
         let (gx, gy) = tile_grid(w, h);
         let rara = options.clip.effective_mode() == ClipMode::Rara;
-        let (_capacity, rounds) =
-            slot.prepare(&self.prefix_sum, &self.sort, w, h, scene.count, rara)?;
+        self.rasterize.check_scene(&self.ctx, scene.count)?;
+        let (_capacity, rounds) = slot.prepare(
+            &self.prefix_sum,
+            &self.sort,
+            (w, h),
+            scene.count,
+            rara,
+            self.rasterize.pair_limit(&self.ctx),
+        )?;
         let image_set = match *target {
             Target::Image { view, .. } => Some(slot.image_target_set(view)?),
             Target::Buffer { .. } => None,
         };
         let sorted_index = self.sort.passes_for(key_bits(w, h)) as usize % 2;
         slot.resources.as_mut().unwrap().sorted = sorted_index;
+        let splat_texels = match self.rasterize.layout() {
+            RasterLayout::Strips => Some(slot.splat_texels_set(sorted_index)?),
+            RasterLayout::PixelPerInvocation => None,
+        };
         let f = slot.resources.as_ref().unwrap();
         let counters_readback = slot.counters_readback();
 
@@ -764,7 +775,7 @@ impl Renderer {
         };
         let cutoff_weight = rara.then_some(options.clip.weight);
         self.rasterize
-            .record(ctx, cmd, &push, (gx, gy), rounds, cutoff_weight);
+            .record(cmd, &push, (gx, gy), rounds, cutoff_weight, splat_texels);
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"rasterize");
 

@@ -7,7 +7,8 @@ use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
 use crate::clip::ClipWeight;
-use crate::error::Result;
+use crate::constants::MAX_INTERSECTIONS;
+use crate::error::{Error, Result, VkContext};
 use crate::shaders;
 use crate::vk::{compute_barrier, ComputePipeline, Context};
 
@@ -40,14 +41,19 @@ pub struct RasterizePush {
 
 const ROUND_FIRST: u32 = 1;
 
+/// Texels of `R32G32B32A32_UINT` per projected splat (64 bytes) in the strips kernels' view.
+const SPLAT_TEXELS: u64 = 4;
+
 /// How the rasterizer maps pixels to invocations. Both give the same image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterLayout {
     /// One invocation per pixel, 256 per tile (`rasterize.comp`): the layout for GPUs.
     PixelPerInvocation,
     /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*.comp`):
-    /// for CPU drivers such as lavapipe, where each staged splat is then loaded once for 32
-    /// pixels and a tile is one 8-lane SIMD vector.
+    /// for CPU drivers such as lavapipe, where each splat is then loaded once for 32 pixels
+    /// and a tile is one 8-lane SIMD vector. The kernels fetch the splats from uniform texel
+    /// buffers ([`splat_texels_set_layout`]), which caps a frame's pairs and a scene's
+    /// Gaussians ([`Rasterize::pair_limit`], [`Rasterize::check_scene`]).
     Strips,
 }
 
@@ -77,28 +83,68 @@ pub struct Rasterize {
     mass: ComputePipeline,
     length: ComputePipeline,
     layout: RasterLayout,
+    /// The strips kernels' descriptor set layout ([`splat_texels_set_layout`]).
+    set_layout: Option<vk::DescriptorSetLayout>,
+    ctx: Context,
+}
+
+/// Creates the layout of the strips kernels' descriptor set: the sorted pair values (binding
+/// 0, `R32_UINT`) and the projected splats (binding 1, `R32G32B32A32_UINT`, four texels per
+/// splat) as uniform texel buffers.
+pub fn splat_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
+    let binding = |b: u32| {
+        vk::DescriptorSetLayoutBinding::default()
+            .binding(b)
+            .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+            .descriptor_count(1)
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+    };
+    let bindings = [binding(0), binding(1), binding(2)];
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+    unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
+        .vk("vkCreateDescriptorSetLayout")
 }
 
 impl Rasterize {
     /// Builds the kernels in `layout`.
     pub fn new(ctx: &Context, layout: RasterLayout) -> Result<Self> {
-        let build = |name: &'static CStr, spirv: &[u32]| {
-            ComputePipeline::new::<RasterizePush>(ctx, name, spirv)
+        let set_layout = match layout {
+            RasterLayout::PixelPerInvocation => None,
+            RasterLayout::Strips => Some(splat_texels_set_layout(ctx)?),
         };
-        Ok(match layout {
-            RasterLayout::PixelPerInvocation => Rasterize {
-                plain: build(c"rasterize", shaders::RASTERIZE)?,
-                mass: build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
-                length: build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
+        let build = |name: &'static CStr, spirv: &[u32]| {
+            ComputePipeline::with_set_layout::<RasterizePush>(ctx, name, spirv, set_layout)
+        };
+        let kernels = (|| {
+            Ok(match layout {
+                RasterLayout::PixelPerInvocation => (
+                    build(c"rasterize", shaders::RASTERIZE)?,
+                    build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
+                    build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
+                ),
+                RasterLayout::Strips => (
+                    build(c"rasterize_strips", shaders::RASTERIZE_STRIPS)?,
+                    build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS)?,
+                    build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH)?,
+                ),
+            })
+        })();
+        match kernels {
+            Ok((plain, mass, length)) => Ok(Rasterize {
+                plain,
+                mass,
+                length,
                 layout,
-            },
-            RasterLayout::Strips => Rasterize {
-                plain: build(c"rasterize_strips", shaders::RASTERIZE_STRIPS)?,
-                mass: build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS)?,
-                length: build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH)?,
-                layout,
-            },
-        })
+                set_layout,
+                ctx: ctx.clone(),
+            }),
+            Err(e) => {
+                if let Some(l) = set_layout {
+                    unsafe { ctx.device().destroy_descriptor_set_layout(l, None) };
+                }
+                Err(e)
+            }
+        }
     }
 
     /// The layout the kernels were built in.
@@ -106,17 +152,45 @@ impl Rasterize {
         self.layout
     }
 
+    /// The most sorted pairs a frame may have: [`MAX_INTERSECTIONS`], and for the strips
+    /// kernels no more than a texel buffer holds (`maxTexelBufferElements`, 134,217,728 on
+    /// lavapipe). A frame with more is drawn incomplete, as at [`MAX_INTERSECTIONS`].
+    pub fn pair_limit(&self, ctx: &Context) -> u64 {
+        match self.layout {
+            RasterLayout::PixelPerInvocation => MAX_INTERSECTIONS,
+            RasterLayout::Strips => {
+                MAX_INTERSECTIONS.min(ctx.info().max_texel_buffer_elements as u64)
+            }
+        }
+    }
+
+    /// Whether the kernels can draw a scene of `gaussians`: the strips kernels read each
+    /// projected splat as 4 texels (and a cutoff record as 3) of one texel buffer.
+    pub fn check_scene(&self, ctx: &Context, gaussians: u32) -> Result<()> {
+        let max_texels = ctx.info().max_texel_buffer_elements as u64;
+        if self.layout == RasterLayout::Strips && gaussians as u64 * SPLAT_TEXELS > max_texels {
+            return Err(Error::InvalidInput(format!(
+                "{gaussians} Gaussians exceed the {} the strips rasterizer can read on this \
+                 device ({SPLAT_TEXELS} texels each, maxTexelBufferElements = {max_texels}); \
+                 RARA_RASTER=pixels selects the other layout",
+                max_texels / SPLAT_TEXELS
+            )));
+        }
+        Ok(())
+    }
+
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
     /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping,
-    /// `None` when no splat is cutoff.
+    /// `None` when no splat is cutoff. The strips kernels need `splat_texels`, the frame's
+    /// set of [`splat_texels_set_layout`].
     pub fn record(
         &self,
-        ctx: &Context,
         cmd: vk::CommandBuffer,
         push: &RasterizePush,
         tiles: (u32, u32),
         rounds: u32,
         cutoff_weight: Option<ClipWeight>,
+        splat_texels: Option<vk::DescriptorSet>,
     ) {
         let pipeline = match cutoff_weight {
             None => &self.plain,
@@ -127,10 +201,21 @@ impl Rasterize {
             let mut p = *push;
             p.round_index = round;
             p.flags = if round == 0 { ROUND_FIRST } else { 0 };
-            pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]);
-            if round + 1 < rounds {
-                compute_barrier(ctx, cmd);
+            match splat_texels {
+                Some(set) => pipeline.dispatch_with_set(cmd, &p, set, [tiles.0, tiles.1, 1]),
+                None => pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]),
             }
+            if round + 1 < rounds {
+                compute_barrier(&self.ctx, cmd);
+            }
+        }
+    }
+}
+
+impl Drop for Rasterize {
+    fn drop(&mut self) {
+        if let Some(l) = self.set_layout {
+            unsafe { self.ctx.device().destroy_descriptor_set_layout(l, None) };
         }
     }
 }

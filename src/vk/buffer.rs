@@ -63,6 +63,8 @@ impl Buffer {
             });
         }
         let device = ctx.device();
+        // Uniform texel buffer: the strips rasterizer reads the projected splats, sorted pairs
+        // and cutoff records through texel-buffer views (`stages::rasterize`).
         let info = vk::BufferCreateInfo::default()
             .size(size)
             .usage(
@@ -70,7 +72,8 @@ impl Buffer {
                     | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
                     | vk::BufferUsageFlags::TRANSFER_SRC
                     | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER
+                    | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
             )
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;

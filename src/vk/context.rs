@@ -81,6 +81,8 @@ pub struct DeviceInfo {
     /// Largest single memory allocation (`maxMemoryAllocationSize`): a buffer larger than this
     /// is refused with [`crate::Error::OutOfDeviceMemory`] before Vulkan is asked.
     pub max_memory_allocation_size: u64,
+    /// `maxTexelBufferElements`: the most texels a buffer view holds.
+    pub max_texel_buffer_elements: u32,
     /// Size of the largest device-local memory heap (lavapipe reports 2 GiB but does not
     /// enforce it: its memory is the host's).
     pub device_local_heap_bytes: u64,
@@ -667,6 +669,7 @@ fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
         subgroup_size: subgroup.subgroup_size,
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+        max_texel_buffer_elements: props.limits.max_texel_buffer_elements,
         device_local_heap_bytes,
         pipeline_statistics: unsafe { instance.get_physical_device_features(pd) }
             .pipeline_statistics_query
