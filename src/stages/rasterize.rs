@@ -44,6 +44,22 @@ const ROUND_FIRST: u32 = 1;
 /// Texels of `R32G32B32A32_UINT` per projected splat (64 bytes) in the strips kernels' view.
 const SPLAT_TEXELS: u64 = 4;
 
+/// Whether the strips kernels' texel view of the projected splats holds a scene of
+/// `gaussians` on a device with `max_texels` texels per view (the cutoff records take 3 per
+/// Gaussian, so they fit too).
+fn strips_scene_fits(gaussians: u32, max_texels: u32) -> Result<()> {
+    let max_texels = max_texels as u64;
+    if gaussians as u64 * SPLAT_TEXELS > max_texels {
+        return Err(Error::InvalidInput(format!(
+            "{gaussians} Gaussians exceed the {} the strips rasterizer can read on this device \
+             ({SPLAT_TEXELS} texels each, maxTexelBufferElements = {max_texels}); \
+             RARA_RASTER=pixels selects the other layout",
+            max_texels / SPLAT_TEXELS
+        )));
+    }
+    Ok(())
+}
+
 /// How the rasterizer maps pixels to invocations. Both give the same image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterLayout {
@@ -167,16 +183,12 @@ impl Rasterize {
     /// Whether the kernels can draw a scene of `gaussians`: the strips kernels read each
     /// projected splat as 4 texels (and a cutoff record as 3) of one texel buffer.
     pub fn check_scene(&self, ctx: &Context, gaussians: u32) -> Result<()> {
-        let max_texels = ctx.info().max_texel_buffer_elements as u64;
-        if self.layout == RasterLayout::Strips && gaussians as u64 * SPLAT_TEXELS > max_texels {
-            return Err(Error::InvalidInput(format!(
-                "{gaussians} Gaussians exceed the {} the strips rasterizer can read on this \
-                 device ({SPLAT_TEXELS} texels each, maxTexelBufferElements = {max_texels}); \
-                 RARA_RASTER=pixels selects the other layout",
-                max_texels / SPLAT_TEXELS
-            )));
+        match self.layout {
+            RasterLayout::PixelPerInvocation => Ok(()),
+            RasterLayout::Strips => {
+                strips_scene_fits(gaussians, ctx.info().max_texel_buffer_elements)
+            }
         }
-        Ok(())
     }
 
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
@@ -217,5 +229,20 @@ impl Drop for Rasterize {
         if let Some(l) = self.set_layout {
             unsafe { self.ctx.device().destroy_descriptor_set_layout(l, None) };
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strips_scene_limit_is_a_quarter_of_the_texels() {
+        // lavapipe's maxTexelBufferElements, and the spec's minimum.
+        assert!(strips_scene_fits(33_554_432, 134_217_728).is_ok());
+        let err = strips_scene_fits(33_554_433, 134_217_728).unwrap_err();
+        assert!(err.to_string().contains("RARA_RASTER=pixels"), "{err}");
+        assert!(strips_scene_fits(16_384, 65_536).is_ok());
+        assert!(strips_scene_fits(16_385, 65_536).is_err());
     }
 }
