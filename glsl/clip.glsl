@@ -4,6 +4,7 @@
 #ifndef RARA_CLIP_GLSL
 #define RARA_CLIP_GLSL
 
+#extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
 
 // The clip region and mode of a frame (GpuClipParams on the host).
@@ -49,18 +50,35 @@ void store_cutoff_record(CutoffRecords records, uint i, CutoffRecord rec) {
 // Unbounded end of a ray interval: finite so no inf - inf, far enough that Phi is 0 or 1.
 #define UNBOUNDED 1e30
 
-// Signed distance of a centre to the visible set, positive inside.
-float clip_signed_distance(ClipParamsRef clip, vec3 p) {
-    uvec4 config = clip.p.config;
+// The whole ClipParams, at constant offsets from `ref`. Call it at the top of main(), before any
+// branch or return: Mesa's gallivm then loads each word once per SIMD vector (the address is
+// a push constant), where under a mask it runs a scalar loop over the lanes per word.
+ClipParams load_clip_params(ClipParamsRef ref) {
+    uint64_t a = uint64_t(ref);
+    ClipParams c;
+    c.config = load_uvec4(a);
+    c.band = load_vec4(a + 16ul);
+    c.sphere = load_vec4(a + 32ul);
+    [[unroll]] for (uint k = 0u; k < MAX_CLIP_PLANES; ++k) {
+        c.planes[k] = load_vec4(a + 48ul + 16ul * uint64_t(k));
+    }
+    return c;
+}
+
+// Signed distance of a centre to the visible set, positive inside. The planes are all
+// visited, the unused ones ignored: a dynamic index would cost a CPU driver a scalar loop
+// over the lanes per plane.
+float clip_signed_distance(ClipParams clip, vec3 p) {
+    uvec4 config = clip.config;
     float s;
     if ((config.z & CLIP_FLAG_SPHERE) != 0u) {
-        vec4 sphere = clip.p.sphere;
+        vec4 sphere = clip.sphere;
         s = sphere.w - length(p - sphere.xyz);
     } else {
         s = UNBOUNDED;
-        for (uint k = 0u; k < config.w; ++k) {
-            vec4 pl = clip.p.planes[k];
-            s = min(s, dot(pl.xyz, p) + pl.w);
+        [[unroll]] for (uint k = 0u; k < MAX_CLIP_PLANES; ++k) {
+            vec4 pl = clip.planes[k];
+            s = k < config.w ? min(s, dot(pl.xyz, p) + pl.w) : s;
         }
     }
     return (config.z & CLIP_FLAG_INVERT) != 0u ? -s : s;
@@ -68,8 +86,8 @@ float clip_signed_distance(ClipParamsRef clip, vec3 p) {
 
 // CLASS_DROPPED, CLASS_DRAWN or CLASS_CUTOFF for a Gaussian with centre mu and standard
 // deviations scale.
-uint clip_classify(ClipParamsRef clip, vec3 mu, vec3 scale) {
-    uvec4 config = clip.p.config;
+uint clip_classify(ClipParams clip, vec3 mu, vec3 scale) {
+    uvec4 config = clip.config;
     if (config.x == CLIP_MODE_NONE) {
         return CLASS_DRAWN;
     }
@@ -77,7 +95,7 @@ uint clip_classify(ClipParamsRef clip, vec3 mu, vec3 scale) {
     if (config.x == CLIP_MODE_HARD) {
         return s >= 0.0 ? CLASS_DRAWN : CLASS_DROPPED;
     }
-    float r = clip.p.band.x * max(scale.x, max(scale.y, scale.z));
+    float r = clip.band.x * max(scale.x, max(scale.y, scale.z));
     if (s < -r) {
         return CLASS_DROPPED;
     }

@@ -25,11 +25,12 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
+    // Before any branch: once per SIMD vector on a CPU driver (load_clip_params in clip.glsl).
+    FrameParams f = load_frame_params(pc.frame);
     uint k = linear_index();
     if (k >= pc.counters.v[COUNTER_CUTOFF]) {
         return;
     }
-    FrameParams f = load_frame_params(pc.frame);
     uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
     uint i = first.y;
     ProjectedSplat p = load_splat(pc.splats, i);

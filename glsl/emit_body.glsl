@@ -29,6 +29,8 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
+    // Before any branch: once per SIMD vector on a CPU driver (load_clip_params in clip.glsl).
+    FrameParams f = load_frame_params(pc.frame);
     uint j = linear_index();
 #ifdef RECORD_CUTOFF_PAIRS
     if (j == 0u) {
@@ -38,7 +40,6 @@ void main() {
     if (j >= pc.drawn.v[0]) {
         return;
     }
-    FrameParams f = load_frame_params(pc.frame);
     uint i = pc.order.v[j];
     ProjectedSplat p = load_splat(pc.splats, i);
     uvec4 rect = p.rect;
