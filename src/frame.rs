@@ -12,9 +12,9 @@ use crate::error::{Result, VkContext};
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
 use crate::renderer::FrameStats;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
-use crate::stages::rasterize::splat_texels_set_layout;
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::write_target::image_target_set_layout;
+use crate::stages::{frame_texels_set_layout, FRAME_TEXEL_BINDINGS};
 use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// Smallest intersection capacity a slot starts with.
@@ -43,7 +43,7 @@ pub struct FrameSlot {
     /// What the last recorded frame had, to judge its counters.
     recorded: Option<(u64, u32)>,
     image_set: Option<ImageTargetSet>,
-    splat_texels: Option<SplatTexelsSet>,
+    frame_texels: Option<FrameTexelsSet>,
 }
 
 /// The device memory of a [`FrameSlot`], grouped by what it scales with: the per-frame
@@ -117,14 +117,28 @@ pub(crate) struct FrameResources {
     pub(crate) sorted: usize,
 }
 
-/// The descriptor pool and set of the strips rasterizer: texel-buffer views of the projected
-/// splats and of the sorted pair values, made for the buffers in `viewed`.
-struct SplatTexelsSet {
+/// The descriptor pool and set of the frame's texel views ([`frame_texels_set_layout`]), made
+/// for the buffers in `viewed`.
+struct FrameTexelsSet {
     layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
-    views: [vk::BufferView; 3],
-    viewed: [vk::Buffer; 3],
+    views: [vk::BufferView; FRAME_TEXEL_BINDINGS as usize],
+    viewed: [vk::Buffer; FRAME_TEXEL_BINDINGS as usize],
+}
+
+impl FrameTexelsSet {
+    /// Destroys the views (before their buffers are freed: a new buffer may get a freed
+    /// one's handle).
+    fn forget_views(&mut self, device: &ash::Device) {
+        for (view, viewed) in self.views.iter_mut().zip(&mut self.viewed) {
+            if *view != vk::BufferView::null() {
+                unsafe { device.destroy_buffer_view(*view, None) };
+            }
+            *view = vk::BufferView::null();
+            *viewed = vk::Buffer::null();
+        }
+    }
 }
 
 /// The descriptor pool and set that hold an image target's view.
@@ -151,7 +165,7 @@ impl FrameSlot {
             rounds: 1,
             recorded: None,
             image_set: None,
-            splat_texels: None,
+            frame_texels: None,
         })
     }
 
@@ -257,6 +271,9 @@ impl FrameSlot {
                 && f.capacity >= capacity
         });
         if !fits {
+            if let Some(t) = &mut self.frame_texels {
+                t.forget_views(self.ctx.device());
+            }
             self.resources = None; // free the old buffers first
             let ctx = &self.ctx;
             let gpu = MemoryLocation::GpuOnly;
@@ -305,6 +322,9 @@ impl FrameSlot {
                 .is_some_and(|b| b.size >= cutoff_bytes)
         {
             // Free the old buffers first.
+            if let Some(t) = &mut self.frame_texels {
+                t.forget_views(self.ctx.device());
+            }
             frame.cutoffs = None;
             frame.cutoff_pairs = None;
             frame.cutoffs = Some(Buffer::new(
@@ -329,16 +349,21 @@ impl FrameSlot {
         &self.counters_readback
     }
 
-    /// The strips rasterizer's descriptor set ([`splat_texels_set_layout`]) for the frame
-    /// `prepare` sized, whose sorted pairs are in sort buffer `sorted`: views are remade only
-    /// when the buffers changed (the slot is idle, so the set is not in use).
-    pub(crate) fn splat_texels_set(&mut self, sorted: usize) -> Result<vk::DescriptorSet> {
+    /// The descriptor set of the frame's texel views ([`frame_texels_set_layout`]) for the
+    /// frame `prepare` sized, whose sorted pairs are in sort buffer `sorted` and drawn
+    /// Gaussians in depth order in depth-sort buffer `depth_sorted`: views are remade only when
+    /// the buffers changed (the slot is idle, so the set is not in use).
+    pub(crate) fn frame_texels_set(
+        &mut self,
+        sorted: usize,
+        depth_sorted: usize,
+    ) -> Result<vk::DescriptorSet> {
         let device = self.ctx.device();
-        if self.splat_texels.is_none() {
-            let layout = splat_texels_set_layout(&self.ctx)?;
+        if self.frame_texels.is_none() {
+            let layout = frame_texels_set_layout(&self.ctx)?;
             let sizes = [vk::DescriptorPoolSize {
                 ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
-                descriptor_count: 3,
+                descriptor_count: FRAME_TEXEL_BINDINGS,
             }];
             let info = vk::DescriptorPoolCreateInfo::default()
                 .max_sets(1)
@@ -364,12 +389,12 @@ impl FrameSlot {
                     return Err(e).vk("vkAllocateDescriptorSets");
                 }
             };
-            self.splat_texels = Some(SplatTexelsSet {
+            self.frame_texels = Some(FrameTexelsSet {
                 layout,
                 pool,
                 set,
-                views: [vk::BufferView::null(); 3],
-                viewed: [vk::Buffer::null(); 3],
+                views: [vk::BufferView::null(); FRAME_TEXEL_BINDINGS as usize],
+                viewed: [vk::Buffer::null(); FRAME_TEXEL_BINDINGS as usize],
             });
         }
         let f = self.resources.as_ref().unwrap();
@@ -377,16 +402,15 @@ impl FrameSlot {
             Some(&f.sort.values[sorted]),
             Some(&f.splats),
             f.cutoffs.as_ref(),
+            Some(&f.depth_sort.values[depth_sorted]),
+            Some(&f.slots),
         ];
-        let formats = [
-            vk::Format::R32_UINT,
-            vk::Format::R32G32B32A32_UINT,
-            vk::Format::R32G32B32A32_UINT,
-        ];
-        let texel_bytes = [4u64, 16, 16];
+        let (r32, rgba32) = (vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT);
+        let formats = [r32, rgba32, rgba32, r32, r32];
+        let texel_bytes = [4u64, 16, 16, 4, 4];
         let max_texels = self.ctx.info().max_texel_buffer_elements as u64;
-        let texels = self.splat_texels.as_mut().unwrap();
-        for b in 0..3 {
+        let texels = self.frame_texels.as_mut().unwrap();
+        for b in 0..FRAME_TEXEL_BINDINGS as usize {
             let Some(buffer) = buffers[b] else { continue };
             if texels.viewed[b] == buffer.raw {
                 continue;
@@ -475,11 +499,9 @@ impl FrameSlot {
 
 impl Drop for FrameSlot {
     fn drop(&mut self) {
-        if let Some(s) = self.splat_texels.take() {
+        if let Some(mut s) = self.frame_texels.take() {
+            s.forget_views(self.ctx.device());
             unsafe {
-                for v in s.views {
-                    self.ctx.device().destroy_buffer_view(v, None);
-                }
                 self.ctx.device().destroy_descriptor_pool(s.pool, None);
                 self.ctx
                     .device()

@@ -306,7 +306,7 @@ impl Renderer {
             project: Project::new(ctx)?,
             prefix_sum: PrefixSum::new(ctx)?,
             depth_order: DepthOrder::new(ctx)?,
-            emit: Emit::new(ctx)?,
+            emit: Emit::new(ctx, layout == RasterLayout::Strips)?,
             cutoff_tiles: CutoffTiles::new(ctx)?,
             cutoff_tile_classes: true,
             sort: RadixSort::new(ctx)?,
@@ -566,8 +566,10 @@ impl Renderer {
         };
         let sorted_index = self.sort.passes_for(key_bits(w, h)) as usize % 2;
         slot.resources.as_mut().unwrap().sorted = sorted_index;
-        let splat_texels = match self.rasterize.layout() {
-            RasterLayout::Strips => Some(slot.splat_texels_set(sorted_index)?),
+        // The kernels that read through texel buffers on CPU drivers (rasterize, emit).
+        let depth_sorted_index = self.sort.passes_for(DEPTH_KEY_BITS) as usize % 2;
+        let frame_texels = match self.rasterize.layout() {
+            RasterLayout::Strips => Some(slot.frame_texels_set(sorted_index, depth_sorted_index)?),
             RasterLayout::PixelPerInvocation => None,
         };
         let f = slot.resources.as_ref().unwrap();
@@ -678,6 +680,7 @@ impl Renderer {
             &DEPTH_SORT_LABELS,
             Some(&mut *timer),
         );
+        debug_assert_eq!(depth_sorted, depth_sorted_index);
         let depth_order = f.depth_sort.values[depth_sorted].address;
 
         // Each drawn Gaussian's first pair, in depth order.
@@ -713,8 +716,13 @@ impl Renderer {
             cutoff_args: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_ARGS_OFFSET),
             cutoff_pairs: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
         };
-        self.emit
-            .record(cmd, &push, scene.count, cutoff_pairs.is_some());
+        self.emit.record(
+            cmd,
+            &push,
+            scene.count,
+            cutoff_pairs.is_some(),
+            frame_texels,
+        );
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"emit");
 
@@ -775,7 +783,7 @@ impl Renderer {
         };
         let cutoff_weight = rara.then_some(options.clip.weight);
         self.rasterize
-            .record(cmd, &push, (gx, gy), rounds, cutoff_weight, splat_texels);
+            .record(cmd, &push, (gx, gy), rounds, cutoff_weight, frame_texels);
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"rasterize");
 

@@ -2,7 +2,11 @@
 //! `record` that only appends dispatches (and barriers) to a command buffer; the GLSL lives
 //! in `glsl/<stage>.comp` and the CPU twin in `reference`.
 
+use ash::vk;
+
 use crate::constants::{LINEAR_GRID_X, LINEAR_WORKGROUP};
+use crate::error::{Result, VkContext};
+use crate::vk::Context;
 
 pub mod cutoff_tiles;
 pub mod depth_order;
@@ -20,3 +24,27 @@ pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
     let groups = items.div_ceil(LINEAR_WORKGROUP);
     [groups.min(LINEAR_GRID_X), groups.div_ceil(LINEAR_GRID_X), 1]
 }
+
+/// Creates the layout of the frame's texel views, descriptor set 0 of the kernels that read
+/// through texel buffers on CPU drivers (the strips rasterizer and emit; see
+/// `glsl/rasterize_body.glsl`), all uniform texel buffers: 0 the sorted pair values
+/// (`R32_UINT`), 1 the projected splats (`R32G32B32A32_UINT`, 4 texels each), 2 the cutoff
+/// records (`R32G32B32A32_UINT`, 3 texels each), 3 the drawn Gaussians in depth order and 4
+/// their first pairs (both `R32_UINT`). A kernel declares only the bindings it reads.
+pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
+    let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..FRAME_TEXEL_BINDINGS)
+        .map(|b| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(b)
+                .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+    unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
+        .vk("vkCreateDescriptorSetLayout")
+}
+
+/// Bindings of [`frame_texels_set_layout`].
+pub const FRAME_TEXEL_BINDINGS: u32 = 5;

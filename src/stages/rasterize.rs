@@ -6,9 +6,10 @@ use bytemuck::{Pod, Zeroable};
 
 use std::ffi::CStr;
 
+use super::frame_texels_set_layout;
 use crate::clip::ClipWeight;
 use crate::constants::MAX_INTERSECTIONS;
-use crate::error::{Error, Result, VkContext};
+use crate::error::{Error, Result};
 use crate::shaders;
 use crate::vk::{compute_barrier, ComputePipeline, Context};
 
@@ -68,7 +69,7 @@ pub enum RasterLayout {
     /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*.comp`):
     /// for CPU drivers such as lavapipe, where each splat is then loaded once for 32 pixels
     /// and a tile is one 8-lane SIMD vector. The kernels fetch the splats from uniform texel
-    /// buffers ([`splat_texels_set_layout`]), which caps a frame's pairs and a scene's
+    /// buffers ([`frame_texels_set_layout`]), which caps a frame's pairs and a scene's
     /// Gaussians ([`Rasterize::pair_limit`], [`Rasterize::check_scene`]).
     Strips,
 }
@@ -99,26 +100,9 @@ pub struct Rasterize {
     mass: ComputePipeline,
     length: ComputePipeline,
     layout: RasterLayout,
-    /// The strips kernels' descriptor set layout ([`splat_texels_set_layout`]).
+    /// The strips kernels' descriptor set layout ([`frame_texels_set_layout`]).
     set_layout: Option<vk::DescriptorSetLayout>,
     ctx: Context,
-}
-
-/// Creates the layout of the strips kernels' descriptor set: the sorted pair values (binding
-/// 0, `R32_UINT`) and the projected splats (binding 1, `R32G32B32A32_UINT`, four texels per
-/// splat) as uniform texel buffers.
-pub fn splat_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
-    let binding = |b: u32| {
-        vk::DescriptorSetLayoutBinding::default()
-            .binding(b)
-            .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
-            .descriptor_count(1)
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
-    };
-    let bindings = [binding(0), binding(1), binding(2)];
-    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-    unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
-        .vk("vkCreateDescriptorSetLayout")
 }
 
 impl Rasterize {
@@ -126,7 +110,7 @@ impl Rasterize {
     pub fn new(ctx: &Context, layout: RasterLayout) -> Result<Self> {
         let set_layout = match layout {
             RasterLayout::PixelPerInvocation => None,
-            RasterLayout::Strips => Some(splat_texels_set_layout(ctx)?),
+            RasterLayout::Strips => Some(frame_texels_set_layout(ctx)?),
         };
         let build = |name: &'static CStr, spirv: &[u32]| {
             ComputePipeline::with_set_layout::<RasterizePush>(ctx, name, spirv, set_layout)
@@ -193,8 +177,8 @@ impl Rasterize {
 
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
     /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping,
-    /// `None` when no splat is cutoff. The strips kernels need `splat_texels`, the frame's
-    /// set of [`splat_texels_set_layout`].
+    /// `None` when no splat is cutoff. The strips kernels need `frame_texels`, the frame's
+    /// set of [`frame_texels_set_layout`].
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -202,7 +186,7 @@ impl Rasterize {
         tiles: (u32, u32),
         rounds: u32,
         cutoff_weight: Option<ClipWeight>,
-        splat_texels: Option<vk::DescriptorSet>,
+        frame_texels: Option<vk::DescriptorSet>,
     ) {
         let pipeline = match cutoff_weight {
             None => &self.plain,
@@ -213,7 +197,7 @@ impl Rasterize {
             let mut p = *push;
             p.round_index = round;
             p.flags = if round == 0 { ROUND_FIRST } else { 0 };
-            match splat_texels {
+            match frame_texels {
                 Some(set) => pipeline.dispatch_with_set(cmd, &p, set, [tiles.0, tiles.1, 1]),
                 None => pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]),
             }
