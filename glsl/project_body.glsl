@@ -25,6 +25,25 @@ layout(push_constant) uniform Push {
     CutoffRecords cutoffs;  // out: one record per cutoff Gaussian, packed
 } pc;
 
+#ifdef SCENE_TEXELS
+// The scene's Gaussians, 3 texels each (binding 5 of the frame's texel views; CPU drivers: a
+// gather instead of a scalar loop over the lanes per 64-bit word).
+layout(set = 0, binding = 5) uniform utextureBuffer gaussian_texels;
+
+Gaussian fetch_gaussian(uint i) {
+    int t = int(i) * 3;
+    Gaussian g;
+    g.pos_opacity = uintBitsToFloat(texelFetch(gaussian_texels, t));
+    g.rot = uintBitsToFloat(texelFetch(gaussian_texels, t + 1));
+    g.scale = uintBitsToFloat(texelFetch(gaussian_texels, t + 2));
+    return g;
+}
+#else
+Gaussian fetch_gaussian(uint i) {
+    return load_gaussian(pc.gaussians, i);
+}
+#endif
+
 shared uint wg_cutoff_count;
 shared uint wg_cutoff_base;
 
@@ -45,7 +64,7 @@ void skip(uint i) {
 
 // Projects Gaussian i; returns true when it is drawn as cutoff, with its side record in rec.
 bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
-    Gaussian g = load_gaussian(pc.gaussians, i);
+    Gaussian g = fetch_gaussian(i);
     vec3 mu = g.pos_opacity.xyz;
     uint kind = clip_classify(clip, mu, g.scale.xyz);
     if (kind == CLASS_DROPPED) {

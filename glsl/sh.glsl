@@ -2,6 +2,9 @@
 // `sh` holds the Gaussian's coefficients coefficient-major: value base + 3 * k + channel,
 // 32-bit floats or (with SH_HALF) half floats.
 #extension GL_EXT_control_flow_attributes : require
+#ifdef SCENE_TEXELS
+#extension GL_EXT_samplerless_texture_functions : require
+#endif
 #ifndef RARA_SH_GLSL
 #define RARA_SH_GLSL
 
@@ -40,6 +43,54 @@ const float SH_C3[7] = float[7](-0.5900435899266435, 2.890611442640554, -0.45704
 #define SH_WORDS ((SH_VALUES + 2 * (SH_PER_WORD - 1)) / SH_PER_WORD)
 #endif
 
+#ifdef SCENE_TEXELS
+// The same from the scene's texel view of the coefficients (binding 6 of the frame's texel
+// views; CPU drivers): texels of four values, RGBA32_UINT for floats, RG32_UINT for half
+// floats. A texel fetch is a gather where a buffer load is a scalar loop over the lanes. The
+// Gaussian's values start `skip` values into its first texel; the fetches stop at the view's
+// last texel (the values past the scene's last are not used).
+layout(set = 0, binding = 6) uniform utextureBuffer sh_texels;
+#if SH_VALUES % 4 == 0
+#define SH_TEXELS (SH_VALUES / 4)
+#else
+#define SH_TEXELS ((SH_VALUES + 6) / 4)
+#endif
+
+void load_sh(uint base, out float values[SH_VALUES]) {
+    uint skip = base % 4u;
+    int first = int(base / 4u);
+    int last = textureSize(sh_texels) - 1;
+    float packed[SH_TEXELS * 4];
+    [[unroll]] for (int j = 0; j < SH_TEXELS; ++j) {
+        uvec4 t = texelFetch(sh_texels, min(first + j, last));
+#ifdef SH_HALF
+        vec2 lo = unpackHalf2x16(t.x);
+        vec2 hi = unpackHalf2x16(t.y);
+        packed[4 * j] = lo.x;
+        packed[4 * j + 1] = lo.y;
+        packed[4 * j + 2] = hi.x;
+        packed[4 * j + 3] = hi.y;
+#else
+        packed[4 * j] = uintBitsToFloat(t.x);
+        packed[4 * j + 1] = uintBitsToFloat(t.y);
+        packed[4 * j + 2] = uintBitsToFloat(t.z);
+        packed[4 * j + 3] = uintBitsToFloat(t.w);
+#endif
+    }
+    [[unroll]] for (uint k = 0u; k < uint(SH_VALUES); ++k) {
+        float v = packed[k];
+#if SH_VALUES % 4 != 0
+        [[unroll]] for (uint o = 1u; o < 4u; ++o) {
+            v = skip == o ? packed[k + o] : v;
+        }
+#endif
+        values[k] = v;
+    }
+}
+#define LOAD_SH(sh, base, values) load_sh(base, values)
+#else
+#define LOAD_SH(sh, base, values) load_sh(sh, base, values)
+
 void load_sh(ShCoefficients sh, uint base, out float values[SH_VALUES]) {
     uint skip = base % uint(SH_PER_WORD);
     U64s words = U64s(uint64_t(sh) + SH_VALUE_BYTES * uint64_t(base - skip));
@@ -69,6 +120,8 @@ void load_sh(ShCoefficients sh, uint base, out float values[SH_VALUES]) {
     }
 }
 
+#endif
+
 // Coefficient k (its three channels) of the loaded values.
 #define SH_COEF(k) vec3(values[3u * (k)], values[3u * (k) + 1u], values[3u * (k) + 2u])
 
@@ -77,7 +130,7 @@ void load_sh(ShCoefficients sh, uint base, out float values[SH_VALUES]) {
 // degree 0: the project pass 30 -> 24 ms without the masked bands 1-3).
 vec3 eval_sh(ShCoefficients sh, uint base, vec3 dir) {
     float values[SH_VALUES];
-    load_sh(sh, base, values);
+    LOAD_SH(sh, base, values);
     vec3 result = SH_C0 * SH_COEF(0u);
 #if SH_DEGREE > 0
     float x = dir.x, y = dir.y, z = dir.z;

@@ -11,10 +11,14 @@ use crate::constants::{
 use crate::error::{Result, VkContext};
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
 use crate::renderer::FrameStats;
+use crate::renderer::GpuScene;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::write_target::image_target_set_layout;
-use crate::stages::{frame_texels_set_layout, FRAME_TEXEL_BINDINGS};
+use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
+
+/// The first binding of [`frame_texels_set_layout`] that views the scene's buffers.
+const FIRST_SCENE_BINDING: usize = 5;
 use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// Smallest intersection capacity a slot starts with.
@@ -125,13 +129,23 @@ struct FrameTexelsSet {
     set: vk::DescriptorSet,
     views: [vk::BufferView; FRAME_TEXEL_BINDINGS as usize],
     viewed: [vk::Buffer; FRAME_TEXEL_BINDINGS as usize],
+    /// The [`GpuScene`] the scene views (bindings 5 and 6) are of.
+    scene_id: u64,
 }
 
 impl FrameTexelsSet {
     /// Destroys the views (before their buffers are freed: a new buffer may get a freed
     /// one's handle).
     fn forget_views(&mut self, device: &ash::Device) {
-        for (view, viewed) in self.views.iter_mut().zip(&mut self.viewed) {
+        self.forget_views_from(device, 0);
+    }
+
+    /// Destroys the views of bindings `first..`.
+    fn forget_views_from(&mut self, device: &ash::Device, first: usize) {
+        for (view, viewed) in self.views[first..]
+            .iter_mut()
+            .zip(&mut self.viewed[first..])
+        {
             if *view != vk::BufferView::null() {
                 unsafe { device.destroy_buffer_view(*view, None) };
             }
@@ -351,12 +365,13 @@ impl FrameSlot {
 
     /// The descriptor set of the frame's texel views ([`frame_texels_set_layout`]) for the
     /// frame `prepare` sized, whose sorted pairs are in sort buffer `sorted` and drawn
-    /// Gaussians in depth order in depth-sort buffer `depth_sorted`: views are remade only when
-    /// the buffers changed (the slot is idle, so the set is not in use).
+    /// Gaussians in depth order in depth-sort buffer `depth_sorted`, of `scene`: views are
+    /// remade only when the buffers changed (the slot is idle, so the set is not in use).
     pub(crate) fn frame_texels_set(
         &mut self,
         sorted: usize,
         depth_sorted: usize,
+        scene: &GpuScene,
     ) -> Result<vk::DescriptorSet> {
         let device = self.ctx.device();
         if self.frame_texels.is_none() {
@@ -395,21 +410,31 @@ impl FrameSlot {
                 set,
                 views: [vk::BufferView::null(); FRAME_TEXEL_BINDINGS as usize],
                 viewed: [vk::Buffer::null(); FRAME_TEXEL_BINDINGS as usize],
+                scene_id: 0,
             });
         }
         let f = self.resources.as_ref().unwrap();
+        let (gaussians, sh, scene_id) = scene.buffers();
         let buffers = [
             Some(&f.sort.values[sorted]),
             Some(&f.splats),
             f.cutoffs.as_ref(),
             Some(&f.depth_sort.values[depth_sorted]),
             Some(&f.slots),
+            Some(gaussians),
+            Some(sh),
         ];
         let (r32, rgba32) = (vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT);
-        let formats = [r32, rgba32, rgba32, r32, r32];
-        let texel_bytes = [4u64, 16, 16, 4, 4];
+        let (sh_format, sh_texel_bytes) = sh_texel(scene.sh_precision());
+        let formats = [r32, rgba32, rgba32, r32, r32, rgba32, sh_format];
+        let texel_bytes = [4u64, 16, 16, 4, 4, 16, sh_texel_bytes];
         let max_texels = self.ctx.info().max_texel_buffer_elements as u64;
         let texels = self.frame_texels.as_mut().unwrap();
+        if texels.scene_id != scene_id {
+            // A freed scene's buffer handles may come back: key the scene views by the scene.
+            texels.forget_views_from(device, FIRST_SCENE_BINDING);
+            texels.scene_id = scene_id;
+        }
         for b in 0..FRAME_TEXEL_BINDINGS as usize {
             let Some(buffer) = buffers[b] else { continue };
             if texels.viewed[b] == buffer.raw {

@@ -65,7 +65,13 @@ pub struct GpuScene {
     count: u32,
     sh_degree: u32,
     sh_precision: ShPrecision,
+    /// Unique per upload into new buffers: frame slots key their texel views of the scene by
+    /// it (a freed buffer's handle may come back).
+    id: u64,
 }
+
+/// The next [`GpuScene`] id.
+static NEXT_SCENE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 impl GpuScene {
     /// Bytes the SH buffer holds past the last coefficient, counted in
@@ -96,6 +102,7 @@ impl GpuScene {
             count: 0,
             sh_degree: scene.sh_degree,
             sh_precision: precision,
+            id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         gpu_scene.upload(scene)?;
         Ok(gpu_scene)
@@ -143,6 +150,11 @@ impl GpuScene {
             return Ok(());
         }
         self.upload(scene)
+    }
+
+    /// The Gaussians' and the SH coefficients' buffers, and the scene's id.
+    pub(crate) fn buffers(&self) -> (&Buffer, &Buffer, u64) {
+        (&self.gaussians, &self.sh, self.id)
     }
 
     /// How the SH coefficients are stored.
@@ -303,7 +315,7 @@ impl Renderer {
     pub fn with_raster_layout(ctx: &Context, layout: RasterLayout) -> Result<Self> {
         Ok(Renderer {
             ctx: ctx.clone(),
-            project: Project::new(ctx)?,
+            project: Project::new(ctx, layout == RasterLayout::Strips)?,
             prefix_sum: PrefixSum::new(ctx)?,
             depth_order: DepthOrder::new(ctx)?,
             emit: Emit::new(ctx, layout == RasterLayout::Strips)?,
@@ -551,7 +563,7 @@ impl Renderer {
         };
         let (gx, gy) = tile_grid(w, h);
         let rara = options.clip.effective_mode() == ClipMode::Rara;
-        self.rasterize.check_scene(&self.ctx, scene.count)?;
+        self.rasterize.check_scene(&self.ctx, scene)?;
         let (_capacity, rounds) = slot.prepare(
             &self.prefix_sum,
             &self.sort,
@@ -569,7 +581,9 @@ impl Renderer {
         // The kernels that read through texel buffers on CPU drivers (rasterize, emit).
         let depth_sorted_index = self.sort.passes_for(DEPTH_KEY_BITS) as usize % 2;
         let frame_texels = match self.rasterize.layout() {
-            RasterLayout::Strips => Some(slot.frame_texels_set(sorted_index, depth_sorted_index)?),
+            RasterLayout::Strips => {
+                Some(slot.frame_texels_set(sorted_index, depth_sorted_index, scene)?)
+            }
             RasterLayout::PixelPerInvocation => None,
         };
         let f = slot.resources.as_ref().unwrap();
@@ -645,8 +659,14 @@ impl Renderer {
             clip: f.clip_params.address,
             cutoffs: cutoffs_address,
         };
-        self.project
-            .record(cmd, &push, scene.count, scene.sh_degree, scene.sh_precision);
+        self.project.record(
+            cmd,
+            &push,
+            scene.count,
+            scene.sh_degree,
+            scene.sh_precision,
+            frame_texels,
+        );
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"project");
 

@@ -6,6 +6,7 @@ use ash::vk;
 
 use crate::constants::{LINEAR_GRID_X, LINEAR_WORKGROUP};
 use crate::error::{Result, VkContext};
+use crate::precision::ShPrecision;
 use crate::vk::Context;
 
 pub mod cutoff_tiles;
@@ -26,11 +27,13 @@ pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
 }
 
 /// Creates the layout of the frame's texel views, descriptor set 0 of the kernels that read
-/// through texel buffers on CPU drivers (the strips rasterizer and emit; see
+/// through texel buffers on CPU drivers (project, emit and the strips rasterizer; see
 /// `glsl/rasterize_body.glsl`), all uniform texel buffers: 0 the sorted pair values
 /// (`R32_UINT`), 1 the projected splats (`R32G32B32A32_UINT`, 4 texels each), 2 the cutoff
 /// records (`R32G32B32A32_UINT`, 3 texels each), 3 the drawn Gaussians in depth order and 4
-/// their first pairs (both `R32_UINT`). A kernel declares only the bindings it reads.
+/// their first pairs (both `R32_UINT`), 5 the scene's Gaussians (`R32G32B32A32_UINT`, 3 texels
+/// each) and 6 its SH coefficients (4 to a texel: `R32G32B32A32_UINT` for floats,
+/// `R32G32_UINT` for half floats). A kernel declares only the bindings it reads.
 pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
     let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..FRAME_TEXEL_BINDINGS)
         .map(|b| {
@@ -46,5 +49,14 @@ pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout>
         .vk("vkCreateDescriptorSetLayout")
 }
 
+/// Format and bytes of a texel of the SH view (binding 6 of [`frame_texels_set_layout`]): four
+/// coefficients at either precision.
+pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
+    match precision {
+        ShPrecision::F32 => (vk::Format::R32G32B32A32_UINT, 16),
+        ShPrecision::F16 => (vk::Format::R32G32_UINT, 8),
+    }
+}
+
 /// Bindings of [`frame_texels_set_layout`].
-pub const FRAME_TEXEL_BINDINGS: u32 = 5;
+pub const FRAME_TEXEL_BINDINGS: u32 = 7;

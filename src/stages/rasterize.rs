@@ -6,10 +6,11 @@ use bytemuck::{Pod, Zeroable};
 
 use std::ffi::CStr;
 
-use super::frame_texels_set_layout;
+use super::{frame_texels_set_layout, sh_texel};
 use crate::clip::ClipWeight;
 use crate::constants::MAX_INTERSECTIONS;
 use crate::error::{Error, Result};
+use crate::renderer::GpuScene;
 use crate::shaders;
 use crate::vk::{compute_barrier, ComputePipeline, Context};
 
@@ -164,15 +165,30 @@ impl Rasterize {
         }
     }
 
-    /// Whether the kernels can draw a scene of `gaussians`: the strips kernels read each
-    /// projected splat as 4 texels (and a cutoff record as 3) of one texel buffer.
-    pub fn check_scene(&self, ctx: &Context, gaussians: u32) -> Result<()> {
-        match self.layout {
-            RasterLayout::PixelPerInvocation => Ok(()),
-            RasterLayout::Strips => {
-                strips_scene_fits(gaussians, ctx.info().max_texel_buffer_elements)
+    /// Whether the frame's texel views can hold `scene` when the kernels read through them
+    /// (the strips layout): 4 texels per projected splat (3 per cutoff record), and the
+    /// scene's Gaussians and SH coefficients ([`super::frame_texels_set_layout`]).
+    pub fn check_scene(&self, ctx: &Context, scene: &GpuScene) -> Result<()> {
+        if self.layout == RasterLayout::PixelPerInvocation {
+            return Ok(());
+        }
+        let max_texels = ctx.info().max_texel_buffer_elements;
+        strips_scene_fits(scene.len(), max_texels)?;
+        let (gaussians, sh, _) = scene.buffers();
+        let (_, sh_texel_bytes) = sh_texel(scene.sh_precision());
+        for (what, texels) in [
+            ("Gaussians", gaussians.size / 16),
+            ("SH coefficients", sh.size / sh_texel_bytes),
+        ] {
+            if texels > max_texels as u64 {
+                return Err(Error::InvalidInput(format!(
+                    "the scene's {what} take {texels} texels, more than a texel buffer holds on \
+                     this device (maxTexelBufferElements = {max_texels}); RARA_RASTER=pixels \
+                     selects the layout that reads them as buffers"
+                )));
             }
         }
+        Ok(())
     }
 
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
