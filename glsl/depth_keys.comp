@@ -1,28 +1,3 @@
-// Stage 2, depth order (first step): one invocation per Gaussian writes a (depth bits, index)
-// pair for every drawn Gaussian (tiles touched > 0) at its slot among the drawn ones: the
-// exclusive scan of project's drawn flags. The pairs are therefore packed in index order, and
-// the stable depth sort that follows keeps index order on equal depths (SPEC: ties by index).
-// Depths are > 0.2, so their float bits order like the floats.
+// Stage 2, depth order, first step: the depth keys (see depth_keys_body.glsl).
 #version 460
-#include "common.glsl"
-
-layout(local_size_x = LINEAR_WORKGROUP) in;
-
-layout(push_constant) uniform Push {
-    FrameParamsRef frame;
-    ProjectedSplats splats;
-    U32s tiles_touched;
-    U32s slots;         // exclusive scan of the drawn flags
-    U32s keys;          // out: depth bits
-    U32s values;        // out: Gaussian index
-} pc;
-
-void main() {
-    uint i = linear_index();
-    if (i >= pc.frame.p.scene.x || pc.tiles_touched.v[i] == 0u) {
-        return;
-    }
-    uint slot = pc.slots.v[i];
-    pc.keys.v[slot] = floatBitsToUint(pc.splats.v[i].depth);
-    pc.values.v[slot] = i;
-}
+#include "depth_keys_body.glsl"

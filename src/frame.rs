@@ -18,7 +18,7 @@ use crate::stages::write_target::image_target_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
 
 /// The first binding of [`frame_texels_set_layout`] that views the scene's buffers.
-const FIRST_SCENE_BINDING: usize = 5;
+const FIRST_SCENE_BINDING: usize = 7;
 use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// Smallest intersection capacity a slot starts with.
@@ -129,7 +129,7 @@ struct FrameTexelsSet {
     set: vk::DescriptorSet,
     views: [vk::BufferView; FRAME_TEXEL_BINDINGS as usize],
     viewed: [vk::Buffer; FRAME_TEXEL_BINDINGS as usize],
-    /// The [`GpuScene`] the scene views (bindings 5 and 6) are of.
+    /// The [`GpuScene`] the scene views (bindings 7 and 8) are of.
     scene_id: u64,
 }
 
@@ -421,13 +421,15 @@ impl FrameSlot {
             f.cutoffs.as_ref(),
             Some(&f.depth_sort.values[depth_sorted]),
             Some(&f.slots),
+            Some(&f.tiles_touched),
+            Some(&f.sort.keys[sorted]),
             Some(gaussians),
             Some(sh),
         ];
         let (r32, rgba32) = (vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT);
         let (sh_format, sh_texel_bytes) = sh_texel(scene.sh_precision());
-        let formats = [r32, rgba32, rgba32, r32, r32, rgba32, sh_format];
-        let texel_bytes = [4u64, 16, 16, 4, 4, 16, sh_texel_bytes];
+        let formats = [r32, rgba32, rgba32, r32, r32, r32, r32, rgba32, sh_format];
+        let texel_bytes = [4u64, 16, 16, 4, 4, 4, 4, 16, sh_texel_bytes];
         let max_texels = self.ctx.info().max_texel_buffer_elements as u64;
         let texels = self.frame_texels.as_mut().unwrap();
         if texels.scene_id != scene_id {

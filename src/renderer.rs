@@ -24,6 +24,7 @@ use crate::stages::rasterize::{RasterLayout, Rasterize, RasterizePush};
 use crate::stages::sort::{RadixSort, DEPTH_SORT_LABELS, TILE_SORT_LABELS};
 use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
 use crate::stages::write_target::{WriteTarget, WriteTargetPush};
+use crate::stages::FrameTexelsLayout;
 use crate::target::{Composite, Target, TargetFormat};
 use crate::timing::{PassTimer, PassTiming};
 use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
@@ -284,6 +285,9 @@ pub struct Renderer {
     timer: PassTimer,
     /// The slot and rgba8 image (+ host copy) of the headless path, [`Renderer::render`].
     headless: Option<HeadlessFrame>,
+    /// The layout of the frame's texel views, for the kernels that read through them (with the
+    /// strips rasterizer, i.e. on CPU drivers).
+    _frame_texels_layout: Option<FrameTexelsLayout>,
 }
 
 /// What [`Renderer::render`] renders into and reads back from.
@@ -313,20 +317,27 @@ impl Renderer {
 
     /// Builds every kernel of the pipeline with the given rasterizer layout.
     pub fn with_raster_layout(ctx: &Context, layout: RasterLayout) -> Result<Self> {
+        // CPU drivers (the strips layout) read through texel views wherever that pays.
+        let frame_texels_layout = match layout {
+            RasterLayout::Strips => Some(FrameTexelsLayout::new(ctx)?),
+            RasterLayout::PixelPerInvocation => None,
+        };
+        let texels = frame_texels_layout.as_ref().map(|l| l.raw);
         Ok(Renderer {
             ctx: ctx.clone(),
-            project: Project::new(ctx, layout == RasterLayout::Strips)?,
+            project: Project::new(ctx, texels)?,
             prefix_sum: PrefixSum::new(ctx)?,
-            depth_order: DepthOrder::new(ctx)?,
-            emit: Emit::new(ctx, layout == RasterLayout::Strips)?,
+            depth_order: DepthOrder::new(ctx, texels)?,
+            emit: Emit::new(ctx, texels)?,
             cutoff_tiles: CutoffTiles::new(ctx)?,
             cutoff_tile_classes: true,
             sort: RadixSort::new(ctx)?,
-            tile_ranges: TileRanges::new(ctx)?,
-            rasterize: Rasterize::new(ctx, layout)?,
+            tile_ranges: TileRanges::new(ctx, texels)?,
+            rasterize: Rasterize::new(ctx, layout, texels)?,
             write_target: WriteTarget::new(ctx)?,
             timer: PassTimer::new(ctx)?,
             headless: None,
+            _frame_texels_layout: frame_texels_layout,
         })
     }
 
@@ -688,7 +699,8 @@ impl Renderer {
             keys: f.depth_sort.keys[0].address,
             values: f.depth_sort.values[0].address,
         };
-        self.depth_order.record_keys(cmd, &push, scene.count);
+        self.depth_order
+            .record_keys(cmd, &push, scene.count, frame_texels);
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"depth keys");
         let depth_sorted = self.sort.record(
@@ -711,7 +723,8 @@ impl Renderer {
             tiles_touched: f.tiles_touched.address,
             counts: f.slots.address,
         };
-        self.depth_order.record_counts(cmd, &push, scene.count);
+        self.depth_order
+            .record_counts(cmd, &push, scene.count, frame_texels);
         compute_barrier(ctx, cmd);
         self.prefix_sum.record(
             ctx,
@@ -784,7 +797,8 @@ impl Renderer {
             tile_count: gx * gy,
             pad: 0,
         };
-        self.tile_ranges.record(cmd, &push, &f.sort.info);
+        self.tile_ranges
+            .record(cmd, &push, &f.sort.info, frame_texels);
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"tile ranges");
 

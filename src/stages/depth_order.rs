@@ -54,26 +54,51 @@ pub struct DepthOrder {
 }
 
 impl DepthOrder {
-    /// Builds the kernels.
-    pub fn new(ctx: &Context) -> Result<Self> {
+    /// Builds the kernels; with `texels`, the layout of the frame's texel views (CPU drivers,
+    /// along with the strips rasterizer), the variants that read through them
+    /// (`depth_{keys,counts}_texels.comp`).
+    pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
+        let (keys, counts) = match texels {
+            Some(_) => (
+                (c"depth_keys_texels", shaders::DEPTH_KEYS_TEXELS),
+                (c"depth_counts_texels", shaders::DEPTH_COUNTS_TEXELS),
+            ),
+            None => (
+                (c"depth_keys", shaders::DEPTH_KEYS),
+                (c"depth_counts", shaders::DEPTH_COUNTS),
+            ),
+        };
         Ok(DepthOrder {
-            keys: ComputePipeline::new::<DepthKeysPush>(ctx, c"depth_keys", shaders::DEPTH_KEYS)?,
-            counts: ComputePipeline::new::<DepthCountsPush>(
-                ctx,
-                c"depth_counts",
-                shaders::DEPTH_COUNTS,
+            keys: ComputePipeline::with_set_layout::<DepthKeysPush>(ctx, keys.0, keys.1, texels)?,
+            counts: ComputePipeline::with_set_layout::<DepthCountsPush>(
+                ctx, counts.0, counts.1, texels,
             )?,
         })
     }
 
-    /// Records the (depth bits, index) pairs of a scene of `count` Gaussians.
-    pub fn record_keys(&self, cmd: vk::CommandBuffer, push: &DepthKeysPush, count: u32) {
-        self.keys.dispatch(cmd, push, super::linear_grid(count));
+    /// Records the depth keys of a scene of `count` Gaussians (the texel kernels need
+    /// `frame_texels`, the frame's set of [`super::frame_texels_set_layout`]).
+    pub fn record_keys(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &DepthKeysPush,
+        count: u32,
+        frame_texels: Option<vk::DescriptorSet>,
+    ) {
+        self.keys
+            .dispatch_in(cmd, push, frame_texels, super::linear_grid(count));
     }
 
-    /// Records the tiles touched in depth order, for a scene of `count` Gaussians (the drawn
-    /// ones are read on the GPU).
-    pub fn record_counts(&self, cmd: vk::CommandBuffer, push: &DepthCountsPush, count: u32) {
-        self.counts.dispatch(cmd, push, super::linear_grid(count));
+    /// Records the tiles touched in depth order for a scene of `count` Gaussians (the drawn
+    /// ones are read on the GPU; `frame_texels` as for [`DepthOrder::record_keys`]).
+    pub fn record_counts(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &DepthCountsPush,
+        count: u32,
+        frame_texels: Option<vk::DescriptorSet>,
+    ) {
+        self.counts
+            .dispatch_in(cmd, push, frame_texels, super::linear_grid(count));
     }
 }

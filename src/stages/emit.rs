@@ -8,7 +8,6 @@ use bytemuck::{Pod, Zeroable};
 
 use std::ffi::CStr;
 
-use super::frame_texels_set_layout;
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{ComputePipeline, Context};
@@ -43,56 +42,33 @@ pub struct EmitPush {
 pub struct Emit {
     plain: ComputePipeline,
     cutoff_pairs: ComputePipeline,
-    /// The texel kernels' descriptor set layout ([`frame_texels_set_layout`]).
-    set_layout: Option<vk::DescriptorSetLayout>,
-    ctx: Context,
 }
 
 impl Emit {
-    /// Builds the kernels; with `texels` (CPU drivers, along with the strips rasterizer) the
-    /// variants that read the depth order, the first pairs and the projected splats through
-    /// the frame's texel views (`emit*_texels.comp`): a CPU driver loads those as gathers,
-    /// where a buffer load is a scalar loop over the lanes per 64-bit word.
-    pub fn new(ctx: &Context, texels: bool) -> Result<Self> {
-        let set_layout = if texels {
-            Some(frame_texels_set_layout(ctx)?)
-        } else {
-            None
-        };
+    /// Builds the kernels; with `texels`, the layout of the frame's texel views (CPU drivers,
+    /// along with the strips rasterizer), the variants that read the depth order, the first
+    /// pairs and the projected splats through them (`emit*_texels.comp`): a CPU driver loads
+    /// those as gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
+    pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let build = |name: &'static CStr, spirv: &[u32]| {
-            ComputePipeline::with_set_layout::<EmitPush>(ctx, name, spirv, set_layout)
+            ComputePipeline::with_set_layout::<EmitPush>(ctx, name, spirv, texels)
         };
-        let kernels = if texels {
-            build(c"emit_texels", shaders::EMIT_TEXELS).and_then(|plain| {
-                Ok((
-                    plain,
-                    build(c"emit_rara_texels", shaders::EMIT_RARA_TEXELS)?,
-                ))
-            })
-        } else {
-            build(c"emit", shaders::EMIT)
-                .and_then(|plain| Ok((plain, build(c"emit_rara", shaders::EMIT_RARA)?)))
-        };
-        match kernels {
-            Ok((plain, cutoff_pairs)) => Ok(Emit {
-                plain,
-                cutoff_pairs,
-                set_layout,
-                ctx: ctx.clone(),
-            }),
-            Err(e) => {
-                if let Some(l) = set_layout {
-                    unsafe { ctx.device().destroy_descriptor_set_layout(l, None) };
-                }
-                Err(e)
-            }
-        }
+        Ok(match texels {
+            Some(_) => Emit {
+                plain: build(c"emit_texels", shaders::EMIT_TEXELS)?,
+                cutoff_pairs: build(c"emit_rara_texels", shaders::EMIT_RARA_TEXELS)?,
+            },
+            None => Emit {
+                plain: build(c"emit", shaders::EMIT)?,
+                cutoff_pairs: build(c"emit_rara", shaders::EMIT_RARA)?,
+            },
+        })
     }
 
     /// Records the emission for a scene of `count` Gaussians (the drawn ones are read on the
     /// GPU). With `cutoff_pairs`, the kernel also fills `push.cutoff_args` and
     /// `push.cutoff_pairs` for [`super::cutoff_tiles::CutoffTiles::record`]. The texel
-    /// kernels need `frame_texels`, the frame's set of [`frame_texels_set_layout`].
+    /// kernels need `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -106,18 +82,6 @@ impl Emit {
         } else {
             &self.plain
         };
-        let groups = super::linear_grid(count);
-        match (self.set_layout, frame_texels) {
-            (Some(_), Some(set)) => pipeline.dispatch_with_set(cmd, push, set, groups),
-            _ => pipeline.dispatch(cmd, push, groups),
-        }
-    }
-}
-
-impl Drop for Emit {
-    fn drop(&mut self) {
-        if let Some(l) = self.set_layout {
-            unsafe { self.ctx.device().destroy_descriptor_set_layout(l, None) };
-        }
+        pipeline.dispatch_in(cmd, push, frame_texels, super::linear_grid(count));
     }
 }

@@ -27,13 +27,15 @@ pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
 }
 
 /// Creates the layout of the frame's texel views, descriptor set 0 of the kernels that read
-/// through texel buffers on CPU drivers (project, emit and the strips rasterizer; see
+/// through texel buffers on CPU drivers (project, depth order, emit, tile ranges and the strips
+/// rasterizer; see
 /// `glsl/rasterize_body.glsl`), all uniform texel buffers: 0 the sorted pair values
 /// (`R32_UINT`), 1 the projected splats (`R32G32B32A32_UINT`, 4 texels each), 2 the cutoff
 /// records (`R32G32B32A32_UINT`, 3 texels each), 3 the drawn Gaussians in depth order and 4
-/// their first pairs (both `R32_UINT`), 5 the scene's Gaussians (`R32G32B32A32_UINT`, 3 texels
-/// each) and 6 its SH coefficients (4 to a texel: `R32G32B32A32_UINT` for floats,
-/// `R32G32_UINT` for half floats). A kernel declares only the bindings it reads.
+/// their first pairs, 5 the tiles touched per Gaussian, 6 the sorted tile keys (all four
+/// `R32_UINT`), 7 the scene's Gaussians (`R32G32B32A32_UINT`, 3 texels each) and 8 its SH
+/// coefficients (4 to a texel: `R32G32B32A32_UINT` for floats, `R32G32_UINT` for half floats).
+/// A kernel declares only the bindings it reads.
 pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
     let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..FRAME_TEXEL_BINDINGS)
         .map(|b| {
@@ -59,4 +61,32 @@ pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
 }
 
 /// Bindings of [`frame_texels_set_layout`].
-pub const FRAME_TEXEL_BINDINGS: u32 = 7;
+pub const FRAME_TEXEL_BINDINGS: u32 = 9;
+
+/// [`frame_texels_set_layout`] made once for the kernels of a renderer (the frame slots make
+/// their own, compatible one for their sets); destroyed on drop.
+pub struct FrameTexelsLayout {
+    /// The layout handle.
+    pub raw: vk::DescriptorSetLayout,
+    ctx: Context,
+}
+
+impl FrameTexelsLayout {
+    /// Creates the layout.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(FrameTexelsLayout {
+            raw: frame_texels_set_layout(ctx)?,
+            ctx: ctx.clone(),
+        })
+    }
+}
+
+impl Drop for FrameTexelsLayout {
+    fn drop(&mut self) {
+        unsafe {
+            self.ctx
+                .device()
+                .destroy_descriptor_set_layout(self.raw, None)
+        };
+    }
+}

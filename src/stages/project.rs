@@ -5,7 +5,6 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
-use super::frame_texels_set_layout;
 use crate::error::Result;
 use crate::precision::ShPrecision;
 use crate::shaders;
@@ -43,77 +42,52 @@ pub struct Project {
     sh32: [ComputePipeline; 4],
     /// Indexed by SH degree.
     sh16: [ComputePipeline; 4],
-    /// The texel kernels' descriptor set layout ([`frame_texels_set_layout`]).
-    set_layout: Option<vk::DescriptorSetLayout>,
-    ctx: Context,
 }
 
 impl Project {
-    /// Builds the kernels; with `texels` (CPU drivers, along with the strips rasterizer) the
-    /// variants that read the Gaussians and SH coefficients through the frame's texel views
-    /// (`project_deg*_texels.comp`): a CPU driver loads those as gathers, where a buffer load
-    /// is a scalar loop over the lanes per 64-bit word.
-    pub fn new(ctx: &Context, texels: bool) -> Result<Self> {
-        let set_layout = if texels {
-            Some(frame_texels_set_layout(ctx)?)
-        } else {
-            None
-        };
+    /// Builds the kernels; with `texels`, the layout of the frame's texel views (CPU drivers,
+    /// along with the strips rasterizer), the variants that read the Gaussians and SH
+    /// coefficients through them (`project_deg*_texels.comp`): a CPU driver loads those as
+    /// gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
+    pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let build = |name: &'static CStr, spirv: &[u32]| {
-            ComputePipeline::with_set_layout::<ProjectPush>(ctx, name, spirv, set_layout)
+            ComputePipeline::with_set_layout::<ProjectPush>(ctx, name, spirv, texels)
         };
-        let kernels = (|| {
-            Ok(if texels {
-                (
-                    [
-                        build(c"project (SH 0)", shaders::PROJECT_DEG0_TEXELS)?,
-                        build(c"project (SH 1)", shaders::PROJECT_DEG1_TEXELS)?,
-                        build(c"project (SH 2)", shaders::PROJECT_DEG2_TEXELS)?,
-                        build(c"project (SH 3)", shaders::PROJECT_DEG3_TEXELS)?,
-                    ],
-                    [
-                        build(c"project (SH 0, f16)", shaders::PROJECT_DEG0_SH16_TEXELS)?,
-                        build(c"project (SH 1, f16)", shaders::PROJECT_DEG1_SH16_TEXELS)?,
-                        build(c"project (SH 2, f16)", shaders::PROJECT_DEG2_SH16_TEXELS)?,
-                        build(c"project (SH 3, f16)", shaders::PROJECT_DEG3_SH16_TEXELS)?,
-                    ],
-                )
-            } else {
-                (
-                    [
-                        build(c"project (SH 0)", shaders::PROJECT_DEG0)?,
-                        build(c"project (SH 1)", shaders::PROJECT_DEG1)?,
-                        build(c"project (SH 2)", shaders::PROJECT_DEG2)?,
-                        build(c"project (SH 3)", shaders::PROJECT_DEG3)?,
-                    ],
-                    [
-                        build(c"project (SH 0, f16)", shaders::PROJECT_DEG0_SH16)?,
-                        build(c"project (SH 1, f16)", shaders::PROJECT_DEG1_SH16)?,
-                        build(c"project (SH 2, f16)", shaders::PROJECT_DEG2_SH16)?,
-                        build(c"project (SH 3, f16)", shaders::PROJECT_DEG3_SH16)?,
-                    ],
-                )
-            })
-        })();
-        match kernels {
-            Ok((sh32, sh16)) => Ok(Project {
-                sh32,
-                sh16,
-                set_layout,
-                ctx: ctx.clone(),
-            }),
-            Err(e) => {
-                if let Some(l) = set_layout {
-                    unsafe { ctx.device().destroy_descriptor_set_layout(l, None) };
-                }
-                Err(e)
-            }
-        }
+        Ok(match texels {
+            Some(_) => Project {
+                sh32: [
+                    build(c"project (SH 0)", shaders::PROJECT_DEG0_TEXELS)?,
+                    build(c"project (SH 1)", shaders::PROJECT_DEG1_TEXELS)?,
+                    build(c"project (SH 2)", shaders::PROJECT_DEG2_TEXELS)?,
+                    build(c"project (SH 3)", shaders::PROJECT_DEG3_TEXELS)?,
+                ],
+                sh16: [
+                    build(c"project (SH 0, f16)", shaders::PROJECT_DEG0_SH16_TEXELS)?,
+                    build(c"project (SH 1, f16)", shaders::PROJECT_DEG1_SH16_TEXELS)?,
+                    build(c"project (SH 2, f16)", shaders::PROJECT_DEG2_SH16_TEXELS)?,
+                    build(c"project (SH 3, f16)", shaders::PROJECT_DEG3_SH16_TEXELS)?,
+                ],
+            },
+            None => Project {
+                sh32: [
+                    build(c"project (SH 0)", shaders::PROJECT_DEG0)?,
+                    build(c"project (SH 1)", shaders::PROJECT_DEG1)?,
+                    build(c"project (SH 2)", shaders::PROJECT_DEG2)?,
+                    build(c"project (SH 3)", shaders::PROJECT_DEG3)?,
+                ],
+                sh16: [
+                    build(c"project (SH 0, f16)", shaders::PROJECT_DEG0_SH16)?,
+                    build(c"project (SH 1, f16)", shaders::PROJECT_DEG1_SH16)?,
+                    build(c"project (SH 2, f16)", shaders::PROJECT_DEG2_SH16)?,
+                    build(c"project (SH 3, f16)", shaders::PROJECT_DEG3_SH16)?,
+                ],
+            },
+        })
     }
 
     /// Records the projection of `count` Gaussians with SH of `degree` (0 to 3) stored at
     /// `precision`. The texel kernels need `frame_texels`, the frame's set of
-    /// [`frame_texels_set_layout`].
+    /// [`super::frame_texels_set_layout`].
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -127,19 +101,11 @@ impl Project {
             ShPrecision::F32 => &self.sh32,
             ShPrecision::F16 => &self.sh16,
         };
-        let kernel = &kernels[degree.min(3) as usize];
-        let groups = super::linear_grid(count);
-        match (self.set_layout, frame_texels) {
-            (Some(_), Some(set)) => kernel.dispatch_with_set(cmd, push, set, groups),
-            _ => kernel.dispatch(cmd, push, groups),
-        }
-    }
-}
-
-impl Drop for Project {
-    fn drop(&mut self) {
-        if let Some(l) = self.set_layout {
-            unsafe { self.ctx.device().destroy_descriptor_set_layout(l, None) };
-        }
+        kernels[degree.min(3) as usize].dispatch_in(
+            cmd,
+            push,
+            frame_texels,
+            super::linear_grid(count),
+        );
     }
 }

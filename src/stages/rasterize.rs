@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 
 use std::ffi::CStr;
 
-use super::{frame_texels_set_layout, sh_texel};
+use super::sh_texel;
 use crate::clip::ClipWeight;
 use crate::constants::MAX_INTERSECTIONS;
 use crate::error::{Error, Result};
@@ -70,7 +70,7 @@ pub enum RasterLayout {
     /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*.comp`):
     /// for CPU drivers such as lavapipe, where each splat is then loaded once for 32 pixels
     /// and a tile is one 8-lane SIMD vector. The kernels fetch the splats from uniform texel
-    /// buffers ([`frame_texels_set_layout`]), which caps a frame's pairs and a scene's
+    /// buffers ([`super::frame_texels_set_layout`]), which caps a frame's pairs and a scene's
     /// Gaussians ([`Rasterize::pair_limit`], [`Rasterize::check_scene`]).
     Strips,
 }
@@ -101,51 +101,46 @@ pub struct Rasterize {
     mass: ComputePipeline,
     length: ComputePipeline,
     layout: RasterLayout,
-    /// The strips kernels' descriptor set layout ([`frame_texels_set_layout`]).
-    set_layout: Option<vk::DescriptorSetLayout>,
     ctx: Context,
 }
 
 impl Rasterize {
-    /// Builds the kernels in `layout`.
-    pub fn new(ctx: &Context, layout: RasterLayout) -> Result<Self> {
-        let set_layout = match layout {
-            RasterLayout::PixelPerInvocation => None,
-            RasterLayout::Strips => Some(frame_texels_set_layout(ctx)?),
-        };
+    /// Builds the kernels in `layout`; the strips kernels need `texels`, the layout of the
+    /// frame's texel views.
+    pub fn new(
+        ctx: &Context,
+        layout: RasterLayout,
+        texels: Option<vk::DescriptorSetLayout>,
+    ) -> Result<Self> {
         let build = |name: &'static CStr, spirv: &[u32]| {
-            ComputePipeline::with_set_layout::<RasterizePush>(ctx, name, spirv, set_layout)
+            ComputePipeline::with_set_layout::<RasterizePush>(ctx, name, spirv, texels)
         };
-        let kernels = (|| {
-            Ok(match layout {
-                RasterLayout::PixelPerInvocation => (
-                    build(c"rasterize", shaders::RASTERIZE)?,
-                    build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
-                    build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
-                ),
-                RasterLayout::Strips => (
+        let (plain, mass, length) = match layout {
+            RasterLayout::PixelPerInvocation => (
+                build(c"rasterize", shaders::RASTERIZE)?,
+                build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
+                build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
+            ),
+            RasterLayout::Strips => {
+                if texels.is_none() {
+                    return Err(Error::InvalidInput(
+                        "the strips rasterizer needs the frame's texel views".into(),
+                    ));
+                }
+                (
                     build(c"rasterize_strips", shaders::RASTERIZE_STRIPS)?,
                     build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS)?,
                     build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH)?,
-                ),
-            })
-        })();
-        match kernels {
-            Ok((plain, mass, length)) => Ok(Rasterize {
-                plain,
-                mass,
-                length,
-                layout,
-                set_layout,
-                ctx: ctx.clone(),
-            }),
-            Err(e) => {
-                if let Some(l) = set_layout {
-                    unsafe { ctx.device().destroy_descriptor_set_layout(l, None) };
-                }
-                Err(e)
+                )
             }
-        }
+        };
+        Ok(Rasterize {
+            plain,
+            mass,
+            length,
+            layout,
+            ctx: ctx.clone(),
+        })
     }
 
     /// The layout the kernels were built in.
@@ -194,7 +189,7 @@ impl Rasterize {
     /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
     /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping,
     /// `None` when no splat is cutoff. The strips kernels need `frame_texels`, the frame's
-    /// set of [`frame_texels_set_layout`].
+    /// set of [`super::frame_texels_set_layout`].
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -213,21 +208,10 @@ impl Rasterize {
             let mut p = *push;
             p.round_index = round;
             p.flags = if round == 0 { ROUND_FIRST } else { 0 };
-            match frame_texels {
-                Some(set) => pipeline.dispatch_with_set(cmd, &p, set, [tiles.0, tiles.1, 1]),
-                None => pipeline.dispatch(cmd, &p, [tiles.0, tiles.1, 1]),
-            }
+            pipeline.dispatch_in(cmd, &p, frame_texels, [tiles.0, tiles.1, 1]);
             if round + 1 < rounds {
                 compute_barrier(&self.ctx, cmd);
             }
-        }
-    }
-}
-
-impl Drop for Rasterize {
-    fn drop(&mut self) {
-        if let Some(l) = self.set_layout {
-            unsafe { self.ctx.device().destroy_descriptor_set_layout(l, None) };
         }
     }
 }

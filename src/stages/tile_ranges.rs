@@ -30,20 +30,39 @@ pub struct TileRanges {
 }
 
 impl TileRanges {
-    /// Builds the kernel.
-    pub fn new(ctx: &Context) -> Result<Self> {
+    /// Builds the kernel; with `texels`, the layout of the frame's texel views (CPU drivers,
+    /// along with the strips rasterizer), the variant that reads the sorted keys through them
+    /// (`tile_ranges_texels.comp`).
+    pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
+        let (name, spirv) = match texels {
+            Some(_) => (c"tile_ranges_texels", shaders::TILE_RANGES_TEXELS),
+            None => (c"tile_ranges", shaders::TILE_RANGES),
+        };
         Ok(TileRanges {
-            pipeline: ComputePipeline::new::<TileRangesPush>(
-                ctx,
-                c"tile_ranges",
-                shaders::TILE_RANGES,
-            )?,
+            pipeline: ComputePipeline::with_set_layout::<TileRangesPush>(ctx, name, spirv, texels)?,
         })
     }
 
-    /// Records the kernel, one invocation per sorted pair (indirect, from the sort's info).
-    pub fn record(&self, cmd: vk::CommandBuffer, push: &TileRangesPush, sort_info: &Buffer) {
-        self.pipeline
-            .dispatch_indirect(cmd, push, sort_info.raw, LINEAR_ARGS_OFFSET);
+    /// Records the kernel over the sorted pairs, as many as `sort_info` says (the texel kernel
+    /// needs `frame_texels`, the frame's set of [`super::frame_texels_set_layout`]).
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &TileRangesPush,
+        sort_info: &Buffer,
+        frame_texels: Option<vk::DescriptorSet>,
+    ) {
+        match frame_texels {
+            Some(set) => self.pipeline.dispatch_indirect_with_set(
+                cmd,
+                push,
+                set,
+                sort_info.raw,
+                LINEAR_ARGS_OFFSET,
+            ),
+            None => self
+                .pipeline
+                .dispatch_indirect(cmd, push, sort_info.raw, LINEAR_ARGS_OFFSET),
+        }
     }
 }

@@ -109,6 +109,21 @@ impl ComputePipeline {
         self.dispatch(cmd, push, groups);
     }
 
+    /// Records a dispatch of `groups` workgroups, with descriptor set 0 bound to `set` when
+    /// given.
+    pub fn dispatch_in<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &P,
+        set: Option<vk::DescriptorSet>,
+        groups: [u32; 3],
+    ) {
+        match set {
+            Some(set) => self.dispatch_with_set(cmd, push, set, groups),
+            None => self.dispatch(cmd, push, groups),
+        }
+    }
+
     /// Records a dispatch of `groups` workgroups with push constants `push`.
     pub fn dispatch<P: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, push: &P, groups: [u32; 3]) {
         if groups.contains(&0) {
@@ -120,6 +135,28 @@ impl ComputePipeline {
                 .device()
                 .cmd_dispatch(cmd, groups[0], groups[1], groups[2])
         };
+    }
+
+    /// Like [`ComputePipeline::dispatch_indirect`], with descriptor set 0 bound to `set`.
+    pub fn dispatch_indirect_with_set<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &P,
+        set: vk::DescriptorSet,
+        args: vk::Buffer,
+        offset: u64,
+    ) {
+        unsafe {
+            self.ctx.device().cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[set],
+                &[],
+            )
+        };
+        self.dispatch_indirect(cmd, push, args, offset);
     }
 
     /// Records an indirect dispatch whose workgroup counts the GPU wrote at `args`+`offset`.
