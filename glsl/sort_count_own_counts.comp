@@ -4,7 +4,7 @@
 #include "sort_own_counts.glsl"
 
 layout(push_constant) uniform Push {
-    U32s keys;
+    U32s keys;          // unused: the keys are read through keys_in_texels
     SortInfoRef info;
     U32s hist;
     uint shift;
@@ -19,7 +19,7 @@ void main() {
     // Four keys at a time: a group that starts below the run's end stays inside the buffer,
     // which holds a multiple of 4 keys (RadixSort::buffers).
     for (uint i = run.x; i < run.y; i += 4u) {
-        uvec4 four = load_u32x4(pc.keys, i);
+        uvec4 four = texelFetch(keys_in_texels, int(i / 4u));
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {
             if (i + j < run.y) {
                 uint slot = own_slot(key_digit(four[j], pc.shift, pc.digit_mask));

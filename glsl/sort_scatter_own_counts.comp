@@ -6,8 +6,8 @@
 #include "sort_own_counts.glsl"
 
 layout(push_constant) uniform Push {
-    U32s keys_in;
-    U32s values_in;
+    U32s keys_in;       // unused: read through keys_in_texels
+    U32s values_in;     // unused: read through values_in_texels
     U32s keys_out;
     U32s values_out;
     SortInfoRef info;
@@ -23,8 +23,8 @@ void main() {
         own_counts[own_slot(d)] = pc.hist.v[hist_index(d, num_blocks)];
     }
     for (uint i = run.x; i < run.y; i += 4u) {
-        uvec4 keys = load_u32x4(pc.keys_in, i);
-        uvec4 values = load_u32x4(pc.values_in, i);
+        uvec4 keys = texelFetch(keys_in_texels, int(i / 4u));
+        uvec4 values = texelFetch(values_in_texels, int(i / 4u));
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {
             if (i + j < run.y) {
                 uint slot = own_slot(key_digit(keys[j], pc.shift, pc.digit_mask));

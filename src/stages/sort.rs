@@ -26,7 +26,7 @@ use crate::constants::{
     SORT_BLOCK, SORT_OWN_BLOCK, SORT_OWN_RADIX, SORT_OWN_RADIX_BITS, SORT_OWN_WORKGROUP,
     SORT_RADIX, SORT_RADIX_BITS,
 };
-use crate::error::Result;
+use crate::error::{Result, VkContext};
 use crate::gpu_types::SORT_HIST_OFFSET;
 use crate::shaders;
 use crate::timing::PassTimer;
@@ -150,10 +150,94 @@ pub struct RadixSort {
     scatter: ComputePipeline,
     scan: PrefixSum,
     layout: SortLayout,
+    /// The own-counts kernels' descriptor set layout: the pass's input keys (binding 0) and
+    /// values (binding 1) as uniform texel buffers of four each (`R32G32B32A32_UINT`).
+    texel_layout: Option<vk::DescriptorSetLayout>,
+    ctx: Context,
+}
+
+/// Texel views of a [`SortBuffers`]' keys and values and their descriptor sets: `sets[k]`
+/// reads `keys[k]` and `values[k]`, the input of a pass from buffer `k`.
+struct SortTexels {
+    pool: vk::DescriptorPool,
+    sets: [vk::DescriptorSet; 2],
+    views: Vec<vk::BufferView>,
+    ctx: Context,
+}
+
+impl SortTexels {
+    /// Views and sets for `keys` and `values` (each `capacity` u32s, a multiple of 4).
+    fn new(
+        ctx: &Context,
+        layout: vk::DescriptorSetLayout,
+        keys: &[Buffer; 2],
+        values: &[Buffer; 2],
+        capacity: u64,
+    ) -> Result<Self> {
+        let device = ctx.device();
+        let sizes = [vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            descriptor_count: 4,
+        }];
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(2)
+            .pool_sizes(&sizes);
+        let pool =
+            unsafe { device.create_descriptor_pool(&info, None) }.vk("vkCreateDescriptorPool")?;
+        // From here on Drop frees what exists.
+        let mut texels = SortTexels {
+            pool,
+            sets: [vk::DescriptorSet::null(); 2],
+            views: Vec::with_capacity(4),
+            ctx: ctx.clone(),
+        };
+        let layouts = [layout, layout];
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(pool)
+            .set_layouts(&layouts);
+        let sets =
+            unsafe { device.allocate_descriptor_sets(&alloc) }.vk("vkAllocateDescriptorSets")?;
+        texels.sets = [sets[0], sets[1]];
+        for k in 0..2 {
+            for (binding, buffer) in [(0, &keys[k]), (1, &values[k])] {
+                let info = vk::BufferViewCreateInfo::default()
+                    .buffer(buffer.raw)
+                    .format(vk::Format::R32G32B32A32_UINT)
+                    .offset(0)
+                    .range(capacity * 4);
+                let view =
+                    unsafe { device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+                texels.views.push(view);
+                let views = [view];
+                let write = vk::WriteDescriptorSet::default()
+                    .dst_set(texels.sets[k])
+                    .dst_binding(binding)
+                    .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                    .texel_buffer_view(&views);
+                unsafe { device.update_descriptor_sets(&[write], &[]) };
+            }
+        }
+        Ok(texels)
+    }
+}
+
+impl Drop for SortTexels {
+    fn drop(&mut self) {
+        let device = self.ctx.device();
+        unsafe {
+            for &v in &self.views {
+                device.destroy_buffer_view(v, None);
+            }
+            device.destroy_descriptor_pool(self.pool, None);
+        }
+    }
 }
 
 /// Ping-pong key/value buffers and scratch for sorting up to `capacity` pairs.
 pub struct SortBuffers {
+    /// The own-counts layout's texel views of `keys` and `values` (declared first: dropped
+    /// before the buffers).
+    texels: Option<SortTexels>,
     /// Keys (`u32`), two buffers that passes alternate between.
     pub keys: [Buffer; 2],
     /// Values, alongside `keys`.
@@ -242,17 +326,54 @@ impl RadixSort {
                 (c"sort_scatter_own_counts", shaders::SORT_SCATTER_OWN_COUNTS),
             ),
         };
-        Ok(RadixSort {
-            prepare: ComputePipeline::new::<PreparePush>(
-                ctx,
-                c"sort_prepare",
-                shaders::SORT_PREPARE,
-            )?,
-            count: ComputePipeline::new::<CountPush>(ctx, count.0, count.1)?,
-            scatter: ComputePipeline::new::<ScatterPush>(ctx, scatter.0, scatter.1)?,
-            scan: PrefixSum::new(ctx)?,
-            layout,
-        })
+        let texel_layout = match layout {
+            SortLayout::ShortRuns => None,
+            SortLayout::OwnCounts => {
+                let binding = |b: u32| {
+                    vk::DescriptorSetLayoutBinding::default()
+                        .binding(b)
+                        .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                        .descriptor_count(1)
+                        .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                };
+                let bindings = [binding(0), binding(1)];
+                let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+                Some(
+                    unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
+                        .vk("vkCreateDescriptorSetLayout")?,
+                )
+            }
+        };
+        let kernels = (|| {
+            Ok((
+                ComputePipeline::new::<PreparePush>(ctx, c"sort_prepare", shaders::SORT_PREPARE)?,
+                ComputePipeline::with_set_layout::<CountPush>(ctx, count.0, count.1, texel_layout)?,
+                ComputePipeline::with_set_layout::<ScatterPush>(
+                    ctx,
+                    scatter.0,
+                    scatter.1,
+                    texel_layout,
+                )?,
+                PrefixSum::new(ctx)?,
+            ))
+        })();
+        match kernels {
+            Ok((prepare, count, scatter, scan)) => Ok(RadixSort {
+                prepare,
+                count,
+                scatter,
+                scan,
+                layout,
+                texel_layout,
+                ctx: ctx.clone(),
+            }),
+            Err(e) => {
+                if let Some(l) = texel_layout {
+                    unsafe { ctx.device().destroy_descriptor_set_layout(l, None) };
+                }
+                Err(e)
+            }
+        }
     }
 
     /// The layout the kernels were built in.
@@ -273,15 +394,21 @@ impl RadixSort {
         let blocks = capacity.div_ceil(self.layout.block() as u64);
         let hist_len = blocks * self.layout.hist_per_block() as u64;
         let gpu = MemoryLocation::GpuOnly;
+        let keys = [
+            Buffer::new(ctx, "sort keys A", capacity * 4, gpu)?,
+            Buffer::new(ctx, "sort keys B", capacity * 4, gpu)?,
+        ];
+        let values = [
+            Buffer::new(ctx, "sort values A", capacity * 4, gpu)?,
+            Buffer::new(ctx, "sort values B", capacity * 4, gpu)?,
+        ];
+        let texels = match self.texel_layout {
+            Some(layout) => Some(SortTexels::new(ctx, layout, &keys, &values, capacity)?),
+            None => None,
+        };
         Ok(SortBuffers {
-            keys: [
-                Buffer::new(ctx, "sort keys A", capacity * 4, gpu)?,
-                Buffer::new(ctx, "sort keys B", capacity * 4, gpu)?,
-            ],
-            values: [
-                Buffer::new(ctx, "sort values A", capacity * 4, gpu)?,
-                Buffer::new(ctx, "sort values B", capacity * 4, gpu)?,
-            ],
+            keys,
+            values,
             info: Buffer::new(
                 ctx,
                 "sort info + histograms",
@@ -290,6 +417,7 @@ impl RadixSort {
             )?,
             scan: self.scan.scratch(ctx, hist_len)?,
             capacity,
+            texels,
         })
     }
 
@@ -343,8 +471,9 @@ impl RadixSort {
                 shift,
                 digit_mask,
             };
+            let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
             self.count
-                .dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
+                .dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             self.scan
                 .record(ctx, cmd, hist, info + HIST_LEN_OFFSET, None, &bufs.scan);
@@ -359,7 +488,7 @@ impl RadixSort {
                 digit_mask,
             };
             self.scatter
-                .dispatch_indirect(cmd, &push, bufs.info.raw, BLOCK_ARGS_OFFSET);
+                .dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             if let Some(t) = timer.as_deref_mut() {
                 t.end_pass(cmd, label);
@@ -398,5 +527,13 @@ impl RadixSort {
             bufs.keys[out].download_as(keys.len())?,
             bufs.values[out].download_as(values.len())?,
         ))
+    }
+}
+
+impl Drop for RadixSort {
+    fn drop(&mut self) {
+        if let Some(l) = self.texel_layout {
+            unsafe { self.ctx.device().destroy_descriptor_set_layout(l, None) };
+        }
     }
 }

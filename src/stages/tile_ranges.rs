@@ -52,17 +52,12 @@ impl TileRanges {
         sort_info: &Buffer,
         frame_texels: Option<vk::DescriptorSet>,
     ) {
-        match frame_texels {
-            Some(set) => self.pipeline.dispatch_indirect_with_set(
-                cmd,
-                push,
-                set,
-                sort_info.raw,
-                LINEAR_ARGS_OFFSET,
-            ),
-            None => self
-                .pipeline
-                .dispatch_indirect(cmd, push, sort_info.raw, LINEAR_ARGS_OFFSET),
-        }
+        self.pipeline.dispatch_indirect_in(
+            cmd,
+            push,
+            frame_texels,
+            sort_info.raw,
+            LINEAR_ARGS_OFFSET,
+        );
     }
 }

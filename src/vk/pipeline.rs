@@ -137,25 +137,28 @@ impl ComputePipeline {
         };
     }
 
-    /// Like [`ComputePipeline::dispatch_indirect`], with descriptor set 0 bound to `set`.
-    pub fn dispatch_indirect_with_set<P: bytemuck::Pod>(
+    /// Like [`ComputePipeline::dispatch_indirect`], with descriptor set 0 bound to `set` when
+    /// given.
+    pub fn dispatch_indirect_in<P: bytemuck::Pod>(
         &self,
         cmd: vk::CommandBuffer,
         push: &P,
-        set: vk::DescriptorSet,
+        set: Option<vk::DescriptorSet>,
         args: vk::Buffer,
         offset: u64,
     ) {
-        unsafe {
-            self.ctx.device().cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[set],
-                &[],
-            )
-        };
+        if let Some(set) = set {
+            unsafe {
+                self.ctx.device().cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    self.layout,
+                    0,
+                    &[set],
+                    &[],
+                )
+            };
+        }
         self.dispatch_indirect(cmd, push, args, offset);
     }
 
