@@ -151,34 +151,52 @@ pub struct RadixSort {
     scan: PrefixSum,
     layout: SortLayout,
     /// The own-counts kernels' descriptor set layout: the pass's input keys (binding 0) and
-    /// values (binding 1) as uniform texel buffers of four each (`R32G32B32A32_UINT`).
+    /// values (binding 1) as uniform texel buffers of four each (`R32G32B32A32_UINT`), and the
+    /// runs' counters (binding 2) as an `R32_UINT` storage texel buffer.
     texel_layout: Option<vk::DescriptorSetLayout>,
     ctx: Context,
 }
 
-/// Texel views of a [`SortBuffers`]' keys and values and their descriptor sets: `sets[k]`
-/// reads `keys[k]` and `values[k]`, the input of a pass from buffer `k`.
+/// The own-counts layout's scratch of a [`SortBuffers`]: the runs' counters, texel views of
+/// them and of the keys and values, and the descriptor sets: `sets[k]` reads `keys[k]` and
+/// `values[k]`, the input of a pass from buffer `k`.
 struct SortTexels {
     pool: vk::DescriptorPool,
     sets: [vk::DescriptorSet; 2],
     views: Vec<vk::BufferView>,
+    /// One `u32` per (run, digit): a column of the histogram per run.
+    counters: Buffer,
     ctx: Context,
 }
 
 impl SortTexels {
-    /// Views and sets for `keys` and `values` (each `capacity` u32s, a multiple of 4).
+    /// Counters for `counters` u32s, and views and sets for `keys` and `values` (each
+    /// `capacity` u32s, a multiple of 4).
     fn new(
         ctx: &Context,
         layout: vk::DescriptorSetLayout,
         keys: &[Buffer; 2],
         values: &[Buffer; 2],
         capacity: u64,
+        counters: u64,
     ) -> Result<Self> {
         let device = ctx.device();
-        let sizes = [vk::DescriptorPoolSize {
-            ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
-            descriptor_count: 4,
-        }];
+        let counters = Buffer::new(
+            ctx,
+            "sort run counters",
+            counters * 4,
+            MemoryLocation::GpuOnly,
+        )?;
+        let sizes = [
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+                descriptor_count: 4,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_TEXEL_BUFFER,
+                descriptor_count: 2,
+            },
+        ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(2)
             .pool_sizes(&sizes);
@@ -188,7 +206,8 @@ impl SortTexels {
         let mut texels = SortTexels {
             pool,
             sets: [vk::DescriptorSet::null(); 2],
-            views: Vec::with_capacity(4),
+            views: Vec::with_capacity(6),
+            counters,
             ctx: ctx.clone(),
         };
         let layouts = [layout, layout];
@@ -216,6 +235,21 @@ impl SortTexels {
                     .texel_buffer_view(&views);
                 unsafe { device.update_descriptor_sets(&[write], &[]) };
             }
+            let info = vk::BufferViewCreateInfo::default()
+                .buffer(texels.counters.raw)
+                .format(vk::Format::R32_UINT)
+                .offset(0)
+                .range(texels.counters.size);
+            let view =
+                unsafe { device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+            texels.views.push(view);
+            let views = [view];
+            let write = vk::WriteDescriptorSet::default()
+                .dst_set(texels.sets[k])
+                .dst_binding(2)
+                .descriptor_type(vk::DescriptorType::STORAGE_TEXEL_BUFFER)
+                .texel_buffer_view(&views);
+            unsafe { device.update_descriptor_sets(&[write], &[]) };
         }
         Ok(texels)
     }
@@ -249,7 +283,8 @@ pub struct SortBuffers {
 }
 
 impl SortBuffers {
-    /// Device bytes held (keys, values, histograms, scan scratch).
+    /// Device bytes held (keys, values, histograms, scan scratch, and the own-counts layout's
+    /// run counters).
     pub fn device_bytes(&self) -> u64 {
         self.keys
             .iter()
@@ -258,6 +293,7 @@ impl SortBuffers {
             .sum::<u64>()
             + self.info.size
             + self.scan.device_bytes()
+            + self.texels.as_ref().map_or(0, |t| t.counters.size)
     }
 
     /// Most pairs these buffers hold.
@@ -336,7 +372,11 @@ impl RadixSort {
                         .descriptor_count(1)
                         .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 };
-                let bindings = [binding(0), binding(1)];
+                let bindings = [
+                    binding(0),
+                    binding(1),
+                    binding(2).descriptor_type(vk::DescriptorType::STORAGE_TEXEL_BUFFER),
+                ];
                 let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
                 Some(
                     unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
@@ -403,7 +443,9 @@ impl RadixSort {
             Buffer::new(ctx, "sort values B", capacity * 4, gpu)?,
         ];
         let texels = match self.texel_layout {
-            Some(layout) => Some(SortTexels::new(ctx, layout, &keys, &values, capacity)?),
+            Some(layout) => Some(SortTexels::new(
+                ctx, layout, &keys, &values, capacity, hist_len,
+            )?),
             None => None,
         };
         Ok(SortBuffers {
