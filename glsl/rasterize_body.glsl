@@ -32,7 +32,7 @@
 //
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
-// ray (clip.glsl), from its cutoff record (the batch stages the record's index). Splats that
+// ray (clip.glsl), from its cutoff record (the splat carries the record's index). Splats that
 // are not cutoff take the plain path, and so do cutoff splats in the tiles where their weight
 // is 1 at every pixel (PAIR_WEIGHT_ONE in the pair's value, set by cutoff_tiles.comp).
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
@@ -40,8 +40,8 @@
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
 // must not be in its kernel at all.
 //
-// A cutoff splat's record is loaded by each invocation on its own (six 64-bit words). The
-// strips kernels used to load it across the subgroup, one or two words per lane, and broadcast
+// A cutoff splat's record is loaded by each invocation on its own (six 64-bit words, or three
+// texels in the strips kernels). The strips kernels used to load it across the subgroup, one or two words per lane, and broadcast
 // them; that needed every lane at the load, so the rara loops then ran while any lane of the
 // subgroup had an open pixel (subgroupAny). On lavapipe that vote is a scalar loop over the
 // lanes for every splat, and it cost more than it saved: plant at 640x480 under a plane,
