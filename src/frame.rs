@@ -16,10 +16,10 @@ use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::write_target::image_target_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
+use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// The first binding of [`frame_texels_set_layout`] that views the scene's buffers.
 const FIRST_SCENE_BINDING: usize = 7;
-use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// Smallest intersection capacity a slot starts with.
 const MIN_CAPACITY: u64 = 1 << 16;

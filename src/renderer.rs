@@ -589,7 +589,8 @@ impl Renderer {
         };
         let sorted_index = self.sort.passes_for(key_bits(w, h)) as usize % 2;
         slot.resources.as_mut().unwrap().sorted = sorted_index;
-        // The kernels that read through texel buffers on CPU drivers (rasterize, emit).
+        // The texel views that most kernels read through on CPU drivers (project, depth order,
+        // emit, tile ranges, rasterize).
         let depth_sorted_index = self.sort.passes_for(DEPTH_KEY_BITS) as usize % 2;
         let frame_texels = match self.rasterize.layout() {
             RasterLayout::Strips => {

@@ -26,7 +26,7 @@ use crate::constants::{
     SORT_BLOCK, SORT_OWN_BLOCK, SORT_OWN_RADIX, SORT_OWN_RADIX_BITS, SORT_OWN_WORKGROUP,
     SORT_RADIX, SORT_RADIX_BITS,
 };
-use crate::error::{Result, VkContext};
+use crate::error::{Error, Result, VkContext};
 use crate::gpu_types::SORT_HIST_OFFSET;
 use crate::shaders;
 use crate::timing::PassTimer;
@@ -91,7 +91,10 @@ pub enum SortLayout {
     /// llvmpipe (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with 64 invocations of
     /// 64 keys each took 456 ms; a block histogram that the scatter counted again took 350 ms
     /// with 512-key runs and 280-293 ms with 2,048; a column per run 224-238 ms with 2,048-key
-    /// runs, 206-214 ms with 4,096 and 261-276 ms with 1,024.
+    /// runs, 206-214 ms with 4,096 and 261-276 ms with 1,024. The kernels read the keys and
+    /// values through texel views and keep the runs' counters in a storage texel buffer (both
+    /// gathers on such a driver, where a shared-memory or buffer load is a lane loop): 205-210
+    /// -> 104-114 ms.
     OwnCounts,
 }
 
@@ -443,9 +446,21 @@ impl RadixSort {
             Buffer::new(ctx, "sort values B", capacity * 4, gpu)?,
         ];
         let texels = match self.texel_layout {
-            Some(layout) => Some(SortTexels::new(
-                ctx, layout, &keys, &values, capacity, hist_len,
-            )?),
+            Some(layout) => {
+                // The views hold capacity / 4 texels of keys or values, and a counter per
+                // histogram entry.
+                let max_texels = ctx.info().max_texel_buffer_elements as u64;
+                if capacity / 4 > max_texels || hist_len > max_texels {
+                    return Err(Error::InvalidInput(format!(
+                        "a sort of {capacity} pairs needs more than the {max_texels} texels a \
+                         texel buffer holds on this device (maxTexelBufferElements) in the \
+                         own-counts layout; RARA_SORT=short selects the other one"
+                    )));
+                }
+                Some(SortTexels::new(
+                    ctx, layout, &keys, &values, capacity, hist_len,
+                )?)
+            }
             None => None,
         };
         Ok(SortBuffers {
