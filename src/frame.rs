@@ -8,7 +8,7 @@ use crate::constants::{
     COUNTER_CUTOFF_PAIRS_WEIGHT_ONE, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS,
     COUNTER_VISIBLE, MAX_INTERSECTIONS, RASTER_CHUNK,
 };
-use crate::error::{Result, VkContext};
+use crate::error::Result;
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
 use crate::renderer::FrameStats;
 use crate::renderer::GpuScene;
@@ -16,6 +16,7 @@ use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::write_target::image_target_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
+use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// The first binding of [`frame_texels_set_layout`] that views the scene's buffers.
@@ -380,28 +381,11 @@ impl FrameSlot {
                 ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
                 descriptor_count: FRAME_TEXEL_BINDINGS,
             }];
-            let info = vk::DescriptorPoolCreateInfo::default()
-                .max_sets(1)
-                .pool_sizes(&sizes);
-            let pool = match unsafe { device.create_descriptor_pool(&info, None) } {
-                Ok(p) => p,
+            let (pool, set) = match allocate_sets(&self.ctx, &sizes, &[layout]) {
+                Ok((pool, sets)) => (pool, sets[0]),
                 Err(e) => {
                     unsafe { device.destroy_descriptor_set_layout(layout, None) };
-                    return Err(e).vk("vkCreateDescriptorPool");
-                }
-            };
-            let layouts = [layout];
-            let alloc = vk::DescriptorSetAllocateInfo::default()
-                .descriptor_pool(pool)
-                .set_layouts(&layouts);
-            let set = match unsafe { device.allocate_descriptor_sets(&alloc) } {
-                Ok(s) => s[0],
-                Err(e) => {
-                    unsafe {
-                        device.destroy_descriptor_pool(pool, None);
-                        device.destroy_descriptor_set_layout(layout, None);
-                    }
-                    return Err(e).vk("vkAllocateDescriptorSets");
+                    return Err(e);
                 }
             };
             self.frame_texels = Some(FrameTexelsSet {
@@ -443,25 +427,20 @@ impl FrameSlot {
                 continue;
             }
             let range = (buffer.size / texel_bytes[b]).min(max_texels) * texel_bytes[b];
-            let info = vk::BufferViewCreateInfo::default()
-                .buffer(buffer.raw)
-                .format(formats[b])
-                .offset(0)
-                .range(range);
-            let view =
-                unsafe { device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+            let view = write_texel_view(
+                &self.ctx,
+                buffer,
+                formats[b],
+                range,
+                texels.set,
+                b as u32,
+                vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            )?;
             if texels.views[b] != vk::BufferView::null() {
                 unsafe { device.destroy_buffer_view(texels.views[b], None) };
             }
             texels.views[b] = view;
             texels.viewed[b] = buffer.raw;
-            let views = [view];
-            let write = vk::WriteDescriptorSet::default()
-                .dst_set(texels.set)
-                .dst_binding(b as u32)
-                .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
-                .texel_buffer_view(&views);
-            unsafe { device.update_descriptor_sets(&[write], &[]) };
         }
         Ok(texels.set)
     }
@@ -476,28 +455,11 @@ impl FrameSlot {
                 ty: vk::DescriptorType::STORAGE_IMAGE,
                 descriptor_count: 1,
             }];
-            let info = vk::DescriptorPoolCreateInfo::default()
-                .max_sets(1)
-                .pool_sizes(&sizes);
-            let pool = match unsafe { device.create_descriptor_pool(&info, None) } {
-                Ok(p) => p,
+            let (pool, set) = match allocate_sets(&self.ctx, &sizes, &[layout]) {
+                Ok((pool, sets)) => (pool, sets[0]),
                 Err(e) => {
                     unsafe { device.destroy_descriptor_set_layout(layout, None) };
-                    return Err(e).vk("vkCreateDescriptorPool");
-                }
-            };
-            let layouts = [layout];
-            let alloc = vk::DescriptorSetAllocateInfo::default()
-                .descriptor_pool(pool)
-                .set_layouts(&layouts);
-            let set = match unsafe { device.allocate_descriptor_sets(&alloc) } {
-                Ok(s) => s[0],
-                Err(e) => {
-                    unsafe {
-                        device.destroy_descriptor_pool(pool, None);
-                        device.destroy_descriptor_set_layout(layout, None);
-                    }
-                    return Err(e).vk("vkAllocateDescriptorSets");
+                    return Err(e);
                 }
             };
             self.image_set = Some(ImageTargetSet {

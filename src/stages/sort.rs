@@ -30,6 +30,7 @@ use crate::error::{Error, Result, VkContext};
 use crate::gpu_types::SORT_HIST_OFFSET;
 use crate::shaders;
 use crate::timing::PassTimer;
+use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
 #[repr(C)]
@@ -183,7 +184,6 @@ impl SortTexels {
         capacity: u64,
         counters: u64,
     ) -> Result<Self> {
-        let device = ctx.device();
         let counters = Buffer::new(
             ctx,
             "sort run counters",
@@ -200,59 +200,36 @@ impl SortTexels {
                 descriptor_count: 2,
             },
         ];
-        let info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(2)
-            .pool_sizes(&sizes);
-        let pool =
-            unsafe { device.create_descriptor_pool(&info, None) }.vk("vkCreateDescriptorPool")?;
+        let (pool, sets) = allocate_sets(ctx, &sizes, &[layout, layout])?;
         // From here on Drop frees what exists.
         let mut texels = SortTexels {
             pool,
-            sets: [vk::DescriptorSet::null(); 2],
+            sets: [sets[0], sets[1]],
             views: Vec::with_capacity(6),
             counters,
             ctx: ctx.clone(),
         };
-        let layouts = [layout, layout];
-        let alloc = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(pool)
-            .set_layouts(&layouts);
-        let sets =
-            unsafe { device.allocate_descriptor_sets(&alloc) }.vk("vkAllocateDescriptorSets")?;
-        texels.sets = [sets[0], sets[1]];
+        let (uniform, storage) = (
+            vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            vk::DescriptorType::STORAGE_TEXEL_BUFFER,
+        );
         for k in 0..2 {
-            for (binding, buffer) in [(0, &keys[k]), (1, &values[k])] {
-                let info = vk::BufferViewCreateInfo::default()
-                    .buffer(buffer.raw)
-                    .format(vk::Format::R32G32B32A32_UINT)
-                    .offset(0)
-                    .range(capacity * 4);
-                let view =
-                    unsafe { device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+            let set = texels.sets[k];
+            let four = vk::Format::R32G32B32A32_UINT;
+            for (binding, buffer, format, range, ty) in [
+                (0, &keys[k], four, capacity * 4, uniform),
+                (1, &values[k], four, capacity * 4, uniform),
+                (
+                    2,
+                    &texels.counters,
+                    vk::Format::R32_UINT,
+                    texels.counters.size,
+                    storage,
+                ),
+            ] {
+                let view = write_texel_view(ctx, buffer, format, range, set, binding, ty)?;
                 texels.views.push(view);
-                let views = [view];
-                let write = vk::WriteDescriptorSet::default()
-                    .dst_set(texels.sets[k])
-                    .dst_binding(binding)
-                    .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
-                    .texel_buffer_view(&views);
-                unsafe { device.update_descriptor_sets(&[write], &[]) };
             }
-            let info = vk::BufferViewCreateInfo::default()
-                .buffer(texels.counters.raw)
-                .format(vk::Format::R32_UINT)
-                .offset(0)
-                .range(texels.counters.size);
-            let view =
-                unsafe { device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
-            texels.views.push(view);
-            let views = [view];
-            let write = vk::WriteDescriptorSet::default()
-                .dst_set(texels.sets[k])
-                .dst_binding(2)
-                .descriptor_type(vk::DescriptorType::STORAGE_TEXEL_BUFFER)
-                .texel_buffer_view(&views);
-            unsafe { device.update_descriptor_sets(&[write], &[]) };
         }
         Ok(texels)
     }

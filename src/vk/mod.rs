@@ -1,8 +1,9 @@
 //! Vulkan plumbing: context (owned or borrowed from an engine), requirements, buffers,
-//! compute pipelines.
+//! compute pipelines, descriptor sets.
 
 pub mod buffer;
 pub mod context;
+pub mod descriptors;
 pub mod pipeline;
 pub mod requirements;
 

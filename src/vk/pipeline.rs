@@ -88,14 +88,8 @@ impl ComputePipeline {
         }
     }
 
-    /// Records a dispatch of `groups` workgroups with descriptor set 0 bound to `set`.
-    pub fn dispatch_with_set<P: bytemuck::Pod>(
-        &self,
-        cmd: vk::CommandBuffer,
-        push: &P,
-        set: vk::DescriptorSet,
-        groups: [u32; 3],
-    ) {
+    /// Binds `set` as descriptor set 0 of this pipeline's layout.
+    fn bind_set(&self, cmd: vk::CommandBuffer, set: vk::DescriptorSet) {
         unsafe {
             self.ctx.device().cmd_bind_descriptor_sets(
                 cmd,
@@ -106,6 +100,17 @@ impl ComputePipeline {
                 &[],
             )
         };
+    }
+
+    /// Records a dispatch of `groups` workgroups with descriptor set 0 bound to `set`.
+    pub fn dispatch_with_set<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &P,
+        set: vk::DescriptorSet,
+        groups: [u32; 3],
+    ) {
+        self.bind_set(cmd, set);
         self.dispatch(cmd, push, groups);
     }
 
@@ -148,16 +153,7 @@ impl ComputePipeline {
         offset: u64,
     ) {
         if let Some(set) = set {
-            unsafe {
-                self.ctx.device().cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::COMPUTE,
-                    self.layout,
-                    0,
-                    &[set],
-                    &[],
-                )
-            };
+            self.bind_set(cmd, set);
         }
         self.dispatch_indirect(cmd, push, args, offset);
     }
