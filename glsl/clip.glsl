@@ -376,6 +376,9 @@ vec2 tile_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dirs[4]) {
 // any ray the mass inside the intersection K of the half-spaces is at most that of each
 // half-space, min_k Phi(u_hi,k), and the mass outside K at most the sum of the masses outside
 // each, sum_k Phi(-u_lo,k); an inverted region swaps the two.
+// The planes are read through `clip` inside the loop: copied into a local ClipParams first (as
+// project does, where every plane is visited), the dynamic index made lavapipe's pass 1.8x
+// slower (plant at 640x480 under rara: 5.8 -> 10.6 ms).
 uint cutoff_tile_class(ClipParamsRef clip, CutoffRecord rec, vec3 eye, vec3 dirs[4],
                        float peak_alpha) {
     uvec4 config = clip.p.config;

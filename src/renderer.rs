@@ -329,7 +329,7 @@ impl Renderer {
             prefix_sum: PrefixSum::new(ctx)?,
             depth_order: DepthOrder::new(ctx, texels)?,
             emit: Emit::new(ctx, texels)?,
-            cutoff_tiles: CutoffTiles::new(ctx)?,
+            cutoff_tiles: CutoffTiles::new(ctx, texels)?,
             cutoff_tile_classes: true,
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx, texels)?,
@@ -774,7 +774,7 @@ impl Renderer {
                 values: f.sort.values[0].address,
             };
             self.cutoff_tiles
-                .record(cmd, &push, pairs.raw, CUTOFF_ARGS_OFFSET);
+                .record(cmd, &push, frame_texels, pairs.raw, CUTOFF_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             timer.end_pass(cmd, c"cutoff tiles");
         }

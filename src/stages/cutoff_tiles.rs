@@ -3,6 +3,11 @@
 //! its tile is marked to be drawn as a plain splat ([`crate::constants::PAIR_WEIGHT_ONE`]), a
 //! pair that adds nothing to its tile leaves every tile list, and only the rest pay the
 //! rasterizer's per-pixel weight.
+//!
+//! On CPU drivers (with the strips rasterizer) the kernel reads the splats, the cutoff records,
+//! the tiles touched and the emitted keys through the frame's texel views
+//! (`glsl/cutoff_tiles_texels.comp`): a CPU driver loads a texel as a gather, where a buffer
+//! load is a scalar loop over the lanes per 64-bit word.
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -41,27 +46,32 @@ pub struct CutoffTiles {
 }
 
 impl CutoffTiles {
-    /// Builds the kernel.
-    pub fn new(ctx: &Context) -> Result<Self> {
+    /// Builds the kernel; with `texels`, the layout of the frame's texel views (CPU drivers),
+    /// the variant that reads through them.
+    pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
+        let (name, spirv) = match texels {
+            Some(_) => (c"cutoff_tiles_texels", shaders::CUTOFF_TILES_TEXELS),
+            None => (c"cutoff_tiles", shaders::CUTOFF_TILES),
+        };
         Ok(CutoffTiles {
-            pipeline: ComputePipeline::new::<CutoffTilesPush>(
-                ctx,
-                c"cutoff_tiles",
-                shaders::CUTOFF_TILES,
+            pipeline: ComputePipeline::with_set_layout::<CutoffTilesPush>(
+                ctx, name, spirv, texels,
             )?,
         })
     }
 
     /// Records the kernel, one invocation per cutoff splat, dispatched indirectly from the
-    /// arguments emit wrote at `args` + `args_offset`.
+    /// arguments emit wrote at `args` + `args_offset`. The texel kernel needs
+    /// `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
         push: &CutoffTilesPush,
+        frame_texels: Option<vk::DescriptorSet>,
         args: vk::Buffer,
         args_offset: u64,
     ) {
         self.pipeline
-            .dispatch_indirect(cmd, push, args, args_offset);
+            .dispatch_indirect_in(cmd, push, frame_texels, args, args_offset);
     }
 }

@@ -1,0 +1,96 @@
+// Stage 4b, cutoff tiles (rara clipping by planes with the mass weight): one invocation per
+// cutoff splat classifies its pairs, which emit_rara.comp wrote at cutoff_pairs, by tile
+// (cutoff_tile_class in clip.glsl). A pair whose weight is 1 at every pixel of its tile gets
+// PAIR_WEIGHT_ONE in its value, and the rasterizer draws it there as a plain splat; a pair
+// that adds nothing to any pixel of its tile gets the key `tile count`, which the sort puts
+// after every tile and the tile-ranges stage leaves out. Either way the pair keeps its slot,
+// so the counts of the earlier stages stay exact. Dispatched indirectly over the cutoff
+// splats, so the rest pay nothing.
+//
+// SPLAT_TEXELS (cutoff_tiles_texels.comp, CPU drivers): the splats, the cutoff records, the
+// tiles touched and the emitted keys are read through the frame's texel views, which a CPU
+// driver loads as gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
+#include "common.glsl"
+#include "clip.glsl"
+
+#ifdef SPLAT_TEXELS
+layout(set = 0, binding = 1) uniform utextureBuffer splat_texels;   // RGBA32_UINT, 4 per splat
+layout(set = 0, binding = 2) uniform utextureBuffer cutoff_texels;  // RGBA32_UINT, 3 per record
+layout(set = 0, binding = 5) uniform utextureBuffer tiles_touched;  // R32_UINT
+layout(set = 0, binding = 7) uniform utextureBuffer emitted_keys;   // R32_UINT
+#endif
+
+layout(local_size_x = LINEAR_WORKGROUP) in;
+
+layout(push_constant) uniform Push {
+    FrameParamsRef frame;
+    ProjectedSplats splats;
+    U32s tiles_touched;
+    U32s counters;
+    U64s cutoff_pairs;      // per cutoff record: (first pair, splat index), packed
+    ClipParamsRef clip;
+    CutoffRecords cutoffs;
+    U32s keys;              // in and out: tile ids, in emit's order
+    U32s values;            // in and out: splat indices
+} pc;
+
+void main() {
+    // Before any branch: once per SIMD vector on a CPU driver (load_clip_params in clip.glsl).
+    FrameParams f = load_frame_params(pc.frame);
+    uint k = linear_index();
+    if (k >= pc.counters.v[COUNTER_CUTOFF]) {
+        return;
+    }
+    uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
+    uint i = first.y;
+#ifdef SPLAT_TEXELS
+    int t = int(i) * 4;
+    uvec4 b0 = texelFetch(splat_texels, t);
+    uvec4 b1 = texelFetch(splat_texels, t + 1);
+    vec2 uv = uintBitsToFloat(b0.xy);
+    float opacity = uintBitsToFloat(b0.w);
+    vec3 conic = uintBitsToFloat(b1.xyz);
+    int r = int(k) * 3;
+    CutoffRecord rec = CutoffRecord(uintBitsToFloat(texelFetch(cutoff_texels, r)),
+                                    uintBitsToFloat(texelFetch(cutoff_texels, r + 1)),
+                                    uintBitsToFloat(texelFetch(cutoff_texels, r + 2)));
+    uint touched = texelFetch(tiles_touched, int(i)).x;
+#else
+    ProjectedSplat p = load_splat(pc.splats, i);
+    vec2 uv = p.uv;
+    float opacity = p.opacity;
+    vec3 conic = p.conic;
+    CutoffRecord rec = load_cutoff_record(pc.cutoffs, k);
+    uint touched = pc.tiles_touched.v[i];
+#endif
+    uint end = max(first.x, min(first.x + touched, f.scene.w));
+    uint tile_count = f.size.z * f.size.w;
+    uint weight_one = 0u;
+    uint empty = 0u;
+    for (uint slot = first.x; slot < end; ++slot) {
+#ifdef SPLAT_TEXELS
+        uint tile = texelFetch(emitted_keys, int(slot)).x;
+#else
+        uint tile = pc.keys.v[slot];
+#endif
+        uvec2 xy = uvec2(tile % f.size.z, tile / f.size.z);
+        // The rays through the tile's corner pixel centres, in order around it.
+        vec2 lo = vec2(xy * TILE_SIZE);
+        vec2 hi = lo + float(TILE_SIZE - 1u);
+        vec3 dirs[4] = vec3[4](pixel_ray(f, lo), pixel_ray(f, vec2(hi.x, lo.y)),
+                               pixel_ray(f, hi), pixel_ray(f, vec2(lo.x, hi.y)));
+        float q_min = footprint_q_min_in_tile(uv, conic, xy.x, xy.y);
+        float peak_alpha = opacity * exp(-0.5 * q_min);
+        uint tile_class = cutoff_tile_class(pc.clip, rec, f.cam_pos.xyz, dirs, peak_alpha);
+        if (tile_class == TILE_CLASS_EMPTY) {
+            pc.keys.v[slot] = tile_count;
+            ++empty;
+        } else if (tile_class == TILE_CLASS_FULL) {
+            pc.values.v[slot] = i | PAIR_WEIGHT_ONE;
+            ++weight_one;
+        }
+    }
+    atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS], end - first.x);
+    atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE], weight_one);
+    atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_EMPTY], empty);
+}
