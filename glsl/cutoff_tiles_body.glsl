@@ -14,10 +14,7 @@
 #include "clip.glsl"
 
 #ifdef SPLAT_TEXELS
-layout(set = 0, binding = 1) uniform utextureBuffer splat_texels;   // RGBA32_UINT, 4 per splat
-layout(set = 0, binding = 2) uniform utextureBuffer cutoff_texels;  // RGBA32_UINT, 3 per record
-layout(set = 0, binding = 5) uniform utextureBuffer tiles_touched;  // R32_UINT
-layout(set = 0, binding = 7) uniform utextureBuffer emitted_keys;   // R32_UINT
+#include "frame_texels.glsl"
 #endif
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
@@ -44,22 +41,11 @@ void main() {
     uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
     uint i = first.y;
 #ifdef SPLAT_TEXELS
-    int t = int(i) * 4;
-    uvec4 b0 = texelFetch(splat_texels, t);
-    uvec4 b1 = texelFetch(splat_texels, t + 1);
-    vec2 uv = uintBitsToFloat(b0.xy);
-    float opacity = uintBitsToFloat(b0.w);
-    vec3 conic = uintBitsToFloat(b1.xyz);
-    int r = int(k) * 3;
-    CutoffRecord rec = CutoffRecord(uintBitsToFloat(texelFetch(cutoff_texels, r)),
-                                    uintBitsToFloat(texelFetch(cutoff_texels, r + 1)),
-                                    uintBitsToFloat(texelFetch(cutoff_texels, r + 2)));
+    ProjectedSplat p = texel_splat(i);
+    CutoffRecord rec = texel_cutoff_record(k);
     uint touched = texelFetch(tiles_touched, int(i)).x;
 #else
     ProjectedSplat p = load_splat(pc.splats, i);
-    vec2 uv = p.uv;
-    float opacity = p.opacity;
-    vec3 conic = p.conic;
     CutoffRecord rec = load_cutoff_record(pc.cutoffs, k);
     uint touched = pc.tiles_touched.v[i];
 #endif
@@ -79,8 +65,8 @@ void main() {
         vec2 hi = lo + float(TILE_SIZE - 1u);
         vec3 dirs[4] = vec3[4](pixel_ray(f, lo), pixel_ray(f, vec2(hi.x, lo.y)),
                                pixel_ray(f, hi), pixel_ray(f, vec2(lo.x, hi.y)));
-        float q_min = footprint_q_min_in_tile(uv, conic, xy.x, xy.y);
-        float peak_alpha = opacity * exp(-0.5 * q_min);
+        float q_min = footprint_q_min_in_tile(p.uv, p.conic, xy.x, xy.y);
+        float peak_alpha = p.opacity * exp(-0.5 * q_min);
         uint tile_class = cutoff_tile_class(pc.clip, rec, f.cam_pos.xyz, dirs, peak_alpha);
         if (tile_class == TILE_CLASS_EMPTY) {
             pc.keys.v[slot] = tile_count;

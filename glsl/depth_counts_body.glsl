@@ -17,8 +17,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 #ifdef FRAME_TEXELS
-layout(set = 0, binding = 3) uniform utextureBuffer depth_order;    // R32_UINT
-layout(set = 0, binding = 5) uniform utextureBuffer tiles_touched;  // R32_UINT
+#include "frame_texels.glsl"
 #endif
 
 void main() {

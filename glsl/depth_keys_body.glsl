@@ -20,9 +20,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 #ifdef FRAME_TEXELS
-layout(set = 0, binding = 1) uniform utextureBuffer splat_texels;   // RGBA32_UINT, 4 per splat
-layout(set = 0, binding = 4) uniform utextureBuffer slot_texels;    // R32_UINT
-layout(set = 0, binding = 5) uniform utextureBuffer tiles_touched;  // R32_UINT
+#include "frame_texels.glsl"
 #endif
 
 void main() {
@@ -32,7 +30,7 @@ void main() {
         return;
     }
     uint slot = texelFetch(slot_texels, int(i)).x;
-    uint depth = texelFetch(splat_texels, int(i) * 4).z;
+    uint depth = floatBitsToUint(texel_splat(i).depth);
 #else
     if (i >= pc.frame.p.scene.x || pc.tiles_touched.v[i] == 0u) {
         return;

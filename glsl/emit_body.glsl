@@ -18,9 +18,7 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 // texel fetch is a gather, where a buffer load is a scalar loop over the lanes per 64-bit
 // word (lavapipe, render --repeat 10, runs in turn: emit 48 -> 31 ms on playbot at 640x480,
 // 17.5 -> 11.9 ms on plant under rara; the same images).
-layout(set = 0, binding = 1) uniform utextureBuffer splat_texels;   // RGBA32_UINT, 4 per splat
-layout(set = 0, binding = 3) uniform utextureBuffer depth_order;    // R32_UINT
-layout(set = 0, binding = 4) uniform utextureBuffer first_pairs;    // R32_UINT
+#include "frame_texels.glsl"
 #endif
 
 layout(push_constant) uniform Push {
@@ -52,16 +50,8 @@ void main() {
     }
 #ifdef SPLAT_TEXELS
     uint i = texelFetch(depth_order, int(j)).x;
-    int t = int(i) * 4;
-    uvec4 b0 = texelFetch(splat_texels, t);
-    uvec4 b1 = texelFetch(splat_texels, t + 1);
-    ProjectedSplat p;
-    p.uv = uintBitsToFloat(b0.xy);
-    p.opacity = uintBitsToFloat(b0.w);
-    p.conic = uintBitsToFloat(b1.xyz);
-    p.cutoff = b1.w;
-    p.rect = texelFetch(splat_texels, t + 3);
-    uint slot = texelFetch(first_pairs, int(j)).x;
+    ProjectedSplat p = texel_splat(i);
+    uint slot = texelFetch(slot_texels, int(j)).x;   // the first pair
 #else
     uint i = pc.order.v[j];
     ProjectedSplat p = load_splat(pc.splats, i);

@@ -26,9 +26,9 @@ layout(push_constant) uniform Push {
 } pc;
 
 #ifdef SCENE_TEXELS
-// The scene's Gaussians, 3 texels each (binding 8 of the frame's texel views; CPU drivers: a
-// gather instead of a scalar loop over the lanes per 64-bit word).
-layout(set = 0, binding = 8) uniform utextureBuffer gaussian_texels;
+// The scene's Gaussians, 3 texels each (the frame's texel views, frame_texels.glsl; CPU
+// drivers: a gather instead of a scalar loop over the lanes per 64-bit word).
+#include "frame_texels.glsl"
 
 Gaussian fetch_gaussian(uint i) {
     int t = int(i) * 3;

@@ -89,38 +89,29 @@ struct Staged {
 };
 
 #ifdef SPLAT_TEXELS
-layout(set = 0, binding = 0) uniform utextureBuffer sorted_values;  // R32_UINT, per pair
-layout(set = 0, binding = 1) uniform utextureBuffer splat_texels;   // RGBA32_UINT, 4 per splat
-layout(set = 0, binding = 2) uniform utextureBuffer cutoff_texels;  // RGBA32_UINT, 3 per record
+#include "frame_texels.glsl"
 
-// Cutoff record i (CutoffRecord: three texels).
+// Cutoff record i.
 CutoffRecord fetch_cutoff_record(uint i) {
-    int t = int(i) * 3;
-    return CutoffRecord(uintBitsToFloat(texelFetch(cutoff_texels, t)),
-                        uintBitsToFloat(texelFetch(cutoff_texels, t + 1)),
-                        uintBitsToFloat(texelFetch(cutoff_texels, t + 2)));
+    return texel_cutoff_record(i);
 }
 
-// The splat of the pair at `entry` of the sorted pairs: the first three of its four texels
-// (uv, depth, opacity | conic, cutoff | colour, pad; the rect is not needed).
+// The splat of the pair at `entry` of the sorted pairs (its rect is not fetched: unused).
 Staged fetch_splat(uint entry) {
     uint value = texelFetch(sorted_values, int(entry)).x;
-    int t = int(value & ~PAIR_WEIGHT_ONE) * 4;
-    uvec4 b0 = texelFetch(splat_texels, t);
-    uvec4 b1 = texelFetch(splat_texels, t + 1);
-    uvec4 b2 = texelFetch(splat_texels, t + 2);
-    float opacity = uintBitsToFloat(b0.w);
+    ProjectedSplat p = texel_splat(value & ~PAIR_WEIGHT_ONE);
+    float opacity = p.opacity;
 #if CUTOFF_WEIGHT != 0
     // As in staging below: the sign of the opacity marks a cutoff splat, and a pair of weight
     // 1 across the tile is drawn as a plain one.
-    bool cutoff = b1.w != NO_CUTOFF && (value & PAIR_WEIGHT_ONE) == 0u;
+    bool cutoff = p.cutoff != NO_CUTOFF && (value & PAIR_WEIGHT_ONE) == 0u;
     opacity = cutoff ? -opacity : opacity;
 #endif
     Staged s;
-    s.co = vec4(uintBitsToFloat(b1.xyz), opacity);
-    s.uv = uintBitsToFloat(b0.xy);
-    s.rgb = uintBitsToFloat(b2.xyz);
-    s.cutoff = b1.w;
+    s.co = vec4(p.conic, opacity);
+    s.uv = p.uv;
+    s.rgb = p.color;
+    s.cutoff = p.cutoff;
     return s;
 }
 

@@ -44,12 +44,12 @@ const float SH_C3[7] = float[7](-0.5900435899266435, 2.890611442640554, -0.45704
 #endif
 
 #ifdef SCENE_TEXELS
-// The same from the scene's texel view of the coefficients (binding 9 of the frame's texel
-// views; CPU drivers): texels of four values, RGBA32_UINT for floats, RG32_UINT for half
-// floats. A texel fetch is a gather where a buffer load is a scalar loop over the lanes. The
-// Gaussian's values start `skip` values into its first texel; the fetches stop at the view's
-// last texel (the values past the scene's last are not used).
-layout(set = 0, binding = 9) uniform utextureBuffer sh_texels;
+// The same from the scene's texel view of the coefficients (sh_texels in frame_texels.glsl;
+// CPU drivers): texels of four values, RGBA32_UINT for floats, RG32_UINT for half floats. A
+// texel fetch is a gather where a buffer load is a scalar loop over the lanes. The Gaussian's
+// values start `skip` values into its first texel; the fetches stop at the view's last texel
+// (the values past the scene's last are not used).
+#include "frame_texels.glsl"
 #if SH_VALUES % 4 == 0
 #define SH_TEXELS (SH_VALUES / 4)
 #else

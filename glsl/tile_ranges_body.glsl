@@ -18,7 +18,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 #ifdef FRAME_TEXELS
-layout(set = 0, binding = 6) uniform utextureBuffer sorted_keys;    // R32_UINT
+#include "frame_texels.glsl"
 
 // Sorted key i (i < num_keys).
 uint key(uint i) {

@@ -35,7 +35,7 @@ pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
 /// keys, 7 the tile keys as emitted (all five `R32_UINT`), 8 the scene's Gaussians
 /// (`R32G32B32A32_UINT`, 3 texels each) and 9 its SH coefficients (4 to a texel:
 /// `R32G32B32A32_UINT` for floats, `R32G32_UINT` for half floats).
-/// A kernel declares only the bindings it reads.
+/// The kernels declare all ten, with these numbers, in `glsl/frame_texels.glsl`.
 pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
     let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..FRAME_TEXEL_BINDINGS)
         .map(|b| {
