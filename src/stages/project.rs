@@ -44,44 +44,79 @@ pub struct Project {
     sh16: [ComputePipeline; 4],
 }
 
+/// A project kernel: its name, and its SPIR-V reading through buffer loads and through the
+/// frame's texel views.
+type Variant = (&'static CStr, &'static [u32], &'static [u32]);
+
+/// The kernels for SH in 32-bit floats, by degree.
+const SH32_KERNELS: [Variant; 4] = [
+    (
+        c"project (SH 0)",
+        shaders::PROJECT_DEG0,
+        shaders::PROJECT_DEG0_TEXELS,
+    ),
+    (
+        c"project (SH 1)",
+        shaders::PROJECT_DEG1,
+        shaders::PROJECT_DEG1_TEXELS,
+    ),
+    (
+        c"project (SH 2)",
+        shaders::PROJECT_DEG2,
+        shaders::PROJECT_DEG2_TEXELS,
+    ),
+    (
+        c"project (SH 3)",
+        shaders::PROJECT_DEG3,
+        shaders::PROJECT_DEG3_TEXELS,
+    ),
+];
+
+/// The kernels for SH in half floats, by degree.
+const SH16_KERNELS: [Variant; 4] = [
+    (
+        c"project (SH 0, f16)",
+        shaders::PROJECT_DEG0_SH16,
+        shaders::PROJECT_DEG0_SH16_TEXELS,
+    ),
+    (
+        c"project (SH 1, f16)",
+        shaders::PROJECT_DEG1_SH16,
+        shaders::PROJECT_DEG1_SH16_TEXELS,
+    ),
+    (
+        c"project (SH 2, f16)",
+        shaders::PROJECT_DEG2_SH16,
+        shaders::PROJECT_DEG2_SH16_TEXELS,
+    ),
+    (
+        c"project (SH 3, f16)",
+        shaders::PROJECT_DEG3_SH16,
+        shaders::PROJECT_DEG3_SH16_TEXELS,
+    ),
+];
+
 impl Project {
     /// Builds the kernels; with `texels`, the layout of the frame's texel views (CPU drivers,
     /// along with the strips rasterizer), the variants that read the Gaussians and SH
     /// coefficients through them (`project_deg*_texels.comp`): a CPU driver loads those as
     /// gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
-        let build = |name: &'static CStr, spirv: &[u32]| {
+        let build = |(name, loads, fetches): &Variant| {
+            let spirv = if texels.is_some() { fetches } else { loads };
             ComputePipeline::with_set_layout::<ProjectPush>(ctx, name, spirv, texels)
         };
-        Ok(match texels {
-            Some(_) => Project {
-                sh32: [
-                    build(c"project (SH 0)", shaders::PROJECT_DEG0_TEXELS)?,
-                    build(c"project (SH 1)", shaders::PROJECT_DEG1_TEXELS)?,
-                    build(c"project (SH 2)", shaders::PROJECT_DEG2_TEXELS)?,
-                    build(c"project (SH 3)", shaders::PROJECT_DEG3_TEXELS)?,
-                ],
-                sh16: [
-                    build(c"project (SH 0, f16)", shaders::PROJECT_DEG0_SH16_TEXELS)?,
-                    build(c"project (SH 1, f16)", shaders::PROJECT_DEG1_SH16_TEXELS)?,
-                    build(c"project (SH 2, f16)", shaders::PROJECT_DEG2_SH16_TEXELS)?,
-                    build(c"project (SH 3, f16)", shaders::PROJECT_DEG3_SH16_TEXELS)?,
-                ],
-            },
-            None => Project {
-                sh32: [
-                    build(c"project (SH 0)", shaders::PROJECT_DEG0)?,
-                    build(c"project (SH 1)", shaders::PROJECT_DEG1)?,
-                    build(c"project (SH 2)", shaders::PROJECT_DEG2)?,
-                    build(c"project (SH 3)", shaders::PROJECT_DEG3)?,
-                ],
-                sh16: [
-                    build(c"project (SH 0, f16)", shaders::PROJECT_DEG0_SH16)?,
-                    build(c"project (SH 1, f16)", shaders::PROJECT_DEG1_SH16)?,
-                    build(c"project (SH 2, f16)", shaders::PROJECT_DEG2_SH16)?,
-                    build(c"project (SH 3, f16)", shaders::PROJECT_DEG3_SH16)?,
-                ],
-            },
+        let build_all = |table: &[Variant; 4]| -> Result<[ComputePipeline; 4]> {
+            Ok([
+                build(&table[0])?,
+                build(&table[1])?,
+                build(&table[2])?,
+                build(&table[3])?,
+            ])
+        };
+        Ok(Project {
+            sh32: build_all(&SH32_KERNELS)?,
+            sh16: build_all(&SH16_KERNELS)?,
         })
     }
 
