@@ -53,8 +53,8 @@ pub const SORT_ITEMS: u32 = SORT_BLOCK / SORT_WORKGROUP;
 pub const SORT_OWN_RADIX_BITS: u32 = 8;
 /// Buckets per radix-sort digit in the CPU-driver layout.
 pub const SORT_OWN_RADIX: u32 = 1 << SORT_OWN_RADIX_BITS;
-/// Threads per sort workgroup in the CPU-driver layout (one SIMD vector on lavapipe): its
-/// shared memory holds one histogram per thread (8 KiB).
+/// Threads per sort workgroup in the CPU-driver layout (one SIMD vector on lavapipe); each
+/// keeps its run's histogram in the sort's scratch (a storage texel buffer, 1 KiB per thread).
 pub const SORT_OWN_WORKGROUP: u32 = 8;
 /// Consecutive keys each sort thread owns in the CPU-driver layout.
 pub const SORT_OWN_ITEMS: u32 = 4096;

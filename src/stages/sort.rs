@@ -10,7 +10,7 @@
 //! ([`SortLayout`]) do the same sort: one for GPUs (4-bit digits, counters in registers, ranks
 //! from subgroup scans, at any subgroup size of
 //! [`MIN_SUBGROUP_SIZE`](crate::constants::MIN_SUBGROUP_SIZE) or more) and one for CPU drivers
-//! (8-bit digits, one histogram per invocation in shared memory).
+//! (8-bit digits, one histogram per invocation, in a storage texel buffer).
 //!
 //! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_{count,scatter}.comp` (GPU layout),
 //! `glsl/sort_{count,scatter}_own_counts.comp` (CPU layout, shared code in
@@ -83,11 +83,12 @@ pub enum SortLayout {
     /// `sort_scatter.comp`): the layout for GPUs, many threads with few registers each.
     ShortRuns,
     /// 8-bit digits (half the passes); every invocation owns a run of 4,096 keys (8 runs per
-    /// workgroup, [`SORT_OWN_BLOCK`] keys), counts it in a histogram of its own in shared
-    /// memory and writes that to its own column of the global histogram, whose scan then gives
-    /// each run its output positions: the scatter neither counts again nor waits on the other
-    /// invocations (`sort_*_own_counts.comp`). For CPU drivers such as lavapipe, where an
-    /// indexed shared-memory access costs one load per lane, while a counter in registers
+    /// workgroup, [`SORT_OWN_BLOCK`] keys), counts it in a histogram of its own (first in
+    /// shared memory, now in a storage texel buffer, see below) and writes that to its own
+    /// column of the global histogram, whose scan then gives each run its output positions:
+    /// the scatter neither counts again nor waits on the other invocations
+    /// (`sort_*_own_counts.comp`). For CPU drivers such as lavapipe, where an indexed
+    /// shared-memory access costs one load per lane, while a counter in registers
     /// costs a compare per digit value per key, which 8-bit digits make 256. Measured on
     /// llvmpipe (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with 64 invocations of
     /// 64 keys each took 456 ms; a block histogram that the scatter counted again took 350 ms
