@@ -121,6 +121,9 @@ fn key_patterns_in_layout(ctx: &rara::Context, layout: SortLayout) {
     );
     // Tile ids as a frame sorts them: few bits, long runs of equal keys.
     check_sort(&sorter, ctx, random_keys(n, 11, 7), 11, "11-bit keys");
+    // Three passes in the CPU layout (and five in the GPU one): an odd number above one, whose
+    // result ends in the second buffers.
+    check_sort(&sorter, ctx, random_keys(n, 20, 8), 20, "20-bit keys");
 }
 
 #[test]
