@@ -32,11 +32,21 @@ pub const SCAN_ITEMS: u32 = 4;
 pub const SCAN_BLOCK: u32 = SCAN_WORKGROUP * SCAN_ITEMS;
 /// Recursion depth of the prefix sum: it scans up to `SCAN_BLOCK^SCAN_LEVELS` elements.
 pub const SCAN_LEVELS: u32 = 3;
+/// Consecutive elements each thread of the CPU-driver prefix sum (`ScanLayout::Runs`) sums
+/// and then scans on its own (a multiple of 4: read four at a time).
+pub const SCAN_RUN: u32 = 256;
+/// Threads per workgroup of the CPU-driver prefix sum (one SIMD vector on lavapipe).
+pub const SCAN_RUN_WORKGROUP: u32 = 8;
+/// Most elements the CPU-driver prefix sum scans: one run per thread, at most
+/// [`LINEAR_GRID_X`] workgroups (134,215,680).
+pub const SCAN_RUNS_MAX: u64 = SCAN_RUN as u64 * SCAN_RUN_WORKGROUP as u64 * LINEAR_GRID_X as u64;
+const _: () = assert!(SCAN_RUN % 4 == 0);
 
 /// Most Gaussians a scene may have: the prefix sum over them dispatches one workgroup per
 /// `SCAN_BLOCK` elements along X (67,107,840).
 pub const MAX_GAUSSIANS: u64 = SCAN_BLOCK as u64 * LINEAR_GRID_X as u64;
 const _: () = assert!(MAX_GAUSSIANS <= PAIR_WEIGHT_ONE as u64);
+const _: () = assert!(MAX_GAUSSIANS <= SCAN_RUNS_MAX);
 /// Bits per radix-sort digit in the GPU layout (`SortLayout::ShortRuns`).
 pub const SORT_RADIX_BITS: u32 = 4;
 /// Buckets per radix-sort digit in the GPU layout.
@@ -126,6 +136,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("SCAN_WORKGROUP", SCAN_WORKGROUP),
     ("SCAN_ITEMS", SCAN_ITEMS),
     ("SCAN_BLOCK", SCAN_BLOCK),
+    ("SCAN_RUN", SCAN_RUN),
+    ("SCAN_RUN_WORKGROUP", SCAN_RUN_WORKGROUP),
     ("SORT_RADIX_BITS", SORT_RADIX_BITS),
     ("SORT_RADIX", SORT_RADIX),
     ("SORT_WORKGROUP", SORT_WORKGROUP),

@@ -2,7 +2,7 @@
 
 mod common;
 
-use rara::constants::{SCAN_BLOCK, SORT_OWN_WORKGROUP};
+use rara::constants::{SCAN_BLOCK, SCAN_RUN, SCAN_RUN_WORKGROUP, SORT_OWN_WORKGROUP};
 use rara::stages::sort::{RadixSort, SortLayout};
 
 /// Both layouts run on every device, so the GPU one is checked here too.
@@ -143,47 +143,60 @@ fn sort_two_million_pairs() {
 
 #[test]
 fn prefix_sum_matches_cpu() {
-    use rara::stages::prefix_sum::PrefixSum;
+    use rara::stages::prefix_sum::{PrefixSum, ScanLayout};
     use rara::vk::Buffer;
     let ctx = common::context();
-    let scan = PrefixSum::new(&ctx).unwrap();
     let b = SCAN_BLOCK as usize;
+    let run = SCAN_RUN as usize;
+    let runs_per_group = run * SCAN_RUN_WORKGROUP as usize;
     let mut rng = Rng::new(3);
-    for n in [
-        0,
-        1,
-        5,
-        b - 1,
-        b,
-        b + 1,
-        b * b - 1,
-        b * b,
-        b * b + 1,
-        3 * b * b + 7,
-    ] {
-        let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 50) as u32).collect();
-        let buf = Buffer::from_slice(&ctx, "scan data", &data).unwrap();
-        let meta = Buffer::from_slice(&ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
-        let scratch = scan.scratch(&ctx, n as u64).unwrap();
-        ctx.run_commands(|cmd| {
-            scan.record(
-                &ctx,
-                cmd,
-                buf.address,
-                meta.address,
-                Some(meta.address + 4),
-                &scratch,
-            )
-        })
-        .unwrap();
-        let got: Vec<u32> = buf.download_as(n).unwrap();
-        let mut acc = 0u32;
-        for (i, (&x, &g)) in data.iter().zip(&got).enumerate() {
-            assert_eq!(g, acc, "n = {n}: element {i}");
-            acc += x;
+    for layout in [ScanLayout::Blocks, ScanLayout::Runs] {
+        let scan = PrefixSum::with_layout(&ctx, layout).unwrap();
+        // Around the blocks layout's level changes, and the runs layout's runs (read four at
+        // a time, so also sizes that leave 1-3 elements over) and workgroups.
+        for n in [
+            0,
+            1,
+            5,
+            run - 1,
+            run,
+            run + 3,
+            4 * run + 2,
+            runs_per_group - 1,
+            runs_per_group + 1,
+            b - 1,
+            b,
+            b + 1,
+            b * b - 1,
+            b * b,
+            b * b + 1,
+            3 * b * b + 7,
+        ] {
+            let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 50) as u32).collect();
+            let buf = Buffer::from_slice(&ctx, "scan data", &data).unwrap();
+            let meta =
+                Buffer::from_slice(&ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
+            let scratch = scan.scratch(&ctx, n as u64).unwrap();
+            ctx.run_commands(|cmd| {
+                scan.record(
+                    &ctx,
+                    cmd,
+                    buf.address,
+                    meta.address,
+                    Some(meta.address + 4),
+                    &scratch,
+                )
+            })
+            .unwrap();
+            let got: Vec<u32> = buf.download_as(n).unwrap();
+            let mut acc = 0u32;
+            for (i, (&x, &g)) in data.iter().zip(&got).enumerate() {
+                assert_eq!(g, acc, "{layout:?}, n = {n}: element {i}");
+                acc += x;
+            }
+            let total: Vec<u32> = meta.download_as(2).unwrap();
+            assert_eq!(total[1], acc, "{layout:?}, n = {n}: total");
         }
-        let total: Vec<u32> = meta.download_as(2).unwrap();
-        assert_eq!(total[1], acc, "n = {n}: total");
     }
     common::assert_no_validation_messages(&ctx);
 }
