@@ -34,13 +34,16 @@ pub const SCAN_BLOCK: u32 = SCAN_WORKGROUP * SCAN_ITEMS;
 pub const SCAN_LEVELS: u32 = 3;
 /// Consecutive elements each thread of the CPU-driver prefix sum (`ScanLayout::Runs`) sums
 /// and then scans on its own (a multiple of 4: read four at a time).
-pub const SCAN_RUN: u32 = 256;
+pub const SCAN_RUN: u32 = 512;
 /// Threads per workgroup of the CPU-driver prefix sum (one SIMD vector on lavapipe).
 pub const SCAN_RUN_WORKGROUP: u32 = 8;
-/// Most elements the CPU-driver prefix sum scans: one run per thread, at most
-/// [`LINEAR_GRID_X`] workgroups (134,215,680).
-pub const SCAN_RUNS_MAX: u64 = SCAN_RUN as u64 * SCAN_RUN_WORKGROUP as u64 * LINEAR_GRID_X as u64;
+/// Most elements the CPU-driver prefix sum scans (67,108,864): one invocation scans the runs'
+/// sums four at a time, and that loop stays at half of lavapipe's cap of 65,535 loop
+/// iterations per invocation (32,768 rounds).
+pub const SCAN_RUNS_MAX: u64 = SCAN_RUN as u64 * 4 * 32768;
 const _: () = assert!(SCAN_RUN % 4 == 0);
+const _: () =
+    assert!(SCAN_RUNS_MAX / SCAN_RUN as u64 <= SCAN_RUN_WORKGROUP as u64 * LINEAR_GRID_X as u64);
 
 /// Most Gaussians a scene may have: the prefix sum over them dispatches one workgroup per
 /// `SCAN_BLOCK` elements along X (67,107,840).

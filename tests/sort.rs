@@ -200,3 +200,36 @@ fn prefix_sum_matches_cpu() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The CPU layout's largest scan, which one invocation's loop over the runs' sums bounds
+/// (lavapipe stops an invocation's loops after 65,535 iterations): 2^26 ones, so element i
+/// must come out as i.
+#[test]
+fn prefix_sum_runs_at_its_largest() {
+    use rara::constants::SCAN_RUNS_MAX;
+    use rara::stages::prefix_sum::{PrefixSum, ScanLayout};
+    use rara::vk::Buffer;
+    let ctx = common::context();
+    let scan = PrefixSum::with_layout(&ctx, ScanLayout::Runs).unwrap();
+    let n = SCAN_RUNS_MAX as usize;
+    let buf = Buffer::from_slice(&ctx, "scan data", &vec![1u32; n]).unwrap();
+    let meta = Buffer::from_slice(&ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
+    let scratch = scan.scratch(&ctx, n as u64).unwrap();
+    ctx.run_commands(|cmd| {
+        scan.record(
+            &ctx,
+            cmd,
+            buf.address,
+            meta.address,
+            Some(meta.address + 4),
+            &scratch,
+        )
+    })
+    .unwrap();
+    let got: Vec<u32> = buf.download_as(n).unwrap();
+    if let Some(i) = (0..n).find(|&i| got[i] != i as u32) {
+        panic!("element {i} of {n}: {} instead of {i}", got[i]);
+    }
+    assert_eq!(meta.download_as::<u32>(2).unwrap()[1], n as u32, "total");
+    common::assert_no_validation_messages(&ctx);
+}
