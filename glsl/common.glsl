@@ -208,4 +208,33 @@ bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) 
     return footprint_q_min_in_tile(uv, conic, tx, ty) <= q_max;
 }
 
+// Cells of a tile rectangle (x0, y0, x1, y1), numbered row by row from (x0, y0).
+uint tile_rect_cells(uvec4 rect) {
+    uint columns = rect.z > rect.x ? rect.z - rect.x : 0u;
+    return rect.w > rect.y ? columns * (rect.w - rect.y) : 0u;
+}
+
+// Tile (x, y) of cell k of a tile rectangle (of at least one column: no division by zero).
+uvec2 tile_rect_cell(uvec4 rect, uint k) {
+    uint columns = rect.z > rect.x ? rect.z - rect.x : 1u;
+    return uvec2(rect.x + k % columns, rect.y + k / columns);
+}
+
+// How many of cells [first, end) of `rect` the ellipse q(p - uv) <= q_max reaches. One loop
+// over the cells rather than a loop per row: a SIMD vector of a CPU driver runs a loop for
+// as long as any of its lanes does, so nested loops take up to (most rows) x (most columns)
+// rounds, one loop only (most cells). Callers keep end - first <= TILE_RECT_CHUNK (lavapipe's
+// loop cap).
+uint count_touched_cells(vec2 uv, vec3 conic, float q_max, uvec4 rect, uint first, uint end) {
+    uint touched = 0u;
+    uvec2 xy = tile_rect_cell(rect, first);
+    for (uint k = first; k < end; ++k) {
+        touched += footprint_touches_tile(uv, conic, q_max, xy.x, xy.y) ? 1u : 0u;
+        ++xy.x;
+        bool row_end = xy.x == rect.z;
+        xy = row_end ? uvec2(rect.x, xy.y + 1u) : xy;
+    }
+    return touched;
+}
+
 #endif

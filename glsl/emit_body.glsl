@@ -9,6 +9,14 @@
 // dispatch of the cutoff-tiles stage (cutoff_tiles.comp), which classifies those pairs by tile.
 // That work runs only for cutoff splats: done here, every invocation of a SIMD vector would
 // pay it, masked, for every tile of its own (plant at 640x480: emit 13 -> 63 ms).
+//
+// A round (round_index) walks at most TILE_RECT_CHUNK cells of each splat's tile rectangle,
+// for lavapipe's cap on an invocation's loop iterations; on an image of more than
+// TILE_RECT_CHUNK tiles the host dispatches more rounds, and a splat whose rectangle goes on
+// past the round leaves its next pair's slot in `progress` for the next.
+// (The cutoff-tiles pass has the same cap per cutoff splat, at about 65,535 / (1 + planes)
+// pairs; the pairs past it stay unclassified, which draws them exactly, at the partial
+// pairs' cost.)
 #include "common.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
@@ -29,11 +37,12 @@ layout(push_constant) uniform Push {
     U32s offsets;       // exclusive prefix sum of tiles touched, in depth order
     U32s keys;          // out: tile ids
     U32s values;        // out: splat indices
-#ifdef RECORD_CUTOFF_PAIRS
+    // RECORD_CUTOFF_PAIRS only:
     U32s counters;
     DispatchArgs cutoff_args;   // out: the cutoff-tiles dispatch
     U64s cutoff_pairs;          // out: per cutoff record (first pair, splat index), packed
-#endif
+    U32s progress;      // in (rounds after the first) and out: per drawn splat, its next slot
+    uint round_index;
 } pc;
 
 void main() {
@@ -41,7 +50,7 @@ void main() {
     FrameParams f = load_frame_params(pc.frame);
     uint j = linear_index();
 #ifdef RECORD_CUTOFF_PAIRS
-    if (j == 0u) {
+    if (j == 0u && pc.round_index == 0u) {
         pc.cutoff_args.v[0] = uvec4(linear_grid(pc.counters.v[COUNTER_CUTOFF]), 0u);
     }
 #endif
@@ -61,20 +70,39 @@ void main() {
     float q_max = footprint_q_max(p.opacity);
     uint capacity = f.scene.w;
 #ifdef RECORD_CUTOFF_PAIRS
-    if (p.cutoff != NO_CUTOFF) {
+    if (p.cutoff != NO_CUTOFF && pc.round_index == 0u) {
         pc.cutoff_pairs.v[p.cutoff] = packUint2x32(uvec2(slot, i)); // one 64-bit store
     }
 #endif
-    for (uint y = rect.y; y < rect.w; ++y) {
-        for (uint x = rect.x; x < rect.z; ++x) {
-            if (!footprint_touches_tile(p.uv, p.conic, q_max, x, y)) {
-                continue;
-            }
+    // One loop over the rect's tiles, row by row, as count_touched_cells (common.glsl) in
+    // project. lavapipe, render --repeat 10, runs in turn, the same images: emit 29.7 -> 27.3
+    // ms on playbot, 16.3 -> 13.3 ms on biker (640x480, unclipped), against a loop per row.
+    uint cells = tile_rect_cells(rect);
+    uint first_cell = pc.round_index * TILE_RECT_CHUNK;
+    if (first_cell >= cells) {
+        return;
+    }
+    uint end_cell = min(cells, first_cell + TILE_RECT_CHUNK);
+    if (pc.round_index > 0u) {
+        slot = pc.progress.v[j];
+    }
+    uvec2 xy = tile_rect_cell(rect, first_cell);
+    uint x = xy.x;
+    uint y = xy.y;
+    for (uint k = first_cell; k < end_cell; ++k) {
+        if (footprint_touches_tile(p.uv, p.conic, q_max, x, y)) {
             if (slot < capacity) {
                 pc.keys.v[slot] = y * f.size.z + x;
                 pc.values.v[slot] = i;
             }
             ++slot;
         }
+        ++x;
+        bool row_end = x == rect.z;
+        x = row_end ? rect.x : x;
+        y = row_end ? y + 1u : y;
+    }
+    if (end_cell < cells) {
+        pc.progress.v[j] = slot;
     }
 }

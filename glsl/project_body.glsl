@@ -114,20 +114,20 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     int y0 = clamp(int((uv.y - radius) / float(TILE_SIZE)), 0, gy);
     int y1 = clamp(int((uv.y + radius + float(TILE_SIZE - 1u)) / float(TILE_SIZE)), 0, gy);
     // Tiles of the 3-sigma rectangle that the splat's visible footprint reaches (common.glsl);
-    // a splat below 1/255 opacity draws nowhere.
+    // a splat below 1/255 opacity draws nowhere. Only the first TILE_RECT_CHUNK cells are
+    // counted here (lavapipe's loop cap): project_touched.comp counts the rest of a larger
+    // rectangle in later rounds, so such a splat is drawn even if none of those first cells
+    // is reached (and then may end with no tile at all, which draws nothing).
+    uvec4 rect = uvec4(x0, y0, x1, y1);
+    uint cells = tile_rect_cells(rect);
     float opacity = g.pos_opacity.w;
+    bool visible = opacity >= 1.0 / 255.0;
     uint touched = 0u;
-    if (opacity >= 1.0 / 255.0) {
-        float q_max = footprint_q_max(opacity);
-        for (int ty = y0; ty < y1; ++ty) {
-            for (int tx = x0; tx < x1; ++tx) {
-                if (footprint_touches_tile(uv, conic, q_max, uint(tx), uint(ty))) {
-                    ++touched;
-                }
-            }
-        }
+    if (visible) {
+        touched = count_touched_cells(uv, conic, footprint_q_max(opacity), rect, 0u,
+                                      min(cells, TILE_RECT_CHUNK));
     }
-    if (touched == 0u) {
+    if (touched == 0u && !(visible && cells > TILE_RECT_CHUNK)) {
         skip(i);
         return false;
     }
@@ -143,7 +143,7 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     p.cutoff = NO_CUTOFF;
     p.color = color;
     p.pad = 0u;
-    p.rect = uvec4(x0, y0, x1, y1);
+    p.rect = rect;
     store_splat(pc.splats, i, p);
     pc.tiles_touched.v[i] = touched;
     pc.drawn.v[i] = 1u;

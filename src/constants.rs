@@ -17,6 +17,11 @@ pub const RASTER_WORKGROUP: u32 = TILE_SIZE * TILE_SIZE;
 /// rounds (dispatches) that carry the per-pixel state in a buffer; 12,288 x 3.5 = 43,008
 /// keeps a margin under the cap.
 pub const RASTER_CHUNK: u32 = 12288;
+/// Most cells of a splat's tile rectangle one invocation walks per round, for the same cap:
+/// project counting the tiles a splat touches, emit writing its pairs. A splat that covers
+/// more of a large image (from 2,896 x 2,896 pixels up) takes several rounds (dispatches),
+/// each carrying on where the last stopped.
+pub const TILE_RECT_CHUNK: u32 = 32768;
 /// Threads per workgroup of the one-item-per-thread kernels (project, emit, tile ranges).
 pub const LINEAR_WORKGROUP: u32 = 256;
 
@@ -134,6 +139,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TILE_SIZE", TILE_SIZE),
     ("RASTER_WORKGROUP", RASTER_WORKGROUP),
     ("RASTER_CHUNK", RASTER_CHUNK),
+    ("TILE_RECT_CHUNK", TILE_RECT_CHUNK),
     ("LINEAR_WORKGROUP", LINEAR_WORKGROUP),
     ("LINEAR_GRID_X", LINEAR_GRID_X),
     ("SCAN_WORKGROUP", SCAN_WORKGROUP),

@@ -672,14 +672,15 @@ impl Renderer {
             cutoffs: cutoffs_address,
         };
         self.project.record(
+            ctx,
             cmd,
             &push,
             scene.count,
+            gx * gy,
             scene.sh_degree,
             scene.sh_precision,
             frame_texels,
         );
-        compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"project");
 
         // The drawn Gaussians, packed in index order, then sorted by depth.
@@ -749,15 +750,20 @@ impl Renderer {
             counters: f.counters.address,
             cutoff_args: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_ARGS_OFFSET),
             cutoff_pairs: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
+            // The depth sort's other key buffer is free once the sort is done.
+            progress: f.depth_sort.keys[1 - depth_sorted].address,
+            round_index: 0,
+            pad: 0,
         };
         self.emit.record(
+            ctx,
             cmd,
             &push,
             scene.count,
+            gx * gy,
             cutoff_pairs.is_some(),
             frame_texels,
         );
-        compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"emit");
 
         if let Some(pairs) = cutoff_pairs {

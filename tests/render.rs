@@ -222,6 +222,52 @@ fn each_stage_matches_its_cpu_twin() {
     common::assert_no_validation_messages(&ctx);
 }
 
+/// A splat over all 65,536 tiles of a 4096 x 4096 image, so its tile rectangle has more cells
+/// than one invocation may loop over on lavapipe (65,535 iterations): project counts its tiles
+/// and emit writes its pairs in rounds of TILE_RECT_CHUNK cells (one dispatch per round), in
+/// front of a shell of small splats. Unclipped and under rara clipping by a plane through it
+/// (a cutoff splat whose pairs the cutoff-tiles pass classifies), GPU against CPU.
+#[test]
+fn splat_over_more_tiles_than_one_round_walks() {
+    use rara::constants::TILE_RECT_CHUNK;
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let mut scene = rara::synth::shell(2000, 0, 5);
+    let dc = rara::scene::rgb_to_sh_dc;
+    scene.push(
+        Vec3::ZERO,
+        0.95,
+        Vec3::splat(1.65),
+        Quat::IDENTITY,
+        &[dc(1.0), dc(0.5), dc(0.2)],
+    );
+    let cam = rara::synth::orbit_cameras(1, 2.4, 4096, 4096, 50.0).unwrap()[0];
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let plane = rara::Plane::new(Vec3::new(0.3, 0.2, 1.0).normalize(), 0.0).unwrap();
+    let rara_clip = Clip::rara(ClipRegion::planes(vec![plane]).unwrap());
+    for (name, clip) in [("unclipped", Clip::default()), ("rara", rara_clip)] {
+        let options = RenderOptions {
+            clip,
+            ..RenderOptions::default()
+        };
+        let (gpu, stats) = renderer.render(&gpu_scene, &cam, &options).unwrap();
+        assert!(
+            stats.intersections > TILE_RECT_CHUNK * 2,
+            "{name}: {} pairs, want the big splat over more than two rounds of cells",
+            stats.intersections
+        );
+        let cpu = reference::render(&scene, &cam, &options);
+        common::check_images(
+            &format!("splat_over_65536_tiles_{name}"),
+            &gpu,
+            &cpu,
+            50.0,
+            4,
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
 /// A tile list of more than 100k splats (lavapipe ends a shader invocation after 65,535 loop
 /// iterations in total): about 110k splats too faint to count (alpha < 1/255 away from their
 /// pixel) in front of one opaque splat, which is the last entry of a full rasterizer round

@@ -10,7 +10,7 @@ use std::ffi::CStr;
 
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{ComputePipeline, Context};
+use crate::vk::{compute_barrier, ComputePipeline, Context};
 
 /// Device addresses the emit kernel reads and writes.
 #[repr(C)]
@@ -36,6 +36,13 @@ pub struct EmitPush {
     pub cutoff_args: u64,
     /// Out (`emit_rara` only): per cutoff record, its splat's (first pair, splat index).
     pub cutoff_pairs: u64,
+    /// Scratch of a `u32` per drawn Gaussian: where a splat whose tile rectangle goes on past
+    /// a round takes up its pairs in the next (read only when there are several rounds).
+    pub progress: u64,
+    /// Set by [`Emit::record`] for each round.
+    pub round_index: u32,
+    /// Padding.
+    pub pad: u32,
 }
 
 /// The emit kernels: plain, and recording the cutoff splats' pairs.
@@ -66,14 +73,18 @@ impl Emit {
     }
 
     /// Records the emission for a scene of `count` Gaussians (the drawn ones are read on the
-    /// GPU). With `cutoff_pairs`, the kernel also fills `push.cutoff_args` and
-    /// `push.cutoff_pairs` for [`super::cutoff_tiles::CutoffTiles::record`]. The texel
-    /// kernels need `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
+    /// GPU) on an image of `tiles` tiles, in [`super::tile_rect_rounds`] rounds with a barrier after each.
+    /// With `cutoff_pairs`, the kernel also fills `push.cutoff_args` and `push.cutoff_pairs`
+    /// for [`super::cutoff_tiles::CutoffTiles::record`]. The texel kernels need
+    /// `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
+        ctx: &Context,
         cmd: vk::CommandBuffer,
         push: &EmitPush,
         count: u32,
+        tiles: u32,
         cutoff_pairs: bool,
         frame_texels: Option<vk::DescriptorSet>,
     ) {
@@ -82,6 +93,13 @@ impl Emit {
         } else {
             &self.plain
         };
-        pipeline.dispatch_in(cmd, push, frame_texels, super::linear_grid(count));
+        for round_index in 0..super::tile_rect_rounds(tiles) {
+            let push = EmitPush {
+                round_index,
+                ..*push
+            };
+            pipeline.dispatch_in(cmd, &push, frame_texels, super::linear_grid(count));
+            compute_barrier(ctx, cmd);
+        }
     }
 }

@@ -19,6 +19,14 @@ pub mod sort;
 pub mod tile_ranges;
 pub mod write_target;
 
+/// Rounds (dispatches) in which project and emit walk the splats' tile rectangles on an image
+/// of `tiles` tiles: a rectangle has at most that many cells, and an invocation walks up to
+/// [`TILE_RECT_CHUNK`](crate::constants::TILE_RECT_CHUNK) of them per round (lavapipe's cap on
+/// an invocation's loop iterations). 1 up to 32,768 tiles (2,896 x 2,896 pixels).
+pub fn tile_rect_rounds(tiles: u32) -> u32 {
+    tiles.div_ceil(crate::constants::TILE_RECT_CHUNK).max(1)
+}
+
 /// Workgroup counts of a linear kernel over `items` (GLSL `linear_grid` in `common.glsl`): rows
 /// of at most [`LINEAR_GRID_X`] workgroups, as only 65,535 per dimension are guaranteed.
 pub(crate) fn linear_grid(items: u32) -> [u32; 3] {

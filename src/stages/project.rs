@@ -8,7 +8,7 @@ use std::ffi::CStr;
 use crate::error::Result;
 use crate::precision::ShPrecision;
 use crate::shaders;
-use crate::vk::{ComputePipeline, Context};
+use crate::vk::{compute_barrier, ComputePipeline, Context};
 
 /// Device addresses the project kernel reads and writes.
 #[repr(C)]
@@ -34,6 +34,18 @@ pub struct ProjectPush {
     pub cutoffs: u64,
 }
 
+/// What `glsl/project_touched.comp` reads and writes: project's later rounds.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TouchedPush {
+    frame: u64,
+    splats: u64,
+    tiles_touched: u64,
+    drawn: u64,
+    round_index: u32,
+    pad: u32,
+}
+
 /// The project kernel, in one variant per SH degree (0 to 3) and storage precision: a CPU
 /// driver runs every band's code under a mask whatever the scene's degree, so each scene gets
 /// the kernel that holds only its own bands.
@@ -42,6 +54,8 @@ pub struct Project {
     sh32: [ComputePipeline; 4],
     /// Indexed by SH degree.
     sh16: [ComputePipeline; 4],
+    /// The later rounds' count of tiles touched (`project_touched.comp`).
+    touched: ComputePipeline,
 }
 
 /// A project kernel: its name, and its SPIR-V reading through buffer loads and through the
@@ -117,17 +131,27 @@ impl Project {
         Ok(Project {
             sh32: build_all(&SH32_KERNELS)?,
             sh16: build_all(&SH16_KERNELS)?,
+            touched: ComputePipeline::new::<TouchedPush>(
+                ctx,
+                c"project_touched",
+                shaders::PROJECT_TOUCHED,
+            )?,
         })
     }
 
     /// Records the projection of `count` Gaussians with SH of `degree` (0 to 3) stored at
-    /// `precision`. The texel kernels need `frame_texels`, the frame's set of
-    /// [`super::frame_texels_set_layout`].
+    /// `precision`, on an image of `tiles` tiles, with a barrier after it: project, then (on
+    /// images of more than [`TILE_RECT_CHUNK`](crate::constants::TILE_RECT_CHUNK) tiles) the
+    /// later rounds of the count of tiles touched ([`super::tile_rect_rounds`]). The texel
+    /// kernels need `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
+        ctx: &Context,
         cmd: vk::CommandBuffer,
         push: &ProjectPush,
         count: u32,
+        tiles: u32,
         degree: u32,
         precision: ShPrecision,
         frame_texels: Option<vk::DescriptorSet>,
@@ -136,11 +160,20 @@ impl Project {
             ShPrecision::F32 => &self.sh32,
             ShPrecision::F16 => &self.sh16,
         };
-        kernels[degree.min(3) as usize].dispatch_in(
-            cmd,
-            push,
-            frame_texels,
-            super::linear_grid(count),
-        );
+        let grid = super::linear_grid(count);
+        kernels[degree.min(3) as usize].dispatch_in(cmd, push, frame_texels, grid);
+        compute_barrier(ctx, cmd);
+        for round_index in 1..super::tile_rect_rounds(tiles) {
+            let touched = TouchedPush {
+                frame: push.frame,
+                splats: push.splats,
+                tiles_touched: push.tiles_touched,
+                drawn: push.drawn,
+                round_index,
+                pad: 0,
+            };
+            self.touched.dispatch(cmd, &touched, grid);
+            compute_barrier(ctx, cmd);
+        }
     }
 }
