@@ -226,12 +226,13 @@ fn each_stage_matches_its_cpu_twin() {
 /// than one invocation may loop over on lavapipe (65,535 iterations): project counts its tiles
 /// and emit writes its pairs in rounds of TILE_RECT_CHUNK cells (one dispatch per round), in
 /// front of a shell of small splats. Unclipped and under rara clipping by a plane through it
-/// (a cutoff splat whose pairs the cutoff-tiles pass classifies), GPU against CPU.
+/// (a cutoff splat whose pairs the cutoff-tiles pass classifies), in both rasterizer layouts
+/// (whose emit and cutoff-tiles kernels read the splats differently), GPU against CPU.
 #[test]
 fn splat_over_more_tiles_than_one_round_walks() {
     use rara::constants::TILE_RECT_CHUNK;
+    use rara::stages::rasterize::RasterLayout;
     let ctx = common::context();
-    let mut renderer = Renderer::new(&ctx).unwrap();
     let mut scene = rara::synth::shell(2000, 0, 5);
     let dc = rara::scene::rgb_to_sh_dc;
     scene.push(
@@ -242,7 +243,6 @@ fn splat_over_more_tiles_than_one_round_walks() {
         &[dc(1.0), dc(0.5), dc(0.2)],
     );
     let cam = rara::synth::orbit_cameras(1, 2.4, 4096, 4096, 50.0).unwrap()[0];
-    let gpu_scene = renderer.upload(&scene).unwrap();
     let plane = rara::Plane::new(Vec3::new(0.3, 0.2, 1.0).normalize(), 0.0).unwrap();
     let rara_clip = Clip::rara(ClipRegion::planes(vec![plane]).unwrap());
     for (name, clip) in [("unclipped", Clip::default()), ("rara", rara_clip)] {
@@ -250,20 +250,19 @@ fn splat_over_more_tiles_than_one_round_walks() {
             clip,
             ..RenderOptions::default()
         };
-        let (gpu, stats) = renderer.render(&gpu_scene, &cam, &options).unwrap();
-        assert!(
-            stats.intersections > TILE_RECT_CHUNK * 2,
-            "{name}: {} pairs, want the big splat over more than two rounds of cells",
-            stats.intersections
-        );
         let cpu = reference::render(&scene, &cam, &options);
-        common::check_images(
-            &format!("splat_over_65536_tiles_{name}"),
-            &gpu,
-            &cpu,
-            50.0,
-            4,
-        );
+        for layout in [RasterLayout::Strips, RasterLayout::PixelPerInvocation] {
+            let mut renderer = Renderer::with_raster_layout(&ctx, layout).unwrap();
+            let gpu_scene = renderer.upload(&scene).unwrap();
+            let (gpu, stats) = renderer.render(&gpu_scene, &cam, &options).unwrap();
+            assert!(
+                stats.intersections > TILE_RECT_CHUNK * 2,
+                "{name}: {} pairs, want the big splat over more than two rounds of cells",
+                stats.intersections
+            );
+            let label = format!("splat_over_65536_tiles_{name}_{layout:?}");
+            common::check_images(&label, &gpu, &cpu, 50.0, 4);
+        }
     }
     common::assert_no_validation_messages(&ctx);
 }
