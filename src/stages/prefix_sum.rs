@@ -218,8 +218,13 @@ impl PrefixSum {
         let mut offset = PARTIALS_OFFSET;
         let mut n = capacity.max(1);
         // Blocks: a level of block sums per level that has more than one block. Runs: the
-        // runs' sums, always.
-        while n > unit || (self.layout() == ScanLayout::Runs && level_offsets.is_empty()) {
+        // runs' sums, one level always.
+        let runs = self.layout() == ScanLayout::Runs;
+        while if runs {
+            level_offsets.is_empty()
+        } else {
+            n > unit
+        } {
             n = n.div_ceil(unit);
             level_offsets.push(offset);
             offset += (n * 4).next_multiple_of(16);
