@@ -217,14 +217,16 @@ impl PrefixSum {
         let mut level_offsets = Vec::new();
         let mut offset = PARTIALS_OFFSET;
         let mut n = capacity.max(1);
-        // Blocks: a level of block sums per level that has more than one block. Runs: the
-        // runs' sums, one level always.
-        let runs = self.layout() == ScanLayout::Runs;
-        while if runs {
-            level_offsets.is_empty()
-        } else {
-            n > unit
-        } {
+        // Blocks: a level of block sums for each level of more than one block. Runs: one
+        // level, the runs' sums.
+        loop {
+            let another = match self.layout() {
+                ScanLayout::Blocks => n > unit,
+                ScanLayout::Runs => level_offsets.is_empty(),
+            };
+            if !another {
+                break;
+            }
             n = n.div_ceil(unit);
             level_offsets.push(offset);
             offset += (n * 4).next_multiple_of(16);
@@ -251,48 +253,87 @@ impl PrefixSum {
         total: Option<u64>,
         scratch: &PrefixSumScratch,
     ) {
-        let (prepare, reduce, block) = match &self.kernels {
+        match &self.kernels {
             ScanKernels::Blocks {
                 prepare,
                 reduce,
                 block,
-            } => (prepare, reduce, block),
+            } => Self::record_blocks(
+                [prepare, reduce, block],
+                ctx,
+                cmd,
+                data,
+                count,
+                total,
+                scratch,
+            ),
             ScanKernels::Runs {
                 prepare,
                 reduce,
                 top,
                 down,
-            } => {
-                assert_eq!(data % 16, 0, "the runs layout scans 16-byte aligned data");
-                let sums = scratch.buffer.address + scratch.level_offsets[0];
-                let push = RunsPreparePush {
-                    count,
-                    args: scratch.buffer.address + ARGS_OFFSET,
-                };
-                prepare.dispatch(cmd, &push, [1, 1, 1]);
-                compute_barrier(ctx, cmd);
-                let push = RunsPush { data, count, sums };
-                reduce.dispatch_indirect(cmd, &push, scratch.buffer.raw, ARGS_OFFSET);
-                compute_barrier(ctx, cmd);
-                let push = RunsTopPush {
-                    sums,
-                    count,
-                    total: total.unwrap_or(0),
-                    flags: if total.is_some() { SCAN_WRITE_TOTAL } else { 0 },
-                    pad: 0,
-                };
-                top.dispatch(cmd, &push, [1, 1, 1]);
-                compute_barrier(ctx, cmd);
-                down.dispatch_indirect(
-                    cmd,
-                    &RunsPush { data, count, sums },
-                    scratch.buffer.raw,
-                    ARGS_OFFSET,
-                );
-                compute_barrier(ctx, cmd);
-                return;
-            }
+            } => Self::record_runs(
+                [prepare, reduce, top, down],
+                ctx,
+                cmd,
+                data,
+                count,
+                total,
+                scratch,
+            ),
+        }
+    }
+
+    /// [`PrefixSum::record`] in the runs layout: prepare, reduce, top, down.
+    fn record_runs(
+        [prepare, reduce, top, down]: [&ComputePipeline; 4],
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        data: u64,
+        count: u64,
+        total: Option<u64>,
+        scratch: &PrefixSumScratch,
+    ) {
+        assert_eq!(data % 16, 0, "the runs layout scans 16-byte aligned data");
+        let sums = scratch.buffer.address + scratch.level_offsets[0];
+        let push = RunsPreparePush {
+            count,
+            args: scratch.buffer.address + ARGS_OFFSET,
         };
+        prepare.dispatch(cmd, &push, [1, 1, 1]);
+        compute_barrier(ctx, cmd);
+        let push = RunsPush { data, count, sums };
+        reduce.dispatch_indirect(cmd, &push, scratch.buffer.raw, ARGS_OFFSET);
+        compute_barrier(ctx, cmd);
+        let push = RunsTopPush {
+            sums,
+            count,
+            total: total.unwrap_or(0),
+            flags: if total.is_some() { SCAN_WRITE_TOTAL } else { 0 },
+            pad: 0,
+        };
+        top.dispatch(cmd, &push, [1, 1, 1]);
+        compute_barrier(ctx, cmd);
+        down.dispatch_indirect(
+            cmd,
+            &RunsPush { data, count, sums },
+            scratch.buffer.raw,
+            ARGS_OFFSET,
+        );
+        compute_barrier(ctx, cmd);
+    }
+
+    /// [`PrefixSum::record`] in the blocks layout: prepare, reduce per level, the top block,
+    /// then each level's blocks down again.
+    fn record_blocks(
+        [prepare, reduce, block]: [&ComputePipeline; 3],
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        data: u64,
+        count: u64,
+        total: Option<u64>,
+        scratch: &PrefixSumScratch,
+    ) {
         let base = scratch.buffer.address;
         let sizes = |level: usize| base + 4 * level as u64;
         let args_offset = |level: usize| ARGS_OFFSET + 16 * level as u64;
