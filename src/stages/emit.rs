@@ -73,10 +73,10 @@ impl Emit {
     }
 
     /// Records the emission for a scene of `count` Gaussians (the drawn ones are read on the
-    /// GPU) on an image of `tiles` tiles, in [`super::tile_rect_rounds`] rounds with a barrier after each.
-    /// With `cutoff_pairs`, the kernel also fills `push.cutoff_args` and `push.cutoff_pairs`
-    /// for [`super::cutoff_tiles::CutoffTiles::record`]. The texel kernels need
-    /// `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
+    /// GPU) on an image of `tiles` tiles, in [`super::tile_rect_rounds`] rounds with a barrier
+    /// after each. With `cutoff_pairs`, the kernel also fills `push.cutoff_args` and
+    /// `push.cutoff_pairs` for [`super::cutoff_tiles::CutoffTiles::record`]. The texel
+    /// kernels need `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
