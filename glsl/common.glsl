@@ -220,6 +220,11 @@ uvec2 tile_rect_cell(uvec4 rect, uint k) {
     return uvec2(rect.x + k % columns, rect.y + k / columns);
 }
 
+// The cell after tile `xy` of a tile rectangle, row by row.
+uvec2 tile_rect_next(uvec4 rect, uvec2 xy) {
+    return xy.x + 1u == rect.z ? uvec2(rect.x, xy.y + 1u) : uvec2(xy.x + 1u, xy.y);
+}
+
 // How many of cells [first, end) of `rect` the ellipse q(p - uv) <= q_max reaches. One loop
 // over the cells rather than a loop per row: a SIMD vector of a CPU driver runs a loop for
 // as long as any of its lanes does, so nested loops take up to (most rows) x (most columns)
@@ -230,9 +235,7 @@ uint count_touched_cells(vec2 uv, vec3 conic, float q_max, uvec4 rect, uint firs
     uvec2 xy = tile_rect_cell(rect, first);
     for (uint k = first; k < end; ++k) {
         touched += footprint_touches_tile(uv, conic, q_max, xy.x, xy.y) ? 1u : 0u;
-        ++xy.x;
-        bool row_end = xy.x == rect.z;
-        xy = row_end ? uvec2(rect.x, xy.y + 1u) : xy;
+        xy = tile_rect_next(rect, xy);
     }
     return touched;
 }

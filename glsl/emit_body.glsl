@@ -87,20 +87,15 @@ void main() {
         slot = pc.progress.v[j];
     }
     uvec2 xy = tile_rect_cell(rect, first_cell);
-    uint x = xy.x;
-    uint y = xy.y;
     for (uint k = first_cell; k < end_cell; ++k) {
-        if (footprint_touches_tile(p.uv, p.conic, q_max, x, y)) {
+        if (footprint_touches_tile(p.uv, p.conic, q_max, xy.x, xy.y)) {
             if (slot < capacity) {
-                pc.keys.v[slot] = y * f.size.z + x;
+                pc.keys.v[slot] = xy.y * f.size.z + xy.x;
                 pc.values.v[slot] = i;
             }
             ++slot;
         }
-        ++x;
-        bool row_end = x == rect.z;
-        x = row_end ? rect.x : x;
-        y = row_end ? y + 1u : y;
+        xy = tile_rect_next(rect, xy);
     }
     if (end_cell < cells) {
         pc.progress.v[j] = slot;
