@@ -141,10 +141,37 @@ fn sort_two_million_pairs() {
     }
 }
 
+/// `data` scanned on the GPU by `scan`, with the grand total it stores.
+fn scan_on_gpu(
+    ctx: &rara::Context,
+    scan: &rara::stages::prefix_sum::PrefixSum,
+    data: &[u32],
+) -> (Vec<u32>, u32) {
+    use rara::vk::Buffer;
+    let n = data.len();
+    let buf = Buffer::from_slice(ctx, "scan data", data).unwrap();
+    let meta = Buffer::from_slice(ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
+    let scratch = scan.scratch(ctx, n as u64).unwrap();
+    ctx.run_commands(|cmd| {
+        scan.record(
+            ctx,
+            cmd,
+            buf.address,
+            meta.address,
+            Some(meta.address + 4),
+            &scratch,
+        )
+    })
+    .unwrap();
+    (
+        buf.download_as(n).unwrap(),
+        meta.download_as::<u32>(2).unwrap()[1],
+    )
+}
+
 #[test]
 fn prefix_sum_matches_cpu() {
     use rara::stages::prefix_sum::{PrefixSum, ScanLayout};
-    use rara::vk::Buffer;
     let ctx = common::context();
     let b = SCAN_BLOCK as usize;
     let run = SCAN_RUN as usize;
@@ -173,29 +200,13 @@ fn prefix_sum_matches_cpu() {
             3 * b * b + 7,
         ] {
             let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 50) as u32).collect();
-            let buf = Buffer::from_slice(&ctx, "scan data", &data).unwrap();
-            let meta =
-                Buffer::from_slice(&ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
-            let scratch = scan.scratch(&ctx, n as u64).unwrap();
-            ctx.run_commands(|cmd| {
-                scan.record(
-                    &ctx,
-                    cmd,
-                    buf.address,
-                    meta.address,
-                    Some(meta.address + 4),
-                    &scratch,
-                )
-            })
-            .unwrap();
-            let got: Vec<u32> = buf.download_as(n).unwrap();
+            let (got, total) = scan_on_gpu(&ctx, &scan, &data);
             let mut acc = 0u32;
             for (i, (&x, &g)) in data.iter().zip(&got).enumerate() {
                 assert_eq!(g, acc, "{layout:?}, n = {n}: element {i}");
                 acc += x;
             }
-            let total: Vec<u32> = meta.download_as(2).unwrap();
-            assert_eq!(total[1], acc, "{layout:?}, n = {n}: total");
+            assert_eq!(total, acc, "{layout:?}, n = {n}: total");
         }
     }
     common::assert_no_validation_messages(&ctx);
@@ -208,28 +219,13 @@ fn prefix_sum_matches_cpu() {
 fn prefix_sum_runs_at_its_largest() {
     use rara::constants::SCAN_RUNS_MAX;
     use rara::stages::prefix_sum::{PrefixSum, ScanLayout};
-    use rara::vk::Buffer;
     let ctx = common::context();
     let scan = PrefixSum::with_layout(&ctx, ScanLayout::Runs).unwrap();
     let n = SCAN_RUNS_MAX as usize;
-    let buf = Buffer::from_slice(&ctx, "scan data", &vec![1u32; n]).unwrap();
-    let meta = Buffer::from_slice(&ctx, "scan count + total", &[n as u32, u32::MAX]).unwrap();
-    let scratch = scan.scratch(&ctx, n as u64).unwrap();
-    ctx.run_commands(|cmd| {
-        scan.record(
-            &ctx,
-            cmd,
-            buf.address,
-            meta.address,
-            Some(meta.address + 4),
-            &scratch,
-        )
-    })
-    .unwrap();
-    let got: Vec<u32> = buf.download_as(n).unwrap();
+    let (got, total) = scan_on_gpu(&ctx, &scan, &vec![1u32; n]);
     if let Some(i) = (0..n).find(|&i| got[i] != i as u32) {
         panic!("element {i} of {n}: {} instead of {i}", got[i]);
     }
-    assert_eq!(meta.download_as::<u32>(2).unwrap()[1], n as u32, "total");
+    assert_eq!(total, n as u32, "total");
     common::assert_no_validation_messages(&ctx);
 }
