@@ -14,7 +14,7 @@ layout(push_constant) uniform Push {
 void main() {
     uvec2 run = own_run(pc.info.s.num_keys);
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
-        own_set(own_slot(d), 0u);
+        own_counts[d] = 0u;
     }
     // Four keys at a time: a group that starts below the run's end stays inside the buffer,
     // which holds a multiple of 4 keys (RadixSort::buffers).
@@ -22,13 +22,12 @@ void main() {
         uvec4 four = texelFetch(keys_in_texels, int(i / 4u));
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {
             if (i + j < run.y) {
-                uint slot = own_slot(key_digit(four[j], pc.shift, pc.digit_mask));
-                own_set(slot, own_get(slot) + 1u);
+                own_counts[key_digit(four[j], pc.shift, pc.digit_mask)] += 1u;
             }
         }
     }
     uint num_blocks = pc.info.s.num_blocks;
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
-        pc.hist.v[hist_index(d, num_blocks)] = own_get(own_slot(d));
+        pc.hist.v[hist_index(d, num_blocks)] = own_counts[d];
     }
 }

@@ -20,16 +20,16 @@ void main() {
     uvec2 run = own_run(pc.info.s.num_keys);
     uint num_blocks = pc.info.s.num_blocks;
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
-        own_set(own_slot(d), pc.hist.v[hist_index(d, num_blocks)]);
+        own_counts[d] = pc.hist.v[hist_index(d, num_blocks)];
     }
     for (uint i = run.x; i < run.y; i += 4u) {
         uvec4 keys = texelFetch(keys_in_texels, int(i / 4u));
         uvec4 values = texelFetch(values_in_texels, int(i / 4u));
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {
             if (i + j < run.y) {
-                uint slot = own_slot(key_digit(keys[j], pc.shift, pc.digit_mask));
-                uint dst = own_get(slot);
-                own_set(slot, dst + 1u);
+                uint digit = key_digit(keys[j], pc.shift, pc.digit_mask);
+                uint dst = own_counts[digit];
+                own_counts[digit] = dst + 1u;
                 pc.keys_out.v[dst] = keys[j];
                 pc.values_out.v[dst] = values[j];
             }

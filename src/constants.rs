@@ -72,7 +72,7 @@ pub const SORT_OWN_RADIX_BITS: u32 = 8;
 /// Buckets per radix-sort digit in the CPU-driver layout.
 pub const SORT_OWN_RADIX: u32 = 1 << SORT_OWN_RADIX_BITS;
 /// Threads per sort workgroup in the CPU-driver layout (one SIMD vector on lavapipe); each
-/// keeps its run's histogram in the sort's scratch (a storage texel buffer, 1 KiB per thread).
+/// keeps its run's histogram in a private array (1 KiB per thread).
 pub const SORT_OWN_WORKGROUP: u32 = 8;
 /// Consecutive keys each sort thread owns in the CPU-driver layout.
 pub const SORT_OWN_ITEMS: u32 = 4096;

@@ -10,7 +10,7 @@
 //! ([`SortLayout`]) do the same sort: one for GPUs (4-bit digits, counters in registers, ranks
 //! from subgroup scans, at any subgroup size of
 //! [`MIN_SUBGROUP_SIZE`](crate::constants::MIN_SUBGROUP_SIZE) or more) and one for CPU drivers
-//! (8-bit digits, one histogram per invocation, in a storage texel buffer).
+//! (8-bit digits, one histogram per invocation, in a private array).
 //!
 //! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_{count,scatter}.comp` (GPU layout),
 //! `glsl/sort_{count,scatter}_own_counts.comp` (CPU layout, shared code in
@@ -83,20 +83,20 @@ pub enum SortLayout {
     /// `sort_scatter.comp`): the layout for GPUs, many threads with few registers each.
     ShortRuns,
     /// 8-bit digits (half the passes); every invocation owns a run of 4,096 keys (8 runs per
-    /// workgroup, [`SORT_OWN_BLOCK`] keys), counts it in a histogram of its own (first in
-    /// shared memory, now in a storage texel buffer, see below) and writes that to its own
-    /// column of the global histogram, whose scan then gives each run its output positions:
-    /// the scatter neither counts again nor waits on the other invocations
-    /// (`sort_*_own_counts.comp`). For CPU drivers such as lavapipe, where an indexed
-    /// shared-memory access costs one load per lane, while a counter in registers
-    /// costs a compare per digit value per key, which 8-bit digits make 256. Measured on
-    /// llvmpipe (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with 64 invocations of
-    /// 64 keys each took 456 ms; a block histogram that the scatter counted again took 350 ms
-    /// with 512-key runs and 280-293 ms with 2,048; a column per run 224-238 ms with 2,048-key
-    /// runs, 206-214 ms with 4,096 and 261-276 ms with 1,024. The kernels read the keys and
-    /// values through texel views and keep the runs' counters in a storage texel buffer (both
-    /// gathers on such a driver, where a shared-memory or buffer load is a lane loop): 205-210
-    /// -> 104-114 ms.
+    /// workgroup, [`SORT_OWN_BLOCK`] keys), counts it in a histogram of its own (a private
+    /// array) and writes that to its own column of the global histogram, whose scan then
+    /// gives each run its output positions: the scatter neither counts again nor waits on the
+    /// other invocations (`sort_*_own_counts.comp`). For CPU drivers such as lavapipe, where
+    /// an indexed shared-memory, buffer or image store is a loop over the lanes, while a
+    /// counter in registers costs a compare per digit value per key, which 8-bit digits make
+    /// 256. Measured on llvmpipe (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with
+    /// 64 invocations of 64 keys each took 456 ms; a block histogram that the scatter counted
+    /// again took 350 ms with 512-key runs and 280-293 ms with 2,048; a column per run
+    /// 224-238 ms with 2,048-key runs, 206-214 ms with 4,096 and 261-276 ms with 1,024. The
+    /// kernels read the keys and values through texel views (gathers on such a driver, where
+    /// a buffer load is a lane loop) and kept the counters in a storage texel buffer: 205-210
+    /// -> 104-114 ms; the counters in a private array, whose indexed stores gallivm writes
+    /// without a loop or branch: 86-105 -> 58-70 ms.
     OwnCounts,
 }
 
@@ -156,79 +156,49 @@ pub struct RadixSort {
     scan: PrefixSum,
     layout: SortLayout,
     /// The own-counts kernels' descriptor set layout: the pass's input keys (binding 0) and
-    /// values (binding 1) as uniform texel buffers of four each (`R32G32B32A32_UINT`), and the
-    /// runs' counters (binding 2) as an `R32_UINT` storage texel buffer.
+    /// values (binding 1) as uniform texel buffers of four each (`R32G32B32A32_UINT`).
     texel_layout: Option<vk::DescriptorSetLayout>,
     ctx: Context,
 }
 
-/// The own-counts layout's scratch of a [`SortBuffers`]: the runs' counters, texel views of
-/// them and of the keys and values, and the descriptor sets: `sets[k]` reads `keys[k]` and
-/// `values[k]`, the input of a pass from buffer `k`.
+/// The own-counts layout's texel views of a [`SortBuffers`]' keys and values, and the
+/// descriptor sets: `sets[k]` reads `keys[k]` and `values[k]`, the input of a pass from buffer
+/// `k`.
 struct SortTexels {
     pool: vk::DescriptorPool,
     sets: [vk::DescriptorSet; 2],
     views: Vec<vk::BufferView>,
-    /// One `u32` per (run, digit): a column of the histogram per run.
-    counters: Buffer,
     ctx: Context,
 }
 
 impl SortTexels {
-    /// Counters for `counters` u32s, and views and sets for `keys` and `values` (each
-    /// `capacity` u32s, a multiple of 4).
+    /// Views and sets for `keys` and `values` (each `capacity` u32s, a multiple of 4).
     fn new(
         ctx: &Context,
         layout: vk::DescriptorSetLayout,
         keys: &[Buffer; 2],
         values: &[Buffer; 2],
         capacity: u64,
-        counters: u64,
     ) -> Result<Self> {
-        let counters = Buffer::new(
-            ctx,
-            "sort run counters",
-            counters * 4,
-            MemoryLocation::GpuOnly,
-        )?;
-        let sizes = [
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
-                descriptor_count: 4,
-            },
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_TEXEL_BUFFER,
-                descriptor_count: 2,
-            },
-        ];
+        let uniform = vk::DescriptorType::UNIFORM_TEXEL_BUFFER;
+        let sizes = [vk::DescriptorPoolSize {
+            ty: uniform,
+            descriptor_count: 4,
+        }];
         let (pool, sets) = allocate_sets(ctx, &sizes, &[layout, layout])?;
         // From here on Drop frees what exists.
         let mut texels = SortTexels {
             pool,
             sets: [sets[0], sets[1]],
-            views: Vec::with_capacity(6),
-            counters,
+            views: Vec::with_capacity(4),
             ctx: ctx.clone(),
         };
-        let (uniform, storage) = (
-            vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
-            vk::DescriptorType::STORAGE_TEXEL_BUFFER,
-        );
         for k in 0..2 {
             let set = texels.sets[k];
             let four = vk::Format::R32G32B32A32_UINT;
-            for (binding, buffer, format, range, ty) in [
-                (0, &keys[k], four, capacity * 4, uniform),
-                (1, &values[k], four, capacity * 4, uniform),
-                (
-                    2,
-                    &texels.counters,
-                    vk::Format::R32_UINT,
-                    texels.counters.size,
-                    storage,
-                ),
-            ] {
-                let view = write_texel_view(ctx, buffer, format, range, set, binding, ty)?;
+            for (binding, buffer) in [(0, &keys[k]), (1, &values[k])] {
+                let view =
+                    write_texel_view(ctx, buffer, four, capacity * 4, set, binding, uniform)?;
                 texels.views.push(view);
             }
         }
@@ -264,8 +234,7 @@ pub struct SortBuffers {
 }
 
 impl SortBuffers {
-    /// Device bytes held (keys, values, histograms, scan scratch, and the own-counts layout's
-    /// run counters).
+    /// Device bytes held (keys, values, histograms and scan scratch).
     pub fn device_bytes(&self) -> u64 {
         self.keys
             .iter()
@@ -274,7 +243,6 @@ impl SortBuffers {
             .sum::<u64>()
             + self.info.size
             + self.scan.device_bytes()
-            + self.texels.as_ref().map_or(0, |t| t.counters.size)
     }
 
     /// Most pairs these buffers hold.
@@ -353,11 +321,7 @@ impl RadixSort {
                         .descriptor_count(1)
                         .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 };
-                let bindings = [
-                    binding(0),
-                    binding(1),
-                    binding(2).descriptor_type(vk::DescriptorType::STORAGE_TEXEL_BUFFER),
-                ];
+                let bindings = [binding(0), binding(1)];
                 let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
                 Some(
                     unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
@@ -425,19 +389,16 @@ impl RadixSort {
         ];
         let texels = match self.texel_layout {
             Some(layout) => {
-                // The views hold capacity / 4 texels of keys or values, and a counter per
-                // histogram entry.
+                // The views hold capacity / 4 texels of keys or values.
                 let max_texels = ctx.info().max_texel_buffer_elements as u64;
-                if capacity / 4 > max_texels || hist_len > max_texels {
+                if capacity / 4 > max_texels {
                     return Err(Error::InvalidInput(format!(
                         "a sort of {capacity} pairs needs more than the {max_texels} texels a \
                          texel buffer holds on this device (maxTexelBufferElements) in the \
                          own-counts layout; RARA_SORT=short selects the other one"
                     )));
                 }
-                Some(SortTexels::new(
-                    ctx, layout, &keys, &values, capacity, hist_len,
-                )?)
+                Some(SortTexels::new(ctx, layout, &keys, &values, capacity)?)
             }
             None => None,
         };
