@@ -10,6 +10,14 @@
 // per block, the last block's empty runs counting nothing), so its exclusive scan gives every
 // run its first output position for every digit: the scatter neither counts again nor talks
 // to the other invocations, and runs in order keep the sort stable.
+//
+// Between passes the pairs travel packed, (key, value) as one 64-bit word: the first of
+// several passes reads separate keys and values and writes packed pairs, the last reads
+// packed pairs and writes separate keys and values (the sort's result), the ones between
+// read and write packed pairs. gallivm writes every component of a store in a loop of its
+// own over the lanes, so a scattered pair costs one such loop instead of two (lavapipe,
+// bench --sort 2000000, builds in turn: 87-94 -> 64-84 ms; 58-70 -> 49-50 ms in a quieter
+// hour).
 #extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
 #include "sort_common.glsl"
@@ -20,12 +28,43 @@
 
 layout(local_size_x = SORT_OWN_WORKGROUP) in;
 
-// The pass's input keys and values, four to a texel (descriptor set 0: SortBuffers' texel
-// views of the pass's source buffers). A CPU driver loads a texel as a gather, where a buffer
-// load is a scalar loop over the lanes per 64-bit word (lavapipe, bench --sort 2000000, two
-// runs in turn: 205-210 -> 162 ms).
+#ifndef SORT_PAIRS_IN
+#error "define SORT_PAIRS_IN: 1 if the pass reads packed pairs, 0 for separate keys and values"
+#endif
+
+// The pass's input (descriptor set 0: SortBuffers' texel views of the pass's source buffers):
+// separate keys and values, four to a texel, or packed pairs (key, value), two to a texel
+// (the passes between the first and the last; see load_four). A CPU driver loads a texel as a
+// gather, where a buffer load is a scalar loop over the lanes per 64-bit word (lavapipe,
+// bench --sort 2000000, two runs in turn: 205-210 -> 162 ms).
 layout(set = 0, binding = 0) uniform utextureBuffer keys_in_texels;
 layout(set = 0, binding = 1) uniform utextureBuffer values_in_texels;
+layout(set = 0, binding = 2) uniform utextureBuffer pairs_in_texels;
+
+// Keys i .. i + 3 of the pass's input (i a multiple of 4) and their values. The buffers hold a
+// multiple of 4 pairs, so a group that starts below the key count stays inside them.
+void load_four(uint i, out uvec4 keys, out uvec4 values) {
+#if SORT_PAIRS_IN
+    uvec4 a = texelFetch(pairs_in_texels, int(i / 2u));
+    uvec4 b = texelFetch(pairs_in_texels, int(i / 2u + 1u));
+    keys = uvec4(a.x, a.z, b.x, b.z);
+    values = uvec4(a.y, a.w, b.y, b.w);
+#else
+    keys = texelFetch(keys_in_texels, int(i / 4u));
+    values = texelFetch(values_in_texels, int(i / 4u));
+#endif
+}
+
+// Keys i .. i + 3 of the pass's input, as load_four.
+uvec4 load_four_keys(uint i) {
+#if SORT_PAIRS_IN
+    uvec4 a = texelFetch(pairs_in_texels, int(i / 2u));
+    uvec4 b = texelFetch(pairs_in_texels, int(i / 2u + 1u));
+    return uvec4(a.x, a.z, b.x, b.z);
+#else
+    return texelFetch(keys_in_texels, int(i / 4u));
+#endif
+}
 
 // The invocation's counters, one per digit: the run's keys of that digit (count) or its next
 // output position for the digit (scatter). A private array: gallivm keeps a workgroup's

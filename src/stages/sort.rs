@@ -13,8 +13,9 @@
 //! (8-bit digits, one histogram per invocation, in a private array).
 //!
 //! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_{count,scatter}.comp` (GPU layout),
-//! `glsl/sort_{count,scatter}_own_counts.comp` (CPU layout, shared code in
-//! `glsl/sort_own_counts.glsl`).
+//! `glsl/sort_{count,scatter}_own_counts*.comp` (CPU layout, a variant per way the pass
+//! holds its input and output; shared code in `glsl/sort_own_counts.glsl` and the
+//! `*_body.glsl` files).
 
 use std::ffi::CStr;
 
@@ -96,7 +97,9 @@ pub enum SortLayout {
     /// kernels read the keys and values through texel views (gathers on such a driver, where
     /// a buffer load is a lane loop) and kept the counters in a storage texel buffer: 205-210
     /// -> 104-114 ms; the counters in a private array, whose indexed stores gallivm writes
-    /// without a loop or branch: 86-105 -> 58-70 ms.
+    /// without a loop or branch: 86-105 -> 58-70 ms. Between passes the pairs travel packed,
+    /// one 64-bit store per pair in the scatter instead of two (each a loop over the lanes):
+    /// 87-94 -> 64-84 ms (builds in turn; 58-70 -> 49-50 ms in a quieter hour).
     OwnCounts,
 }
 
@@ -151,19 +154,69 @@ impl SortLayout {
 /// The radix-sort kernels.
 pub struct RadixSort {
     prepare: ComputePipeline,
+    /// Count kernel over separate keys (every pass of the GPU layout, the first of the
+    /// own-counts layout).
     count: ComputePipeline,
+    /// Scatter kernel from separate keys and values to separate keys and values (every pass of
+    /// the GPU layout, a one-pass sort in the own-counts layout).
     scatter: ComputePipeline,
+    /// The own-counts layout's kernels for sorts of several passes, which hand the pairs on
+    /// packed between passes.
+    packed: Option<PackedPassKernels>,
     scan: PrefixSum,
     layout: SortLayout,
-    /// The own-counts kernels' descriptor set layout: the pass's input keys (binding 0) and
-    /// values (binding 1) as uniform texel buffers of four each (`R32G32B32A32_UINT`).
+    /// The own-counts kernels' descriptor set layout, uniform texel buffers of the pass's
+    /// input (`R32G32B32A32_UINT`): keys (binding 0) and values (binding 1) four to a texel,
+    /// and the same key buffer as packed pairs (binding 2), two to a texel.
     texel_layout: Option<vk::DescriptorSetLayout>,
     ctx: Context,
 }
 
+/// The own-counts layout's kernels for sorts of several passes, between which the pairs travel
+/// packed, (key, value) as one 64-bit word, so that a pass's scatter writes a pair with one
+/// store (`sort_*_own_counts_*pairs.comp`).
+struct PackedPassKernels {
+    /// Count kernel over packed pairs (every pass after the first).
+    count: ComputePipeline,
+    /// Scatter kernel of the first pass: separate keys and values in, packed pairs out.
+    scatter_to_packed: ComputePipeline,
+    /// Scatter kernel of the passes between the first and the last: packed in and out.
+    scatter_packed: ComputePipeline,
+    /// Scatter kernel of the last pass: packed pairs in, separate keys and values out.
+    scatter_from_packed: ComputePipeline,
+}
+
+impl PackedPassKernels {
+    fn new(ctx: &Context, set_layout: vk::DescriptorSetLayout) -> Result<Self> {
+        let scatter = |name, spirv| {
+            ComputePipeline::with_set_layout::<ScatterPush>(ctx, name, spirv, Some(set_layout))
+        };
+        Ok(PackedPassKernels {
+            count: ComputePipeline::with_set_layout::<CountPush>(
+                ctx,
+                c"sort_count_own_counts_pairs",
+                shaders::SORT_COUNT_OWN_COUNTS_PAIRS,
+                Some(set_layout),
+            )?,
+            scatter_to_packed: scatter(
+                c"sort_scatter_own_counts_to_pairs",
+                shaders::SORT_SCATTER_OWN_COUNTS_TO_PAIRS,
+            )?,
+            scatter_packed: scatter(
+                c"sort_scatter_own_counts_pairs",
+                shaders::SORT_SCATTER_OWN_COUNTS_PAIRS,
+            )?,
+            scatter_from_packed: scatter(
+                c"sort_scatter_own_counts_from_pairs",
+                shaders::SORT_SCATTER_OWN_COUNTS_FROM_PAIRS,
+            )?,
+        })
+    }
+}
+
 /// The own-counts layout's texel views of a [`SortBuffers`]' keys and values, and the
-/// descriptor sets: `sets[k]` reads `keys[k]` and `values[k]`, the input of a pass from buffer
-/// `k`.
+/// descriptor sets: `sets[k]` reads `keys[k]` and `values[k]` (or the packed pairs in
+/// `keys[k]`), the input of a pass from buffer `k`.
 struct SortTexels {
     pool: vk::DescriptorPool,
     sets: [vk::DescriptorSet; 2],
@@ -172,7 +225,8 @@ struct SortTexels {
 }
 
 impl SortTexels {
-    /// Views and sets for `keys` and `values` (each `capacity` u32s, a multiple of 4).
+    /// Views and sets for `keys` (each `capacity` packed pairs) and `values` (each `capacity`
+    /// u32s); `capacity` is a multiple of 4.
     fn new(
         ctx: &Context,
         layout: vk::DescriptorSetLayout,
@@ -183,22 +237,25 @@ impl SortTexels {
         let uniform = vk::DescriptorType::UNIFORM_TEXEL_BUFFER;
         let sizes = [vk::DescriptorPoolSize {
             ty: uniform,
-            descriptor_count: 4,
+            descriptor_count: 6,
         }];
         let (pool, sets) = allocate_sets(ctx, &sizes, &[layout, layout])?;
         // From here on Drop frees what exists.
         let mut texels = SortTexels {
             pool,
             sets: [sets[0], sets[1]],
-            views: Vec::with_capacity(4),
+            views: Vec::with_capacity(6),
             ctx: ctx.clone(),
         };
         for k in 0..2 {
             let set = texels.sets[k];
             let four = vk::Format::R32G32B32A32_UINT;
-            for (binding, buffer) in [(0, &keys[k]), (1, &values[k])] {
-                let view =
-                    write_texel_view(ctx, buffer, four, capacity * 4, set, binding, uniform)?;
+            for (binding, buffer, bytes) in [
+                (0, &keys[k], capacity * 4),
+                (1, &values[k], capacity * 4),
+                (2, &keys[k], capacity * 8),
+            ] {
+                let view = write_texel_view(ctx, buffer, four, bytes, set, binding, uniform)?;
                 texels.views.push(view);
             }
         }
@@ -223,7 +280,9 @@ pub struct SortBuffers {
     /// The own-counts layout's texel views of `keys` and `values` (declared first: dropped
     /// before the buffers).
     texels: Option<SortTexels>,
-    /// Keys (`u32`), two buffers that passes alternate between.
+    /// Keys (`u32`), two buffers that passes alternate between. In the own-counts layout each
+    /// holds 8 bytes per pair: the passes between the first and the last leave the pairs
+    /// packed in them.
     pub keys: [Buffer; 2],
     /// Values, alongside `keys`.
     pub values: [Buffer; 2],
@@ -321,7 +380,7 @@ impl RadixSort {
                         .descriptor_count(1)
                         .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 };
-                let bindings = [binding(0), binding(1)];
+                let bindings = [binding(0), binding(1), binding(2)];
                 let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
                 Some(
                     unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
@@ -339,14 +398,18 @@ impl RadixSort {
                     scatter.1,
                     texel_layout,
                 )?,
+                texel_layout
+                    .map(|l| PackedPassKernels::new(ctx, l))
+                    .transpose()?,
                 PrefixSum::new(ctx)?,
             ))
         })();
         match kernels {
-            Ok((prepare, count, scatter, scan)) => Ok(RadixSort {
+            Ok((prepare, count, scatter, packed, scan)) => Ok(RadixSort {
                 prepare,
                 count,
                 scatter,
+                packed,
                 scan,
                 layout,
                 texel_layout,
@@ -379,9 +442,13 @@ impl RadixSort {
         let blocks = capacity.div_ceil(self.layout.block() as u64);
         let hist_len = blocks * self.layout.hist_per_block() as u64;
         let gpu = MemoryLocation::GpuOnly;
+        let key_bytes = match self.packed {
+            Some(_) => capacity * 8,
+            None => capacity * 4,
+        };
         let keys = [
-            Buffer::new(ctx, "sort keys A", capacity * 4, gpu)?,
-            Buffer::new(ctx, "sort keys B", capacity * 4, gpu)?,
+            Buffer::new(ctx, "sort keys A", key_bytes, gpu)?,
+            Buffer::new(ctx, "sort keys B", key_bytes, gpu)?,
         ];
         let values = [
             Buffer::new(ctx, "sort values A", capacity * 4, gpu)?,
@@ -389,9 +456,10 @@ impl RadixSort {
         ];
         let texels = match self.texel_layout {
             Some(layout) => {
-                // The views hold capacity / 4 texels of keys or values.
+                // The views hold capacity / 4 texels of keys or values, capacity / 2 of
+                // packed pairs.
                 let max_texels = ctx.info().max_texel_buffer_elements as u64;
-                if capacity / 4 > max_texels {
+                if capacity / 2 > max_texels {
                     return Err(Error::InvalidInput(format!(
                         "a sort of {capacity} pairs needs more than the {max_texels} texels a \
                          texel buffer holds on this device (maxTexelBufferElements) in the \
@@ -415,6 +483,20 @@ impl RadixSort {
             capacity,
             texels,
         })
+    }
+
+    /// The count and scatter kernels of radix pass `pass` of `passes`.
+    fn pass_kernels(&self, pass: u32, passes: u32) -> (&ComputePipeline, &ComputePipeline) {
+        let Some(packed) = self.packed.as_ref().filter(|_| passes > 1) else {
+            return (&self.count, &self.scatter);
+        };
+        if pass == 0 {
+            (&self.count, &packed.scatter_to_packed)
+        } else if pass + 1 < passes {
+            (&packed.count, &packed.scatter_packed)
+        } else {
+            (&packed.count, &packed.scatter_from_packed)
+        }
     }
 
     /// Records the sort of the pairs in `bufs.keys[0]` / `bufs.values[0]`. Their number is the
@@ -453,7 +535,8 @@ impl RadixSort {
         }
         let mut src = 0;
         let bits = self.layout.radix_bits();
-        for pass in 0..self.passes_for(key_bits) {
+        let passes = self.passes_for(key_bits);
+        for pass in 0..passes {
             let label = labels.passes[pass as usize];
             if let Some(t) = timer.as_deref_mut() {
                 t.begin_pass(cmd, label);
@@ -468,8 +551,8 @@ impl RadixSort {
                 digit_mask,
             };
             let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
-            self.count
-                .dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
+            let (count, scatter) = self.pass_kernels(pass, passes);
+            count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             self.scan
                 .record(ctx, cmd, hist, info + HIST_LEN_OFFSET, None, &bufs.scan);
@@ -483,8 +566,7 @@ impl RadixSort {
                 shift,
                 digit_mask,
             };
-            self.scatter
-                .dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
+            scatter.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             if let Some(t) = timer.as_deref_mut() {
                 t.end_pass(cmd, label);

@@ -1,0 +1,51 @@
+// Radix sort, scatter step, CPU-driver layout (SortLayout::OwnCounts; see
+// sort_own_counts.glsl): each invocation takes its run's first output position per digit from
+// the scanned histogram and writes its keys in order. Stable, with no atomics, barriers or
+// subgroup operations. Included by sort_scatter_own_counts*.comp, which set SORT_PAIRS_IN and
+// SORT_PAIRS_OUT.
+#include "sort_own_counts.glsl"
+
+#ifndef SORT_PAIRS_OUT
+#error "define SORT_PAIRS_OUT: 1 to write packed pairs, 0 for separate keys and values"
+#endif
+
+layout(push_constant) uniform Push {
+    U32s keys_in;       // unused: read through the texel views
+    U32s values_in;     // unused: read through the texel views
+    U32s keys_out;      // or the packed pairs, with SORT_PAIRS_OUT
+    U32s values_out;    // unused with SORT_PAIRS_OUT
+    SortInfoRef info;
+    U32s hist;          // scanned histogram: first output position of (digit, run)
+    uint shift;
+    uint digit_mask;
+} pc;
+
+void main() {
+    uvec2 run = own_run(pc.info.s.num_keys);
+    uint num_blocks = pc.info.s.num_blocks;
+    for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
+        own_counts[d] = pc.hist.v[hist_index(d, num_blocks)];
+    }
+#if SORT_PAIRS_OUT
+    U64s pairs_out = U64s(pc.keys_out);
+#endif
+    for (uint i = run.x; i < run.y; i += 4u) {
+        uvec4 keys, values;
+        load_four(i, keys, values);
+        [[unroll]] for (uint j = 0u; j < 4u; ++j) {
+            if (i + j < run.y) {
+                uint digit = key_digit(keys[j], pc.shift, pc.digit_mask);
+                uint dst = own_counts[digit];
+                own_counts[digit] = dst + 1u;
+#if SORT_PAIRS_OUT
+                // One 64-bit store: gallivm writes each component of a store in a loop of
+                // its own over the lanes, so a pair costs one loop instead of two.
+                pairs_out.v[dst] = packUint2x32(uvec2(keys[j], values[j]));
+#else
+                pc.keys_out.v[dst] = keys[j];
+                pc.values_out.v[dst] = values[j];
+#endif
+            }
+        }
+    }
+}

@@ -1,0 +1,6 @@
+// Radix sort scatter step, CPU-driver layout: packed pairs in and out (the passes between the
+// first and the last).
+#version 460
+#define SORT_PAIRS_IN 1
+#define SORT_PAIRS_OUT 1
+#include "sort_scatter_own_counts_body.glsl"
