@@ -126,6 +126,45 @@ fn key_patterns_in_layout(ctx: &rara::Context, layout: SortLayout) {
     check_sort(&sorter, ctx, random_keys(n, 20, 8), 20, "20-bit keys");
 }
 
+/// Sorts of packed pairs (key in the low 32 bits, value in the high), in the layout that
+/// takes them: every count of passes, sizes around a run and a block, against a stable CPU
+/// sort. The GPU layout refuses them.
+#[test]
+fn sort_packed_pairs() {
+    let ctx = common::context();
+    let refused = RadixSort::with_layout(&ctx, SortLayout::ShortRuns).unwrap();
+    assert!(!refused.sorts_packed());
+    assert!(refused.sort_packed_pairs(&ctx, &[1, 2], 32).is_err());
+    let sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
+    assert!(sorter.sorts_packed());
+    let block = SortLayout::OwnCounts.block() as usize;
+    let run = block / SORT_OWN_WORKGROUP as usize;
+    let sizes = [0, 1, 5, run - 1, run + 3, block + 1, 3 * block + 17];
+    // One, two, three and four passes.
+    for (k, key_bits) in [3u32, 13, 20, 32].into_iter().enumerate() {
+        for (j, &n) in sizes.iter().enumerate() {
+            let keys = random_keys(n, 32, (10 * k + j) as u64);
+            let pairs: Vec<u64> = keys
+                .iter()
+                .enumerate()
+                .map(|(i, &key)| key as u64 | (i as u64) << 32)
+                .collect();
+            let got = sorter.sort_packed_pairs(&ctx, &pairs, key_bits).unwrap();
+            let mask = (u64::MAX >> (64 - key_bits)) & u32::MAX as u64;
+            let mut expected = pairs.clone();
+            expected.sort_by_key(|&p| p & mask); // stable
+            assert_eq!(got.len(), n);
+            if let Some(i) = (0..n).find(|&i| got[i] != expected[i]) {
+                panic!(
+                    "{key_bits}-bit keys, n = {n}: position {i}: GPU {:#x}, expected {:#x}",
+                    got[i], expected[i]
+                );
+            }
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
 #[test]
 fn sort_two_million_pairs() {
     let ctx = common::context();

@@ -445,7 +445,9 @@ fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
 
 /// The radix sort alone on `n` random pairs (full 32-bit keys, as the frame's depth sort uses),
 /// GPU timestamps against `slice::sort_unstable_by_key` on the same data, medians of 5 runs
-/// each.
+/// each. Where the layout sorts packed pairs (CPU drivers), the GPU sorts them packed, one
+/// 64-bit word per pair, as the CPU's slice of `(u32, u32)` holds them; elsewhere as separate
+/// keys and values.
 fn bench_sort(n: u64) -> Result<()> {
     const RUNS: usize = 5;
     const KEY_BITS: u32 = 32;
@@ -454,17 +456,32 @@ fn bench_sort(n: u64) -> Result<()> {
     let mut rng = rara::synth::Rng::new(1);
     let keys: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
     let values: Vec<u32> = (0..n as u32).collect();
+    let packed: Vec<u64> = keys
+        .iter()
+        .zip(&values)
+        .map(|(&k, &v)| k as u64 | (v as u64) << 32)
+        .collect();
     let bufs = sort.buffers(&ctx, n)?;
     let count = Buffer::from_slice(&ctx, "sort count", &[n as u32])?;
     let mut timer = PassTimer::new(&ctx)?;
     let mut gpu_ms = Vec::new();
     let mut gpu_result = Vec::new();
     for _ in 0..RUNS + 1 {
-        bufs.keys[0].upload(bytemuck::cast_slice(&keys))?;
-        bufs.values[0].upload(bytemuck::cast_slice(&values))?;
+        if sort.sorts_packed() {
+            bufs.keys[0].upload(bytemuck::cast_slice(&packed))?;
+        } else {
+            bufs.keys[0].upload(bytemuck::cast_slice(&keys))?;
+            bufs.values[0].upload(bytemuck::cast_slice(&values))?;
+        }
         let out = ctx.run_commands(|cmd| {
             timer.begin_frame(cmd);
-            sort.record(
+            let record = if sort.sorts_packed() {
+                RadixSort::record_packed
+            } else {
+                RadixSort::record
+            };
+            record(
+                &sort,
                 &ctx,
                 cmd,
                 &bufs,
@@ -475,7 +492,12 @@ fn bench_sort(n: u64) -> Result<()> {
             )
         })?;
         gpu_ms.push(timer.read()?.iter().map(|p| p.ms).sum::<f64>());
-        gpu_result = bufs.keys[out].download_as::<u32>(n as usize)?;
+        gpu_result = if sort.sorts_packed() {
+            let pairs = bufs.keys[out].download_as::<u64>(n as usize)?;
+            pairs.into_iter().map(|p| p as u32).collect()
+        } else {
+            bufs.keys[out].download_as::<u32>(n as usize)?
+        };
     }
     gpu_ms.remove(0); // warm-up
     let mut cpu_ms = Vec::new();
@@ -495,11 +517,16 @@ fn bench_sort(n: u64) -> Result<()> {
     let (g, c) = (median(&mut gpu_ms), median(&mut cpu_ms));
     let rate = |ms: f64| n as f64 / (ms * 1e-3) / 1e6;
     println!(
-        "sort of {n} random (u32 key, u32 value) pairs on {} ({}), {:?} layout, medians of \
-         {RUNS} runs:",
+        "sort of {n} random (u32 key, u32 value) pairs on {} ({}), {:?} layout, {}, medians \
+         of {RUNS} runs:",
         ctx.info().name,
         ctx.info().driver,
-        sort.layout()
+        sort.layout(),
+        if sort.sorts_packed() {
+            "packed pairs"
+        } else {
+            "separate keys and values"
+        }
     );
     println!(
         "  GPU radix sort (timestamps): {g:9.2} ms  {:8.1} Mkeys/s",

@@ -160,8 +160,8 @@ pub struct RadixSort {
     /// Scatter kernel from separate keys and values to separate keys and values (every pass of
     /// the GPU layout, a one-pass sort in the own-counts layout).
     scatter: ComputePipeline,
-    /// The own-counts layout's kernels for sorts of several passes, which hand the pairs on
-    /// packed between passes.
+    /// The own-counts layout's kernels that read or write packed pairs: the passes between
+    /// the first and the last of a sort, and sorts of packed pairs.
     packed: Option<PackedPassKernels>,
     scan: PrefixSum,
     layout: SortLayout,
@@ -172,17 +172,30 @@ pub struct RadixSort {
     ctx: Context,
 }
 
-/// The own-counts layout's kernels for sorts of several passes, between which the pairs travel
-/// packed, (key, value) as one 64-bit word, so that a pass's scatter writes a pair with one
-/// store (`sort_*_own_counts_*pairs.comp`).
+/// How a sort's input or result is held in a [`SortBuffers`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairForm {
+    /// Keys in `keys[k]`, values in `values[k]`, one `u32` each.
+    Split,
+    /// Each pair as one `u64` in `keys[k]`: the key in the low 32 bits, the value in the
+    /// high 32 bits.
+    Packed,
+}
+
+/// The own-counts layout's kernels that read or write packed pairs ([`PairForm::Packed`]). A
+/// sort of several passes hands the pairs on packed between them, so that a pass's scatter
+/// writes a pair with one store (`sort_*_own_counts_*pairs.comp`).
 struct PackedPassKernels {
-    /// Count kernel over packed pairs (every pass after the first).
+    /// Count kernel over packed pairs.
     count: ComputePipeline,
-    /// Scatter kernel of the first pass: separate keys and values in, packed pairs out.
+    /// Scatter kernel from separate keys and values to packed pairs (the first pass of a
+    /// split sort).
     scatter_to_packed: ComputePipeline,
-    /// Scatter kernel of the passes between the first and the last: packed in and out.
+    /// Scatter kernel from packed pairs to packed pairs (the passes between the first and the
+    /// last, and every pass of a packed sort).
     scatter_packed: ComputePipeline,
-    /// Scatter kernel of the last pass: packed pairs in, separate keys and values out.
+    /// Scatter kernel from packed pairs to separate keys and values (the last pass of a split
+    /// sort).
     scatter_from_packed: ComputePipeline,
 }
 
@@ -485,18 +498,51 @@ impl RadixSort {
         })
     }
 
-    /// The count and scatter kernels of radix pass `pass` of `passes`.
-    fn pass_kernels(&self, pass: u32, passes: u32) -> (&ComputePipeline, &ComputePipeline) {
-        let Some(packed) = self.packed.as_ref().filter(|_| passes > 1) else {
+    /// Whether this sort takes and gives packed pairs ([`RadixSort::record_packed`]): in the
+    /// own-counts layout.
+    pub fn sorts_packed(&self) -> bool {
+        self.packed.is_some()
+    }
+
+    /// The count and scatter kernels of radix pass `pass` of `passes`, for a sort from `input`
+    /// to `output`: the passes between hand the pairs on packed where the layout can.
+    fn pass_kernels(
+        &self,
+        pass: u32,
+        passes: u32,
+        input: PairForm,
+        output: PairForm,
+    ) -> (&ComputePipeline, &ComputePipeline) {
+        let Some(packed) = self.packed.as_ref() else {
+            assert!(
+                input == PairForm::Split && output == PairForm::Split,
+                "packed pairs in the {:?} sort layout",
+                self.layout
+            );
             return (&self.count, &self.scatter);
         };
-        if pass == 0 {
-            (&self.count, &packed.scatter_to_packed)
-        } else if pass + 1 < passes {
-            (&packed.count, &packed.scatter_packed)
+        let packed_in = if pass == 0 {
+            input == PairForm::Packed
         } else {
-            (&packed.count, &packed.scatter_from_packed)
-        }
+            true
+        };
+        let packed_out = if pass + 1 == passes {
+            output == PairForm::Packed
+        } else {
+            true
+        };
+        let count = if packed_in {
+            &packed.count
+        } else {
+            &self.count
+        };
+        let scatter = match (packed_in, packed_out) {
+            (false, false) => &self.scatter,
+            (false, true) => &packed.scatter_to_packed,
+            (true, true) => &packed.scatter_packed,
+            (true, false) => &packed.scatter_from_packed,
+        };
+        (count, scatter)
     }
 
     /// Records the sort of the pairs in `bufs.keys[0]` / `bufs.values[0]`. Their number is the
@@ -512,6 +558,41 @@ impl RadixSort {
         bufs: &SortBuffers,
         count: u64,
         key_bits: u32,
+        labels: &SortLabels,
+        timer: Option<&mut PassTimer>,
+    ) -> usize {
+        let split = (PairForm::Split, PairForm::Split);
+        self.record_forms(ctx, cmd, bufs, count, key_bits, split, labels, timer)
+    }
+
+    /// As [`RadixSort::record`], for packed pairs ([`PairForm::Packed`]) in `bufs.keys[0]`,
+    /// the result packed as well in `bufs.keys[result]`. Only the own-counts layout sorts
+    /// packed pairs ([`RadixSort::sorts_packed`]); in the other this panics.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_packed(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        bufs: &SortBuffers,
+        count: u64,
+        key_bits: u32,
+        labels: &SortLabels,
+        timer: Option<&mut PassTimer>,
+    ) -> usize {
+        let packed = (PairForm::Packed, PairForm::Packed);
+        self.record_forms(ctx, cmd, bufs, count, key_bits, packed, labels, timer)
+    }
+
+    /// Records a sort from `forms.0` to `forms.1`.
+    #[allow(clippy::too_many_arguments)]
+    fn record_forms(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        bufs: &SortBuffers,
+        count: u64,
+        key_bits: u32,
+        forms: (PairForm, PairForm),
         labels: &SortLabels,
         mut timer: Option<&mut PassTimer>,
     ) -> usize {
@@ -551,7 +632,7 @@ impl RadixSort {
                 digit_mask,
             };
             let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
-            let (count, scatter) = self.pass_kernels(pass, passes);
+            let (count, scatter) = self.pass_kernels(pass, passes, forms.0, forms.1);
             count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             self.scan
@@ -605,6 +686,40 @@ impl RadixSort {
             bufs.keys[out].download_as(keys.len())?,
             bufs.values[out].download_as(values.len())?,
         ))
+    }
+}
+
+impl RadixSort {
+    /// Sorts packed pairs (see [`PairForm::Packed`]) on the GPU (upload, sort, readback) by
+    /// the low `key_bits` bits (at most 32) of their keys. Stable. An error in a layout that
+    /// does not sort packed pairs ([`RadixSort::sorts_packed`]).
+    pub fn sort_packed_pairs(
+        &self,
+        ctx: &Context,
+        pairs: &[u64],
+        key_bits: u32,
+    ) -> Result<Vec<u64>> {
+        if !self.sorts_packed() {
+            return Err(Error::InvalidInput(format!(
+                "the {:?} sort layout does not sort packed pairs",
+                self.layout
+            )));
+        }
+        let bufs = self.buffers(ctx, pairs.len() as u64)?;
+        bufs.keys[0].upload(bytemuck::cast_slice(pairs))?;
+        let count = Buffer::from_slice(ctx, "sort count", &[pairs.len() as u32])?;
+        let out = ctx.run_commands(|cmd| {
+            self.record_packed(
+                ctx,
+                cmd,
+                &bufs,
+                count.address,
+                key_bits,
+                &TILE_SORT_LABELS,
+                None,
+            )
+        })?;
+        bufs.keys[out].download_as(pairs.len())
     }
 }
 
