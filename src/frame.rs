@@ -56,13 +56,15 @@ pub struct FrameSlot {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameMemory {
     /// Per Gaussian of the scene: projected splats (64 B), tiles touched (4 B), sort slots /
-    /// pair offsets (4 B), the depth sort's keys and values (16 B) and histograms, plus the
-    /// prefix sum's partial sums (4 B per 1,024).
+    /// pair offsets (4 B), the depth sort's keys and values (16 B; 24 B in the CPU drivers'
+    /// sort layout, whose key buffers also hold packed pairs) and histograms, plus the prefix
+    /// sum's partial sums (4 B per 1,024).
     pub per_gaussian: u64,
     /// Cutoff side records (48 B per Gaussian) and where their pairs start (8 B), allocated by
     /// the first rara-clipped frame.
     pub cutoff_records: u64,
-    /// Sort keys and values, double-buffered (16 B per pair), and the sort histograms, for
+    /// Sort keys and values, double-buffered (16 B per pair; 24 B in the CPU drivers' sort
+    /// layout), and the sort histograms, for
     /// `intersection_capacity` (tile, splat) pairs.
     pub per_intersection: u64,
     /// Pairs the sort buffers hold (grown from the frames' counts).
