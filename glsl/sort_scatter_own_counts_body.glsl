@@ -29,23 +29,37 @@ void main() {
 #if SORT_PAIRS_OUT
     U64s pairs_out = U64s(pc.keys_out);
 #endif
-    for (uint i = run.x; i < run.y; i += 4u) {
+    // The run's whole groups of four keys without a test per key, then its last 0-3 keys one
+    // by one: gallivm runs a key's work under a mask whether the test passes or not (lavapipe,
+    // bench --sort 2000000 with LP_NUM_THREADS=1, three runs in turn: 150-154 -> 127-132 ms).
+    uint whole = run.x + ((run.y - run.x) & ~3u);
+    for (uint i = run.x; i < whole; i += 4u) {
         uvec4 keys, values;
         load_four(i, keys, values);
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {
-            if (i + j < run.y) {
-                uint digit = key_digit(keys[j], pc.shift, pc.digit_mask);
-                uint dst = own_counts[digit];
-                own_counts[digit] = dst + 1u;
+            uint digit = key_digit(keys[j], pc.shift, pc.digit_mask);
+            uint dst = own_counts[digit];
+            own_counts[digit] = dst + 1u;
 #if SORT_PAIRS_OUT
-                // One 64-bit store: gallivm writes each component of a store in a loop of
-                // its own over the lanes, so a pair costs one loop instead of two.
-                pairs_out.v[dst] = packUint2x32(uvec2(keys[j], values[j]));
+            pairs_out.v[dst] = packUint2x32(uvec2(keys[j], values[j]));
 #else
-                pc.keys_out.v[dst] = keys[j];
-                pc.values_out.v[dst] = values[j];
+            pc.keys_out.v[dst] = keys[j];
+            pc.values_out.v[dst] = values[j];
 #endif
-            }
         }
+    }
+    for (uint i = whole; i < run.y; ++i) {
+        uvec4 keys, values;
+        load_four(i & ~3u, keys, values);
+        uint j = i & 3u;
+        uint digit = key_digit(keys[j], pc.shift, pc.digit_mask);
+        uint dst = own_counts[digit];
+        own_counts[digit] = dst + 1u;
+#if SORT_PAIRS_OUT
+        pairs_out.v[dst] = packUint2x32(uvec2(keys[j], values[j]));
+#else
+        pc.keys_out.v[dst] = keys[j];
+        pc.values_out.v[dst] = values[j];
+#endif
     }
 }
