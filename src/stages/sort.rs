@@ -154,8 +154,8 @@ impl SortLayout {
 /// The radix-sort kernels.
 pub struct RadixSort {
     prepare: ComputePipeline,
-    /// Count kernel over separate keys (every pass of the GPU layout, the first of the
-    /// own-counts layout).
+    /// Count kernel over separate keys (every pass of the GPU layout; in the own-counts
+    /// layout the first pass of a sort of separate keys and values).
     count: ComputePipeline,
     /// Scatter kernel from separate keys and values to separate keys and values (every pass of
     /// the GPU layout, a one-pass sort in the own-counts layout).
@@ -687,9 +687,7 @@ impl RadixSort {
             bufs.values[out].download_as(values.len())?,
         ))
     }
-}
 
-impl RadixSort {
     /// Sorts packed pairs (see [`PairForm::Packed`]) on the GPU (upload, sort, readback) by
     /// the low `key_bits` bits (at most 32) of their keys. Stable. An error in a layout that
     /// does not sort packed pairs ([`RadixSort::sorts_packed`]).
