@@ -1,4 +1,4 @@
-// Radix sort, CPU-driver layout (SortLayout::OwnCounts, sort_{count,scatter}_own_counts.comp):
+// Radix sort, CPU-driver layout (SortLayout::OwnCounts, sort_{count,scatter}_own_counts*.comp):
 // every invocation owns a run of SORT_OWN_ITEMS consecutive keys (SORT_OWN_WORKGROUP runs make
 // one block) and counts the SORT_OWN_RADIX digits of its run in a histogram of its own
 // (own_counts below). A CPU driver runs a workgroup on one thread, so a private counter costs
@@ -14,7 +14,8 @@
 // Between passes the pairs travel packed, (key, value) as one 64-bit word: the first of
 // several passes reads separate keys and values and writes packed pairs, the last reads
 // packed pairs and writes separate keys and values (the sort's result), the ones between
-// read and write packed pairs. gallivm writes every component of a store in a loop of its
+// read and write packed pairs; a sort of packed pairs (RadixSort::record_packed) reads and
+// writes them in every pass. gallivm writes every component of a store in a loop of its
 // own over the lanes, so a scattered pair costs one such loop instead of two (lavapipe,
 // bench --sort 2000000, builds in turn: 87-94 -> 64-84 ms; 58-70 -> 49-50 ms in a quieter
 // hour).
@@ -34,7 +35,7 @@ layout(local_size_x = SORT_OWN_WORKGROUP) in;
 
 // The pass's input (descriptor set 0: SortBuffers' texel views of the pass's source buffers):
 // separate keys and values, four to a texel, or packed pairs (key, value), two to a texel
-// (the passes between the first and the last; see load_four). A CPU driver loads a texel as a
+// (see load_four). A CPU driver loads a texel as a
 // gather, where a buffer load is a scalar loop over the lanes per 64-bit word (lavapipe,
 // bench --sort 2000000, two runs in turn: 205-210 -> 162 ms).
 layout(set = 0, binding = 0) uniform utextureBuffer keys_in_texels;
