@@ -1,29 +1,46 @@
 // The frame's texel views: descriptor set 0 of the kernels that read through texel buffers on
-// CPU drivers (project, depth order, emit, cutoff tiles, tile ranges and the strips
-// rasterizer), one binding per buffer as stages::frame_texels_set_layout and
-// FrameSlot::frame_texels_set (src/frame.rs) make them. A CPU driver (lavapipe) loads a texel
-// as a gather, where a buffer load is a scalar loop over the lanes per 64-bit word. Every
-// binding is declared here, in one place; a kernel reads only those it needs.
+// CPU drivers (project, depth order, emit, cutoff tiles, tile ranges, the strips rasterizer
+// and write target; set 1 of write target's image kernels), one binding per buffer as
+// stages::frame_texels_set_layout and FrameSlot::frame_texels_set (src/frame.rs) make them. A
+// CPU driver (lavapipe) loads a texel as a gather, where a buffer load is a scalar loop over
+// the lanes per 64-bit word. Every binding is declared here, in one place; a kernel reads only
+// those it needs.
 #ifndef RARA_FRAME_TEXELS_GLSL
 #define RARA_FRAME_TEXELS_GLSL
 
 #include "common.glsl"
 #include "clip.glsl"
 
-layout(set = 0, binding = 0) uniform utextureBuffer sorted_values;   // R32_UINT, per pair
-layout(set = 0, binding = 1) uniform utextureBuffer splat_texels;    // RGBA32_UINT, 4 per splat
-layout(set = 0, binding = 2) uniform utextureBuffer cutoff_texels;   // RGBA32_UINT, 3 per record
-layout(set = 0, binding = 3) uniform utextureBuffer depth_order;     // R32_UINT
+// The set's number: 0, except in the write-target kernels of image targets, whose set 0 holds
+// the image.
+#ifndef FRAME_TEXELS_SET
+#define FRAME_TEXELS_SET 0
+#endif
+
+// R32_UINT, per pair.
+layout(set = FRAME_TEXELS_SET, binding = 0) uniform utextureBuffer sorted_values;
+// RGBA32_UINT, 4 per splat.
+layout(set = FRAME_TEXELS_SET, binding = 1) uniform utextureBuffer splat_texels;
+// RGBA32_UINT, 3 per record.
+layout(set = FRAME_TEXELS_SET, binding = 2) uniform utextureBuffer cutoff_texels;
+// R32_UINT.
+layout(set = FRAME_TEXELS_SET, binding = 3) uniform utextureBuffer depth_order;
 // R32_UINT: each Gaussian's drawn slot (the scan of the drawn flags), then, after the depth
 // order, each drawn Gaussian's first pair.
-layout(set = 0, binding = 4) uniform utextureBuffer slot_texels;
-layout(set = 0, binding = 5) uniform utextureBuffer tiles_touched;   // R32_UINT
-layout(set = 0, binding = 6) uniform utextureBuffer sorted_keys;     // R32_UINT
-layout(set = 0, binding = 7) uniform utextureBuffer emitted_keys;    // R32_UINT, as emitted
-layout(set = 0, binding = 8) uniform utextureBuffer gaussian_texels; // RGBA32_UINT, 3 per Gaussian
+layout(set = FRAME_TEXELS_SET, binding = 4) uniform utextureBuffer slot_texels;
+// R32_UINT.
+layout(set = FRAME_TEXELS_SET, binding = 5) uniform utextureBuffer tiles_touched;
+// R32_UINT.
+layout(set = FRAME_TEXELS_SET, binding = 6) uniform utextureBuffer sorted_keys;
+// R32_UINT, as emitted.
+layout(set = FRAME_TEXELS_SET, binding = 7) uniform utextureBuffer emitted_keys;
+// RGBA32_UINT, one per pixel: the rasterizer's per-pixel state (C, T), as floats' bits.
+layout(set = FRAME_TEXELS_SET, binding = 8) uniform utextureBuffer state_texels;
+// RGBA32_UINT, 3 per Gaussian.
+layout(set = FRAME_TEXELS_SET, binding = 9) uniform utextureBuffer gaussian_texels;
 // The scene's SH coefficients, four to a texel: RGBA32_UINT for floats, RG32_UINT for half
 // floats (sh.glsl).
-layout(set = 0, binding = 9) uniform utextureBuffer sh_texels;
+layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer sh_texels;
 
 // Projected splat i (load_splat in common.glsl, from its four texels; a kernel that does not
 // use a texel's fields does not fetch it).

@@ -8,8 +8,19 @@
 // buffer reached by device address, rows tightly packed) include this file. A buffer's format
 // is a kernel of its own rather than a branch: a CPU driver runs every branch's loads and
 // stores under a mask, each a scalar loop over the SIMD lanes (lavapipe, plant at 640x480:
-// write target 10.4 -> 6.0 ms for the rgba8 buffer, the same image).
+// write target 10.4 -> 6.0 ms for the rgba8 buffer, the same image). With STATE_TEXELS
+// (write_target_*_texels.comp, CPU drivers) the state is read through the frame's texel view
+// (binding 8 of frame_texels.glsl; set 1 of the image kernels, set 0 of the buffer kernels): a
+// gather, where a buffer load is a loop over the lanes per 64-bit word (lavapipe, plant at
+// 1280x960, builds in turn, four runs: 21.8-23.7 -> 9.9-13.1 ms; 5.3-5.8 -> 3.8-4.2 ms at
+// 640x480; the same images).
 #include "common.glsl"
+#ifdef STATE_TEXELS
+#ifdef TARGET_IMAGE_FORMAT
+#define FRAME_TEXELS_SET 1
+#endif
+#include "frame_texels.glsl"
+#endif
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 
@@ -21,7 +32,8 @@ layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 #define BUFFER_RGBA32F 2
 
 layout(push_constant) uniform Push {
-    Vec4s state;        // per pixel (C, T), T negated once the pixel was done
+    Vec4s state;        // per pixel (C, T), T negated once the pixel was done; unused with
+                        // STATE_TEXELS
     U32s buffer_target; // the buffer target (0 for an image)
     vec4 background;    // rgba, with mode background
     uvec2 size;         // W, H
@@ -80,7 +92,11 @@ void main() {
         return;
     }
     uint index = p.y * pc.size.x + p.x;
+#ifdef STATE_TEXELS
+    vec4 s = uintBitsToFloat(texelFetch(state_texels, int(index)));
+#else
     vec4 s = load_vec4_item(pc.state, index);
+#endif
     float T = abs(s.a);
     vec4 under = (pc.flags & TARGET_OVER) != 0u ? load_target(p, index) : pc.background;
     store_target(p, index, vec4(s.rgb + T * under.rgb, (1.0 - T) + T * under.a));

@@ -334,7 +334,7 @@ impl Renderer {
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx, texels)?,
             rasterize: Rasterize::new(ctx, layout, texels)?,
-            write_target: WriteTarget::new(ctx)?,
+            write_target: WriteTarget::new(ctx, texels)?,
             timer: PassTimer::new(ctx)?,
             headless: None,
             _frame_texels_layout: frame_texels_layout,
@@ -838,8 +838,12 @@ impl Renderer {
             flags: WriteTargetPush::flags_for(options.composite),
             padding: 0,
         };
+        // The state's texel view holds at most maxTexelBufferElements pixels; a larger image
+        // reads the state by address.
+        let max_texels = ctx.info().max_texel_buffer_elements as u64;
+        let state_texels = frame_texels.filter(|_| w as u64 * h as u64 <= max_texels);
         self.write_target
-            .record(cmd, &push, target.format(), image_set);
+            .record(cmd, &push, target.format(), image_set, state_texels);
         timer.end_pass(cmd, c"write target");
 
         // The counters, for FrameSlot::stats once the frame completed.

@@ -62,14 +62,14 @@ struct FormatKernels {
 
 impl FormatKernels {
     /// Builds the three kernels from `(name, SPIR-V)` in format order (rgba8, rgba16f,
-    /// rgba32f), with `set_layout` for an image target.
+    /// rgba32f), with descriptor sets of `set_layouts`.
     fn new(
         ctx: &Context,
         kernels: [(&'static CStr, &[u32]); 3],
-        set_layout: Option<vk::DescriptorSetLayout>,
+        set_layouts: &[vk::DescriptorSetLayout],
     ) -> Result<Self> {
         let build = |(name, spirv): (&'static CStr, &[u32])| {
-            ComputePipeline::with_set_layout::<WriteTargetPush>(ctx, name, spirv, set_layout)
+            ComputePipeline::with_set_layouts::<WriteTargetPush>(ctx, name, spirv, set_layouts)
         };
         let [rgba8, rgba16f, rgba32f] = kernels;
         Ok(FormatKernels {
@@ -90,17 +90,23 @@ impl FormatKernels {
 }
 
 /// The write-target kernels: one per storage-image format (GLSL must name the format to load
-/// an image) and one per buffer format (a CPU driver would run every format's branch).
+/// an image) and one per buffer format (a CPU driver would run every format's branch), and on
+/// CPU drivers the same again reading the rasterizer's state through the frame's texel view.
 pub struct WriteTarget {
     set_layout: vk::DescriptorSetLayout,
     image: FormatKernels,
     buffer: FormatKernels,
+    /// With the frame's texel views: image kernels (set 0 the image, set 1 the views) and
+    /// buffer kernels (set 0 the views), `write_target_*_texels.comp`.
+    texels: Option<(FormatKernels, FormatKernels)>,
     ctx: Context,
 }
 
 impl WriteTarget {
-    /// Builds the kernels and the descriptor set layout of an image target.
-    pub fn new(ctx: &Context) -> Result<Self> {
+    /// Builds the kernels and the descriptor set layout of an image target, and with
+    /// `frame_texels` (the layout of the frame's texel views, on CPU drivers) the kernels that
+    /// read the state through them.
+    pub fn new(ctx: &Context, frame_texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let set_layout = image_target_set_layout(ctx)?;
         // The layout is destroyed by Drop once `stage` exists; until then by hand on failure.
         let kernels = (|| {
@@ -120,7 +126,7 @@ impl WriteTarget {
                         shaders::WRITE_TARGET_IMAGE_RGBA32F,
                     ),
                 ],
-                Some(set_layout),
+                &[set_layout],
             )?;
             let buffer = FormatKernels::new(
                 ctx,
@@ -138,15 +144,57 @@ impl WriteTarget {
                         shaders::WRITE_TARGET_BUFFER_RGBA32F,
                     ),
                 ],
-                None,
+                &[],
             )?;
-            Ok((image, buffer))
+            let texels = match frame_texels {
+                None => None,
+                Some(frame_texels) => Some((
+                    FormatKernels::new(
+                        ctx,
+                        [
+                            (
+                                c"write_target_image_rgba8_texels",
+                                shaders::WRITE_TARGET_IMAGE_RGBA8_TEXELS,
+                            ),
+                            (
+                                c"write_target_image_rgba16f_texels",
+                                shaders::WRITE_TARGET_IMAGE_RGBA16F_TEXELS,
+                            ),
+                            (
+                                c"write_target_image_rgba32f_texels",
+                                shaders::WRITE_TARGET_IMAGE_RGBA32F_TEXELS,
+                            ),
+                        ],
+                        &[set_layout, frame_texels],
+                    )?,
+                    FormatKernels::new(
+                        ctx,
+                        [
+                            (
+                                c"write_target_buffer_rgba8_texels",
+                                shaders::WRITE_TARGET_BUFFER_RGBA8_TEXELS,
+                            ),
+                            (
+                                c"write_target_buffer_rgba16f_texels",
+                                shaders::WRITE_TARGET_BUFFER_RGBA16F_TEXELS,
+                            ),
+                            (
+                                c"write_target_buffer_rgba32f_texels",
+                                shaders::WRITE_TARGET_BUFFER_RGBA32F_TEXELS,
+                            ),
+                        ],
+                        &[frame_texels],
+                    )?,
+                )),
+            };
+            Ok((image, buffer, texels))
         })();
         match kernels {
-            Ok((image, buffer)) => Ok(WriteTarget {
+            Ok((image, buffer, texels)) => Ok(WriteTarget {
                 set_layout,
                 image,
                 buffer,
+                texels,
                 ctx: ctx.clone(),
             }),
             Err(e) => {
@@ -157,25 +205,36 @@ impl WriteTarget {
     }
 
     /// Records the kernel for a target of `format`: the storage image whose view `image_set`
-    /// holds or, with `image_set == None`, the buffer at `push.buffer_target`.
+    /// holds or, with `image_set == None`, the buffer at `push.buffer_target`. With
+    /// `frame_texels` (the frame's texel views, whose state view must hold every pixel) and
+    /// kernels built for them, the state is read through its view, else at `push.state`.
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
         push: &WriteTargetPush,
         format: TargetFormat,
         image_set: Option<vk::DescriptorSet>,
+        frame_texels: Option<vk::DescriptorSet>,
     ) {
         let groups = [
             push.size[0].div_ceil(TILE_SIZE),
             push.size[1].div_ceil(TILE_SIZE),
             1,
         ];
-        match image_set {
-            None => self.buffer.get(format).dispatch(cmd, push, groups),
-            Some(set) => self
+        match (image_set, self.texels.as_ref().zip(frame_texels)) {
+            (None, None) => self.buffer.get(format).dispatch(cmd, push, groups),
+            (Some(image), None) => self
                 .image
                 .get(format)
-                .dispatch_with_set(cmd, push, set, groups),
+                .dispatch_with_set(cmd, push, image, groups),
+            (None, Some(((_, buffer), texels))) => buffer
+                .get(format)
+                .dispatch_with_set(cmd, push, texels, groups),
+            (Some(image), Some(((images, _), texels))) => {
+                images
+                    .get(format)
+                    .dispatch_with_sets(cmd, push, &[image, texels], groups)
+            }
         }
     }
 }

@@ -1,5 +1,5 @@
-//! Compute pipelines whose interface is a push-constant block of buffer addresses (and, for the
-//! kernels that write an engine's storage image, one descriptor set).
+//! Compute pipelines whose interface is a push-constant block of buffer addresses and, for the
+//! kernels that need them, descriptor sets (an engine's storage image, texel views).
 
 use std::ffi::CStr;
 
@@ -12,7 +12,7 @@ use crate::error::{Result, VkContext};
 pub struct ComputePipeline {
     /// The pipeline handle.
     pub raw: vk::Pipeline,
-    /// Its layout (push constants, and at most one descriptor set).
+    /// Its layout (push constants and the descriptor sets).
     pub layout: vk::PipelineLayout,
     /// Kernel name, used for debug labels.
     pub name: &'static CStr,
@@ -36,6 +36,17 @@ impl ComputePipeline {
         spirv: &[u32],
         set_layout: Option<vk::DescriptorSetLayout>,
     ) -> Result<Self> {
+        let set_layouts: Vec<vk::DescriptorSetLayout> = set_layout.into_iter().collect();
+        Self::with_set_layouts::<P>(ctx, name, spirv, &set_layouts)
+    }
+
+    /// Like [`ComputePipeline::new`], with descriptor sets 0, 1, ... of `set_layouts`.
+    pub fn with_set_layouts<P: bytemuck::Pod>(
+        ctx: &Context,
+        name: &'static CStr,
+        spirv: &[u32],
+        set_layouts: &[vk::DescriptorSetLayout],
+    ) -> Result<Self> {
         let device = ctx.device();
         let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
         let module = unsafe { device.create_shader_module(&module_info, None) }
@@ -44,10 +55,9 @@ impl ComputePipeline {
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .offset(0)
             .size(std::mem::size_of::<P>() as u32)];
-        let set_layouts: Vec<vk::DescriptorSetLayout> = set_layout.into_iter().collect();
         let layout_info = vk::PipelineLayoutCreateInfo::default()
             .push_constant_ranges(&ranges)
-            .set_layouts(&set_layouts);
+            .set_layouts(set_layouts);
         let layout = match unsafe { device.create_pipeline_layout(&layout_info, None) } {
             Ok(l) => l,
             Err(e) => {
@@ -90,16 +100,34 @@ impl ComputePipeline {
 
     /// Binds `set` as descriptor set 0 of this pipeline's layout.
     fn bind_set(&self, cmd: vk::CommandBuffer, set: vk::DescriptorSet) {
+        self.bind_sets(cmd, &[set]);
+    }
+
+    /// Binds `sets` as descriptor sets 0, 1, ... of this pipeline's layout.
+    fn bind_sets(&self, cmd: vk::CommandBuffer, sets: &[vk::DescriptorSet]) {
         unsafe {
             self.ctx.device().cmd_bind_descriptor_sets(
                 cmd,
                 vk::PipelineBindPoint::COMPUTE,
                 self.layout,
                 0,
-                &[set],
+                sets,
                 &[],
             )
         };
+    }
+
+    /// Records a dispatch of `groups` workgroups with descriptor sets 0, 1, ... bound to
+    /// `sets`.
+    pub fn dispatch_with_sets<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &P,
+        sets: &[vk::DescriptorSet],
+        groups: [u32; 3],
+    ) {
+        self.bind_sets(cmd, sets);
+        self.dispatch(cmd, push, groups);
     }
 
     /// Records a dispatch of `groups` workgroups with descriptor set 0 bound to `set`.
