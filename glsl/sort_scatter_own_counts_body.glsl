@@ -20,15 +20,28 @@ layout(push_constant) uniform Push {
     uint digit_mask;
 } pc;
 
+// Writes the run's next key of `key`'s digit, with its value, at the digit's next output
+// position.
+void scatter_pair(uint key, uint value) {
+    uint digit = key_digit(key, pc.shift, pc.digit_mask);
+    uint dst = own_counts[digit];
+    own_counts[digit] = dst + 1u;
+#if SORT_PAIRS_OUT
+    // One 64-bit store: gallivm writes each component of a store in a loop of its own over
+    // the lanes, so a pair costs one loop instead of two.
+    U64s(pc.keys_out).v[dst] = packUint2x32(uvec2(key, value));
+#else
+    pc.keys_out.v[dst] = key;
+    pc.values_out.v[dst] = value;
+#endif
+}
+
 void main() {
     uvec2 run = own_run(pc.info.s.num_keys);
     uint num_blocks = pc.info.s.num_blocks;
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
         own_counts[d] = pc.hist.v[hist_index(d, num_blocks)];
     }
-#if SORT_PAIRS_OUT
-    U64s pairs_out = U64s(pc.keys_out);
-#endif
     // The run's whole groups of four keys without a test per key, then its last 0-3 keys one
     // by one: gallivm runs a key's work under a mask whether the test passes or not (lavapipe,
     // bench --sort 2000000 with LP_NUM_THREADS=1, three runs in turn: 150-154 -> 127-132 ms).
@@ -37,29 +50,12 @@ void main() {
         uvec4 keys, values;
         load_four(i, keys, values);
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {
-            uint digit = key_digit(keys[j], pc.shift, pc.digit_mask);
-            uint dst = own_counts[digit];
-            own_counts[digit] = dst + 1u;
-#if SORT_PAIRS_OUT
-            pairs_out.v[dst] = packUint2x32(uvec2(keys[j], values[j]));
-#else
-            pc.keys_out.v[dst] = keys[j];
-            pc.values_out.v[dst] = values[j];
-#endif
+            scatter_pair(keys[j], values[j]);
         }
     }
     for (uint i = whole; i < run.y; ++i) {
         uvec4 keys, values;
         load_four(i & ~3u, keys, values);
-        uint j = i & 3u;
-        uint digit = key_digit(keys[j], pc.shift, pc.digit_mask);
-        uint dst = own_counts[digit];
-        own_counts[digit] = dst + 1u;
-#if SORT_PAIRS_OUT
-        pairs_out.v[dst] = packUint2x32(uvec2(keys[j], values[j]));
-#else
-        pc.keys_out.v[dst] = keys[j];
-        pc.values_out.v[dst] = values[j];
-#endif
+        scatter_pair(keys[i & 3u], values[i & 3u]);
     }
 }
