@@ -14,7 +14,7 @@
 // Between passes the pairs travel packed, (key, value) as one 64-bit word: the first of
 // several passes reads separate keys and values and writes packed pairs, the last reads
 // packed pairs and writes separate keys and values (the sort's result), the ones between
-// read and write packed pairs; a sort of packed pairs (RadixSort::record_packed) reads and
+// read and write packed pairs; a sort of packed pairs (RadixSort::record_form) reads and
 // writes them in every pass. gallivm writes every component of a store in a loop of its
 // own over the lanes, so a scattered pair costs one such loop instead of two (lavapipe,
 // bench --sort 2000000, builds in turn: 87-94 -> 64-84 ms; 58-70 -> 49-50 ms in a quieter

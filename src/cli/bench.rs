@@ -7,7 +7,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use rara::clip::{Clip, ClipMode, Plane};
-use rara::stages::sort::{RadixSort, TILE_SORT_LABELS};
+use rara::stages::sort::{PairForm, RadixSort, TILE_SORT_LABELS};
 use rara::timing::PassTimer;
 use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
@@ -475,18 +475,18 @@ fn bench_sort(n: u64) -> Result<()> {
         }
         let out = ctx.run_commands(|cmd| {
             timer.begin_frame(cmd);
-            let record = if sort.sorts_packed() {
-                RadixSort::record_packed
+            let form = if sort.sorts_packed() {
+                PairForm::Packed
             } else {
-                RadixSort::record
+                PairForm::Split
             };
-            record(
-                &sort,
+            sort.record_form(
                 &ctx,
                 cmd,
                 &bufs,
                 count.address,
                 KEY_BITS,
+                form,
                 &TILE_SORT_LABELS,
                 Some(&mut timer),
             )

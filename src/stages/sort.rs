@@ -498,39 +498,31 @@ impl RadixSort {
         })
     }
 
-    /// Whether this sort takes and gives packed pairs ([`RadixSort::record_packed`]): in the
+    /// Whether this sort takes and gives packed pairs ([`RadixSort::record_form`]): in the
     /// own-counts layout.
     pub fn sorts_packed(&self) -> bool {
         self.packed.is_some()
     }
 
-    /// The count and scatter kernels of radix pass `pass` of `passes`, for a sort from `input`
-    /// to `output`: the passes between hand the pairs on packed where the layout can.
+    /// The count and scatter kernels of radix pass `pass` of `passes`, for a sort whose input
+    /// and result are in `form`: the passes between hand the pairs on packed where the layout
+    /// can.
     fn pass_kernels(
         &self,
         pass: u32,
         passes: u32,
-        input: PairForm,
-        output: PairForm,
+        form: PairForm,
     ) -> (&ComputePipeline, &ComputePipeline) {
         let Some(packed) = self.packed.as_ref() else {
             assert!(
-                input == PairForm::Split && output == PairForm::Split,
+                form == PairForm::Split,
                 "packed pairs in the {:?} sort layout",
                 self.layout
             );
             return (&self.count, &self.scatter);
         };
-        let packed_in = if pass == 0 {
-            input == PairForm::Packed
-        } else {
-            true
-        };
-        let packed_out = if pass + 1 == passes {
-            output == PairForm::Packed
-        } else {
-            true
-        };
+        let packed_in = pass > 0 || form == PairForm::Packed;
+        let packed_out = pass + 1 < passes || form == PairForm::Packed;
         let count = if packed_in {
             &packed.count
         } else {
@@ -561,38 +553,31 @@ impl RadixSort {
         labels: &SortLabels,
         timer: Option<&mut PassTimer>,
     ) -> usize {
-        let split = (PairForm::Split, PairForm::Split);
-        self.record_forms(ctx, cmd, bufs, count, key_bits, split, labels, timer)
+        self.record_form(
+            ctx,
+            cmd,
+            bufs,
+            count,
+            key_bits,
+            PairForm::Split,
+            labels,
+            timer,
+        )
     }
 
-    /// As [`RadixSort::record`], for packed pairs ([`PairForm::Packed`]) in `bufs.keys[0]`,
-    /// the result packed as well in `bufs.keys[result]`. Only the own-counts layout sorts
-    /// packed pairs ([`RadixSort::sorts_packed`]); in the other this panics.
+    /// As [`RadixSort::record`], for a sort whose input and result are in `form`: with
+    /// [`PairForm::Packed`], packed pairs in `bufs.keys[0]` and the result packed in
+    /// `bufs.keys[result]`. Only the own-counts layout sorts packed pairs
+    /// ([`RadixSort::sorts_packed`]); in the other a packed `form` panics.
     #[allow(clippy::too_many_arguments)]
-    pub fn record_packed(
+    pub fn record_form(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         bufs: &SortBuffers,
         count: u64,
         key_bits: u32,
-        labels: &SortLabels,
-        timer: Option<&mut PassTimer>,
-    ) -> usize {
-        let packed = (PairForm::Packed, PairForm::Packed);
-        self.record_forms(ctx, cmd, bufs, count, key_bits, packed, labels, timer)
-    }
-
-    /// Records a sort from `forms.0` to `forms.1`.
-    #[allow(clippy::too_many_arguments)]
-    fn record_forms(
-        &self,
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        bufs: &SortBuffers,
-        count: u64,
-        key_bits: u32,
-        forms: (PairForm, PairForm),
+        form: PairForm,
         labels: &SortLabels,
         mut timer: Option<&mut PassTimer>,
     ) -> usize {
@@ -632,7 +617,7 @@ impl RadixSort {
                 digit_mask,
             };
             let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
-            let (count, scatter) = self.pass_kernels(pass, passes, forms.0, forms.1);
+            let (count, scatter) = self.pass_kernels(pass, passes, form);
             count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             self.scan
@@ -707,12 +692,13 @@ impl RadixSort {
         bufs.keys[0].upload(bytemuck::cast_slice(pairs))?;
         let count = Buffer::from_slice(ctx, "sort count", &[pairs.len() as u32])?;
         let out = ctx.run_commands(|cmd| {
-            self.record_packed(
+            self.record_form(
                 ctx,
                 cmd,
                 &bufs,
                 count.address,
                 key_bits,
+                PairForm::Packed,
                 &TILE_SORT_LABELS,
                 None,
             )
