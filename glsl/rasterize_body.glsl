@@ -26,7 +26,7 @@
 //
 // One dispatch walks at most RASTER_CHUNK entries of each tile list (lavapipe ends an
 // invocation after 65,535 loop iterations in total; the loops over r are unrolled, and the rara
-// variants take at most 3.5 passes per entry, see RASTER_CHUNK in src/constants.rs).
+// variants take at most 3 passes per entry, see RASTER_CHUNK in src/constants.rs).
 // Longer lists take several rounds; between rounds, and for the write-target stage after the
 // last, the per-pixel state (colour, transmittance, done) lives in `state`.
 //
@@ -352,33 +352,42 @@ void composite_entries(uint base, uint count) {
     // Runs of plain splats and runs of cutoff splats each go through a loop of their own, so
     // that the weight code runs once per cutoff splat rather than for every splat: CPU drivers
     // execute an if's body under a mask whatever the condition, but leave a loop once no lane
-    // continues it. Each run's loop has the shape of the plain kernel's (a for loop that
-    // breaks), which such a driver runs faster than a do-while over a predicated body
-    // (lavapipe, plant at 640x480 with almost no cutoff splats: rasterize 105 -> 96 ms; 95 ms
-    // with the plain loop alone).
+    // continues it (lavapipe, plant at 640x480 with almost no cutoff splats: rasterize 105 ->
+    // 96 ms against a do-while over a predicated body; 95 ms with the plain loop alone).
+    // Each run's loop is a do-while that composites the splat in hand and fetches the next one
+    // at the end of its body. Such a driver tests for live lanes only at the end of a loop's
+    // body, so a loop that found the run's end at its top would run one more whole body, under
+    // an empty mask, per run: a cutoff splat between plain ones cost its own weight, a second
+    // one and a plain splat's compositing.
+    if (count == 0u) {
+        return;
+    }
     uint k = 0u;
     bool open = true;
+    Staged s = splat_at(base, 0u);
     do {
-        for (; k < count; ++k) {
-            Staged s = splat_at(base, k);
-            if (s.co.w < 0.0) {
-                break;
-            }
-            if (!composite(s, false)) {
-                open = false;
-                break;
-            }
+        if (s.co.w >= 0.0) {
+            do {
+                open = composite(s, false);
+                ++k;
+                if (!open || k == count) {
+                    break;
+                }
+                s = splat_at(base, k);
+            } while (s.co.w >= 0.0);
         }
-        for (; open && k < count; ++k) {
-            Staged s = splat_at(base, k);
-            if (s.co.w >= 0.0) {
-                break;
-            }
-            s.co.w = -s.co.w;
-            if (!composite(s, true)) {
-                open = false;
-                break;
-            }
+        // Here s is a cutoff splat, unless the list or the pixels ran out.
+        if (open && k < count) {
+            do {
+                Staged t = s;
+                t.co.w = -t.co.w;
+                open = composite(t, true);
+                ++k;
+                if (!open || k == count) {
+                    break;
+                }
+                s = splat_at(base, k);
+            } while (s.co.w < 0.0);
         }
     } while (open && k < count);
 #endif

@@ -9,13 +9,13 @@ pub const TILE_SIZE: u32 = 16;
 /// Threads per workgroup of the rasterizer: one per pixel of a tile.
 pub const RASTER_WORKGROUP: u32 = TILE_SIZE * TILE_SIZE;
 /// Most tile-list entries one rasterizer round walks per tile. lavapipe stops an invocation's
-/// loops after 65,535 iterations in total. The rara rasterizer's loops take up to 3.5 passes
-/// per entry: a cutoff splat in a run of them takes its pass of the cutoff loop and two of the
-/// ends of its visible interval; a plain and a cutoff splat in turn take seven between them
-/// (each run's loop takes one more pass to find the run's end, plus one of the outer loop);
-/// the strips layout's staging adds one per 8 entries. So longer lists are split over several
-/// rounds (dispatches) that carry the per-pixel state in a buffer; 12,288 x 3.5 = 43,008
-/// keeps a margin under the cap.
+/// loops after 65,535 iterations in total. The rara rasterizer's loops take up to 3 passes per
+/// entry: a cutoff splat takes its pass of the cutoff loop and up to two of the ends of its
+/// visible interval; a plain and a cutoff splat in turn take five between them (one each, two
+/// ends, one of the outer loop), and each loop at most one empty pass per batch walked; the
+/// pixel-per-invocation layout's staging adds one per batch of 256 entries. So longer lists are
+/// split over several rounds (dispatches) that carry the per-pixel state in a buffer;
+/// 12,288 x 3 = 36,864 keeps a margin under the cap.
 pub const RASTER_CHUNK: u32 = 12288;
 /// Most cells of a splat's tile rectangle one invocation walks per round, for the same cap:
 /// project counting the tiles a splat touches, emit writing its pairs. A splat that covers
