@@ -60,14 +60,19 @@ void main() {
         uint tile = pc.keys.v[slot];
 #endif
         uvec2 xy = uvec2(tile % f.size.z, tile / f.size.z);
-        // The rays through the tile's corner pixel centres, in order around it.
-        vec2 lo = vec2(xy * TILE_SIZE);
-        vec2 hi = lo + float(TILE_SIZE - 1u);
-        vec3 dirs[4] = vec3[4](pixel_ray(f, lo), pixel_ray(f, vec2(hi.x, lo.y)),
-                               pixel_ray(f, hi), pixel_ray(f, vec2(lo.x, hi.y)));
+        // The rays through the corners of the tile's pixels that the splat can reach (alpha
+        // >= 1/255 needs q <= footprint_q_max), in order around them: the weight elsewhere in
+        // the tile changes no pixel, and a footprint that covers part of the tile often sees
+        // only weight 1 or 0 where the tile as a whole sees both.
+        vec4 box = footprint_pixel_box_in_tile(p.uv, p.conic, footprint_q_max(p.opacity), xy.x,
+                                               xy.y);
+        vec3 dirs[4] = vec3[4](pixel_ray(f, box.xy), pixel_ray(f, box.zy),
+                               pixel_ray(f, box.zw), pixel_ray(f, box.xw));
         float q_min = footprint_q_min_in_tile(p.uv, p.conic, xy.x, xy.y);
         float peak_alpha = p.opacity * exp(-0.5 * q_min);
         uint tile_class = cutoff_tile_class(pc.clip, rec, f.cam_pos.xyz, dirs, peak_alpha);
+        // No pixel centre of the tile in the footprint's bounding box: nothing to draw.
+        tile_class = box.x > box.z || box.y > box.w ? TILE_CLASS_EMPTY : tile_class;
         if (tile_class == TILE_CLASS_EMPTY) {
             pc.keys.v[slot] = tile_count;
             ++empty;
