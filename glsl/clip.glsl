@@ -371,27 +371,32 @@ vec2 tile_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dirs[4]) {
                 f_hi / (f_hi >= 0.0 ? q_lo : q_hi) + slack);
 }
 
-// TILE_CLASS_* of a cutoff splat's pair with the tile whose corner rays are dirs, for a region
-// of planes and the mass weight; peak_alpha bounds o exp(power) over the tile's pixels. Along
-// any ray the mass inside the intersection K of the half-spaces is at most that of each
-// half-space, min_k Phi(u_hi,k), and the mass outside K at most the sum of the masses outside
-// each, sum_k Phi(-u_lo,k); an inverted region swaps the two.
-// The planes are read through `clip` inside the loop: copied into a local ClipParams first (as
-// project does, where every plane is visited), the dynamic index made lavapipe's pass 1.8x
-// slower (plant at 640x480 under rara: 5.8 -> 10.6 ms).
-uint cutoff_tile_class(ClipParamsRef clip, CutoffRecord rec, vec3 eye, vec3 dirs[4],
-                       float peak_alpha) {
-    uvec4 config = clip.p.config;
-    float u_keep = UNBOUNDED;
-    float lost = 0.0;
-    for (uint k = 0u; k < config.w; ++k) {
-        vec2 u = tile_plane_u_range(rec, clip.p.planes[k], eye, dirs);
-        u_keep = min(u_keep, u.y);
-        lost += normal_cdf(-u.x);
-    }
-    float inside_max = normal_cdf(u_keep);
-    float outside_max = min(lost, 1.0);
-    bool invert = (config.z & CLIP_FLAG_INVERT) != 0u;
+// Bounds over a tile's rays of the mass a cutoff splat keeps, gathered plane by plane from
+// tile_plane_u_range. Along any ray the mass inside the intersection K of the half-spaces is
+// at most that of each half-space, min_k Phi(u_hi,k), and the mass outside K at most the sum
+// of the masses outside each, sum_k Phi(-u_lo,k).
+struct TileMassBounds {
+    float u_keep;   // min_k u_hi,k
+    float lost;     // sum_k Phi(-u_lo,k)
+};
+
+TileMassBounds tile_mass_bounds_none() {
+    return TileMassBounds(UNBOUNDED, 0.0);
+}
+
+// Adds a plane's bounds u = (u_lo, u_hi) (tile_plane_u_range).
+void tile_mass_bounds_add(inout TileMassBounds b, vec2 u) {
+    b.u_keep = min(b.u_keep, u.y);
+    b.lost += normal_cdf(-u.x);
+}
+
+// TILE_CLASS_* of a cutoff splat's pair with a tile, from the bounds over every plane of the
+// region (flags: ClipParams.config.z; an inverted region swaps inside and outside);
+// peak_alpha bounds o exp(power) over the tile's pixels.
+uint cutoff_tile_class(uint flags, TileMassBounds b, float peak_alpha) {
+    float inside_max = normal_cdf(b.u_keep);
+    float outside_max = min(b.lost, 1.0);
+    bool invert = (flags & CLIP_FLAG_INVERT) != 0u;
     float weight_max = invert ? outside_max : inside_max;
     float deficit_max = invert ? inside_max : outside_max;
     // The rasterizer skips alpha w < 1/255; a 1 % margin covers rounding.

@@ -36,11 +36,13 @@ layout(set = FRAME_TEXELS_SET, binding = 6) uniform utextureBuffer sorted_keys;
 layout(set = FRAME_TEXELS_SET, binding = 7) uniform utextureBuffer emitted_keys;
 // RGBA32_UINT, one per pixel: the rasterizer's per-pixel state (C, T), as floats' bits.
 layout(set = FRAME_TEXELS_SET, binding = 8) uniform utextureBuffer state_texels;
+// RGBA32_UINT: the frame's ClipParams (clip.glsl), texel 3 + k holding plane k.
+layout(set = FRAME_TEXELS_SET, binding = 9) uniform utextureBuffer clip_texels;
 // RGBA32_UINT, 3 per Gaussian.
-layout(set = FRAME_TEXELS_SET, binding = 9) uniform utextureBuffer gaussian_texels;
+layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer gaussian_texels;
 // The scene's SH coefficients, four to a texel: RGBA32_UINT for floats, RG32_UINT for half
 // floats (sh.glsl).
-layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer sh_texels;
+layout(set = FRAME_TEXELS_SET, binding = 11) uniform utextureBuffer sh_texels;
 
 // Projected splat i (load_splat in common.glsl, from its four texels; a kernel that does not
 // use a texel's fields does not fetch it).
@@ -67,6 +69,11 @@ CutoffRecord texel_cutoff_record(uint k) {
     return CutoffRecord(uintBitsToFloat(texelFetch(cutoff_texels, t)),
                         uintBitsToFloat(texelFetch(cutoff_texels, t + 1)),
                         uintBitsToFloat(texelFetch(cutoff_texels, t + 2)));
+}
+
+// Clip plane k of the frame's region (ClipParams.planes[k]).
+vec4 texel_clip_plane(uint k) {
+    return uintBitsToFloat(texelFetch(clip_texels, 3 + int(k)));
 }
 
 #endif

@@ -5,7 +5,7 @@
 //! rasterizer's per-pixel weight.
 //!
 //! On CPU drivers (with the strips rasterizer) the kernel reads the splats, the cutoff records,
-//! the tiles touched and the emitted keys through the frame's texel views
+//! the tiles touched, the emitted keys and the clip planes through the frame's texel views
 //! (`glsl/cutoff_tiles_texels.comp`): a CPU driver loads a texel as a gather, where a buffer
 //! load is a scalar loop over the lanes per 64-bit word.
 
