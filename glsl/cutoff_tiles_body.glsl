@@ -8,8 +8,9 @@
 // splats, so the rest pay nothing.
 //
 // SPLAT_TEXELS (cutoff_tiles_texels.comp, CPU drivers): the splats, the cutoff records, the
-// tiles touched, the emitted keys and the clip planes are read through the frame's texel views, which a CPU
-// driver loads as gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
+// tiles touched, the emitted keys and the clip planes are read through the frame's texel views,
+// which a CPU driver loads as gathers, where a buffer load is a scalar loop over the lanes per
+// 64-bit word.
 #include "common.glsl"
 #include "clip.glsl"
 
@@ -35,7 +36,8 @@ layout(push_constant) uniform Push {
 // through pc.clip in the loop over the pairs is a scalar loop over the lanes per word there;
 // copied into a local ClipParams before the loop (as project does, where every plane is
 // visited), the dynamic index made lavapipe's pass 1.8x slower (plant at 640x480 under rara:
-// 5.8 -> 10.6 ms). The texel fetch halved it (plant at 1280x960: 15.6-17.5 -> 8.0-8.2 ms).
+// 5.8 -> 10.6 ms). The texel fetch took a third off (plant at 1280x960, one thread: 14.2-14.7
+// -> 9.4-9.9 ms; 8.0 ms with the one plane loaded before any branch, as a lower bound).
 vec4 clip_plane(uint k) {
 #ifdef SPLAT_TEXELS
     return texel_clip_plane(k);
@@ -85,9 +87,9 @@ void main() {
         float q_min = footprint_q_min_in_tile(p.uv, p.conic, xy.x, xy.y);
         float peak_alpha = p.opacity * exp(-0.5 * q_min);
         TileMassBounds bounds = tile_mass_bounds_none();
-        for (uint k = 0u; k < config.w; ++k) {
-            tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(k), f.cam_pos.xyz,
-                                                            dirs));
+        for (uint plane = 0u; plane < config.w; ++plane) {
+            tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(plane),
+                                                            f.cam_pos.xyz, dirs));
         }
         uint tile_class = cutoff_tile_class(config.z, bounds, peak_alpha);
         // No pixel centre of the tile in the footprint's bounding box: nothing to draw.
