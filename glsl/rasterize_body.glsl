@@ -339,6 +339,26 @@ void strip_spans(vec3 eye) {
 }
 #endif
 
+#if CUTOFF_WEIGHT != 0
+// Composites the run of plain (cutoff false) or cutoff splats that starts with s, entry k of
+// splat_at(base, .), over the strip, and fetches the entry after the run into s (k is then
+// its index). Returns whether any pixel of the strip is still open.
+bool composite_run(uint base, uint count, bool cutoff, inout uint k, inout Staged s) {
+    bool open;
+    do {
+        Staged t = s;
+        t.co.w = cutoff ? -t.co.w : t.co.w;
+        open = composite(t, cutoff);
+        ++k;
+        if (!open || k == count) {
+            break;
+        }
+        s = splat_at(base, k);
+    } while ((s.co.w < 0.0) == cutoff);
+    return open;
+}
+#endif
+
 // Composites splats [0, count) of splat_at(base, .) over the strip, in order, until every
 // pixel of the strip is done.
 void composite_entries(uint base, uint count) {
@@ -367,27 +387,11 @@ void composite_entries(uint base, uint count) {
     Staged s = splat_at(base, 0u);
     do {
         if (s.co.w >= 0.0) {
-            do {
-                open = composite(s, false);
-                ++k;
-                if (!open || k == count) {
-                    break;
-                }
-                s = splat_at(base, k);
-            } while (s.co.w >= 0.0);
+            open = composite_run(base, count, false, k, s);
         }
         // Here s is a cutoff splat, unless the list or the pixels ran out.
         if (open && k < count) {
-            do {
-                Staged t = s;
-                t.co.w = -t.co.w;
-                open = composite(t, true);
-                ++k;
-                if (!open || k == count) {
-                    break;
-                }
-                s = splat_at(base, k);
-            } while (s.co.w < 0.0);
+            open = composite_run(base, count, true, k, s);
         }
     } while (open && k < count);
 #endif

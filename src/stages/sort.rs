@@ -655,18 +655,7 @@ impl RadixSort {
         let bufs = self.buffers(ctx, keys.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(keys))?;
         bufs.values[0].upload(bytemuck::cast_slice(values))?;
-        let count = Buffer::from_slice(ctx, "sort count", &[keys.len() as u32])?;
-        let out = ctx.run_commands(|cmd| {
-            self.record(
-                ctx,
-                cmd,
-                &bufs,
-                count.address,
-                key_bits,
-                &TILE_SORT_LABELS,
-                None,
-            )
-        })?;
+        let out = self.run_uploaded(ctx, &bufs, keys.len(), key_bits, PairForm::Split)?;
         Ok((
             bufs.keys[out].download_as(keys.len())?,
             bufs.values[out].download_as(values.len())?,
@@ -690,20 +679,33 @@ impl RadixSort {
         }
         let bufs = self.buffers(ctx, pairs.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(pairs))?;
-        let count = Buffer::from_slice(ctx, "sort count", &[pairs.len() as u32])?;
-        let out = ctx.run_commands(|cmd| {
+        let out = self.run_uploaded(ctx, &bufs, pairs.len(), key_bits, PairForm::Packed)?;
+        bufs.keys[out].download_as(pairs.len())
+    }
+
+    /// Sorts the `n` pairs uploaded to `bufs` in `form` and waits for it (the count from a
+    /// buffer of its own, as in a frame); returns the index of the buffers holding the result.
+    fn run_uploaded(
+        &self,
+        ctx: &Context,
+        bufs: &SortBuffers,
+        n: usize,
+        key_bits: u32,
+        form: PairForm,
+    ) -> Result<usize> {
+        let count = Buffer::from_slice(ctx, "sort count", &[n as u32])?;
+        ctx.run_commands(|cmd| {
             self.record_form(
                 ctx,
                 cmd,
-                &bufs,
+                bufs,
                 count.address,
                 key_bits,
-                PairForm::Packed,
+                form,
                 &TILE_SORT_LABELS,
                 None,
             )
-        })?;
-        bufs.keys[out].download_as(pairs.len())
+        })
     }
 }
 
