@@ -6,9 +6,9 @@
 // Scratch header, followed (at SORT_HIST_OFFSET bytes) by the block histograms.
 struct SortInfo {
     uint num_keys;      // min(count, capacity)
-    uint num_blocks;    // div_ceil(num_keys, keys per block of the layout)
+    uint num_blocks;    // div_ceil(num_keys, block_keys)
     uint hist_len;      // entries per block (the layout's) * num_blocks: the histogram scan
-    uint pad;
+    uint block_keys;    // keys per block, as sort_prepare.comp chose them
     uvec4 block_args;   // indirect dispatch: one workgroup per block
     uvec4 linear_args;  // indirect dispatch: one invocation per key, LINEAR_WORKGROUP wide
 };

@@ -12,7 +12,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
-    uvec2 run = own_run(pc.info.s.num_keys);
+    uvec2 run = own_run(pc.info.s.num_keys, pc.info.s.block_keys);
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
         own_counts[d] = 0u;
     }

@@ -1,6 +1,6 @@
 // Radix sort, CPU-driver layout (SortLayout::OwnCounts, sort_{count,scatter}_own_counts*.comp):
-// every invocation owns a run of SORT_OWN_ITEMS consecutive keys (SORT_OWN_WORKGROUP runs make
-// one block) and counts the SORT_OWN_RADIX digits of its run in a histogram of its own
+// every invocation owns a run of consecutive keys (SORT_OWN_WORKGROUP runs make one block;
+// see own_run) and counts the SORT_OWN_RADIX digits of its run in a histogram of its own
 // (own_counts below). A CPU driver runs a workgroup on one thread, so a private counter costs
 // one gather and one masked store per key: no atomics, no compare per digit (the GPU layout's
 // register counters cost SORT_RADIX compares per key, fine at 4 bits, too many at 8), and
@@ -23,8 +23,8 @@
 #include "common.glsl"
 #include "sort_common.glsl"
 
-#if SORT_OWN_ITEMS % 4 != 0
-#error "SORT_OWN_ITEMS must be a multiple of 4: runs are read four at a time"
+#if SORT_OWN_MIN_ITEMS % 4 != 0
+#error "SORT_OWN_MIN_ITEMS must be a multiple of 4: runs are read four at a time"
 #endif
 
 layout(local_size_x = SORT_OWN_WORKGROUP) in;
@@ -77,10 +77,13 @@ uvec4 load_four_keys(uint i) {
 // turn beat shared memory: 160-164 -> 111-114 ms for the whole sort).
 uint own_counts[SORT_OWN_RADIX];
 
-// This invocation's run of keys: [first, end), empty past the key count n.
-uvec2 own_run(uint n) {
-    uint first = gl_GlobalInvocationID.x * SORT_OWN_ITEMS;
-    return uvec2(first, max(first, min(first + SORT_OWN_ITEMS, n)));
+// This invocation's run of keys: [first, end), empty past num_keys. A block's
+// runs share it evenly: SORT_OWN_MIN_ITEMS keys each or a power-of-two multiple of that,
+// as sort_prepare.comp chose.
+uvec2 own_run(uint num_keys, uint block_keys) {
+    uint run_keys = block_keys / SORT_OWN_WORKGROUP;
+    uint first = gl_GlobalInvocationID.x * run_keys;
+    return uvec2(first, max(first, min(first + run_keys, num_keys)));
 }
 
 // Index of (digit, this invocation's run) in the histogram of num_blocks blocks.

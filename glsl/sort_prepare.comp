@@ -11,14 +11,22 @@ layout(push_constant) uniform Push {
     SortInfoRef info;   // out
     uint capacity;
     uint hist_per_block; // histogram entries per block in the layout
-    uint block;         // keys per block (workgroup) of the layout
+    uint min_block;     // keys per block (workgroup) of the layout, at the least
+    uint max_block;     // at the most: min_block times a power of two
 } pc;
 
 void main() {
     uint n = min(pc.count.v[0], pc.capacity);
-    uint blocks = div_ceil(n, pc.block);
+    // Blocks grow while at least SORT_PARALLEL_BLOCKS are left: a CPU driver's threads share
+    // them, and every run pays a fixed cost (see SORT_PARALLEL_BLOCKS in constants.rs).
+    uint block = pc.min_block;
+    while (block < pc.max_block && div_ceil(n, 2u * block) >= SORT_PARALLEL_BLOCKS) {
+        block *= 2u;
+    }
+    uint blocks = div_ceil(n, block);
     pc.info.s.num_keys = n;
     pc.info.s.num_blocks = blocks;
+    pc.info.s.block_keys = block;
     pc.info.s.hist_len = blocks * pc.hist_per_block;
     pc.info.s.block_args = uvec4(blocks, 1u, 1u, 0u);
     pc.info.s.linear_args = uvec4(linear_grid(n), 0u);

@@ -37,7 +37,7 @@ void scatter_pair(uint key, uint value) {
 }
 
 void main() {
-    uvec2 run = own_run(pc.info.s.num_keys);
+    uvec2 run = own_run(pc.info.s.num_keys, pc.info.s.block_keys);
     uint num_blocks = pc.info.s.num_blocks;
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
         own_counts[d] = pc.hist.v[hist_index(d, num_blocks)];

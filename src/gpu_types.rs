@@ -65,12 +65,13 @@ pub struct GpuFrameParams {
 pub struct GpuSortInfo {
     /// Keys being sorted (clamped to capacity).
     pub num_keys: u32,
-    /// Blocks of the layout's keys per block.
+    /// Blocks of `block_keys` keys.
     pub num_blocks: u32,
     /// Histogram entries per block (the layout's) times num_blocks.
     pub hist_len: u32,
-    /// Unused.
-    pub pad: u32,
+    /// Keys per block: the layout's, or in the CPU-driver layout a power-of-two multiple of
+    /// it for a sort with many keys (`SORT_PARALLEL_BLOCKS` in constants.rs).
+    pub block_keys: u32,
     /// Indirect dispatch arguments: one workgroup per block.
     pub block_args: [u32; 4],
     /// Indirect dispatch arguments: one invocation per key.

@@ -86,7 +86,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuSortInfo, num_keys),
         offset_of!(GpuSortInfo, num_blocks),
         offset_of!(GpuSortInfo, hist_len),
-        offset_of!(GpuSortInfo, pad),
+        offset_of!(GpuSortInfo, block_keys),
         offset_of!(GpuSortInfo, block_args),
         offset_of!(GpuSortInfo, linear_args),
     ];

@@ -2,7 +2,9 @@
 
 mod common;
 
-use rara::constants::{SCAN_BLOCK, SCAN_RUN, SCAN_RUN_WORKGROUP, SORT_OWN_WORKGROUP};
+use rara::constants::{
+    SCAN_BLOCK, SCAN_RUN, SCAN_RUN_WORKGROUP, SORT_OWN_WORKGROUP, SORT_PARALLEL_BLOCKS,
+};
 use rara::stages::sort::{RadixSort, SortLayout};
 
 /// Both layouts run on every device, so the GPU one is checked here too.
@@ -55,7 +57,7 @@ fn sort_sizes_around_block_boundaries() {
 
 fn sort_sizes_in_layout(ctx: &rara::Context, layout: SortLayout) {
     let sorter = RadixSort::with_layout(ctx, layout).unwrap();
-    let block = layout.block() as usize;
+    let block = layout.min_block() as usize;
     // The histogram's scan changes level at SCAN_BLOCK entries: a whole number of blocks in
     // the GPU layout. The CPU layout's histogram has more than SCAN_BLOCK entries per block
     // (one column per run), so it spans levels from the first block and gets a size of a few
@@ -93,7 +95,7 @@ fn sort_key_patterns() {
 
 fn key_patterns_in_layout(ctx: &rara::Context, layout: SortLayout) {
     let sorter = RadixSort::with_layout(ctx, layout).unwrap();
-    let n = 3 * layout.block() as usize + 17;
+    let n = 3 * layout.min_block() as usize + 17;
     check_sort(&sorter, ctx, vec![0x1234_5678; n], 32, "all-equal keys");
     check_sort(
         &sorter,
@@ -137,7 +139,7 @@ fn sort_packed_pairs() {
     assert!(refused.sort_packed_pairs(&ctx, &[1, 2], 32).is_err());
     let sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
     assert!(sorter.sorts_packed());
-    let block = SortLayout::OwnCounts.block() as usize;
+    let block = SortLayout::OwnCounts.min_block() as usize;
     let run = block / SORT_OWN_WORKGROUP as usize;
     let sizes = [0, 1, 5, run - 1, run + 3, block + 1, 3 * block + 17];
     // One, two, three and four passes.
@@ -162,6 +164,45 @@ fn sort_packed_pairs() {
             }
         }
     }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The CPU layout's blocks double while SORT_PARALLEL_BLOCKS or more are left: sizes on both
+/// sides of each doubling, whose last block holds one key past the others or is whole. Split
+/// and packed pairs.
+#[test]
+fn sort_sizes_where_runs_grow() {
+    let ctx = common::context();
+    let layout = SortLayout::OwnCounts;
+    let sorter = RadixSort::with_layout(&ctx, layout).unwrap();
+    let parallel = SORT_PARALLEL_BLOCKS as usize;
+    let mut block = layout.min_block() as usize;
+    let mut k = 0;
+    while block < layout.max_block() as usize {
+        // Above (parallel - 1) blocks of twice the size, the block doubles.
+        let edge = (parallel - 1) * 2 * block;
+        for n in [edge, edge + 1] {
+            check_sort(
+                &sorter,
+                &ctx,
+                random_keys(n, 32, 200 + k),
+                32,
+                "random 32-bit keys where the runs grow",
+            );
+            k += 1;
+        }
+        block *= 2;
+    }
+    let n = (parallel - 1) * block + 1;
+    let pairs: Vec<u64> = random_keys(n, 32, 300)
+        .iter()
+        .enumerate()
+        .map(|(i, &key)| key as u64 | (i as u64) << 32)
+        .collect();
+    let got = sorter.sort_packed_pairs(&ctx, &pairs, 32).unwrap();
+    let mut expected = pairs.clone();
+    expected.sort_by_key(|&p| p as u32); // stable
+    assert!(got == expected, "packed pairs in the longest runs, n = {n}");
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -24,8 +24,8 @@ use bytemuck::{Pod, Zeroable};
 
 use super::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::constants::{
-    SORT_BLOCK, SORT_OWN_BLOCK, SORT_OWN_RADIX, SORT_OWN_RADIX_BITS, SORT_OWN_WORKGROUP,
-    SORT_RADIX, SORT_RADIX_BITS,
+    SORT_BLOCK, SORT_OWN_MAX_BLOCK, SORT_OWN_MIN_BLOCK, SORT_OWN_RADIX, SORT_OWN_RADIX_BITS,
+    SORT_OWN_WORKGROUP, SORT_RADIX, SORT_RADIX_BITS,
 };
 use crate::error::{Error, Result, VkContext};
 use crate::gpu_types::SORT_HIST_OFFSET;
@@ -41,8 +41,8 @@ struct PreparePush {
     info: u64,
     capacity: u32,
     hist_per_block: u32,
-    block: u32,
-    pad: u32,
+    min_block: u32,
+    max_block: u32,
 }
 
 #[repr(C)]
@@ -83,8 +83,9 @@ pub enum SortLayout {
     /// counter per digit in registers, ranked with subgroup scans (`sort_count.comp`,
     /// `sort_scatter.comp`): the layout for GPUs, many threads with few registers each.
     ShortRuns,
-    /// 8-bit digits (half the passes); every invocation owns a run of 4,096 keys (8 runs per
-    /// workgroup, [`SORT_OWN_BLOCK`] keys), counts it in a histogram of its own (a private
+    /// 8-bit digits (half the passes); every invocation owns a run of 4,096 keys, or up to
+    /// 16,384 in a sort of many keys (8 runs per workgroup, [`SORT_OWN_MIN_BLOCK`] to
+    /// [`SORT_OWN_MAX_BLOCK`] keys), counts it in a histogram of its own (a private
     /// array) and writes that to its own column of the global histogram, whose scan then
     /// gives each run its output positions: the scatter neither counts again nor waits on the
     /// other invocations (`sort_*_own_counts.comp`). For CPU drivers such as lavapipe, where
@@ -99,7 +100,9 @@ pub enum SortLayout {
     /// -> 104-114 ms; the counters in a private array, whose indexed stores gallivm writes
     /// without a loop or branch: 86-105 -> 58-70 ms. Between passes the pairs travel packed,
     /// one 64-bit store per pair in the scatter instead of two (each a loop over the lanes):
-    /// 87-94 -> 64-84 ms (builds in turn; 58-70 -> 49-50 ms in a quieter hour).
+    /// 87-94 -> 64-84 ms (builds in turn; 58-70 -> 49-50 ms in a quieter hour). Runs that
+    /// grow with the sort while 16 blocks or more are left: see
+    /// [`SORT_PARALLEL_BLOCKS`](crate::constants::SORT_PARALLEL_BLOCKS).
     OwnCounts,
 }
 
@@ -127,11 +130,23 @@ impl SortLayout {
         }
     }
 
-    /// Keys per block: one workgroup's share of a pass.
-    pub fn block(self) -> u32 {
+    /// Keys per block, one workgroup's share of a pass: the fewest. The number of blocks, and
+    /// the histogram's size, is at its largest with these.
+    pub fn min_block(self) -> u32 {
         match self {
             SortLayout::ShortRuns => SORT_BLOCK,
-            SortLayout::OwnCounts => SORT_OWN_BLOCK,
+            SortLayout::OwnCounts => SORT_OWN_MIN_BLOCK,
+        }
+    }
+
+    /// Keys per block at the most: a sort of many keys doubles its blocks from
+    /// [`SortLayout::min_block`] up to this while it keeps
+    /// [`SORT_PARALLEL_BLOCKS`](crate::constants::SORT_PARALLEL_BLOCKS) blocks or more.
+    /// The GPU layout's blocks are fixed.
+    pub fn max_block(self) -> u32 {
+        match self {
+            SortLayout::ShortRuns => SORT_BLOCK,
+            SortLayout::OwnCounts => SORT_OWN_MAX_BLOCK,
         }
     }
 
@@ -452,7 +467,7 @@ impl RadixSort {
     /// the pass kernels read them four at a time).
     pub fn buffers(&self, ctx: &Context, capacity: u64) -> Result<SortBuffers> {
         let capacity = capacity.max(1).next_multiple_of(4);
-        let blocks = capacity.div_ceil(self.layout.block() as u64);
+        let blocks = capacity.div_ceil(self.layout.min_block() as u64);
         let hist_len = blocks * self.layout.hist_per_block() as u64;
         let gpu = MemoryLocation::GpuOnly;
         let key_bytes = match self.packed {
@@ -591,8 +606,8 @@ impl RadixSort {
             info,
             capacity: bufs.capacity.min(u32::MAX as u64) as u32,
             hist_per_block: self.layout.hist_per_block(),
-            block: self.layout.block(),
-            pad: 0,
+            min_block: self.layout.min_block(),
+            max_block: self.layout.max_block(),
         };
         self.prepare.dispatch(cmd, &push, [1, 1, 1]);
         compute_barrier(ctx, cmd);
