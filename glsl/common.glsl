@@ -233,22 +233,108 @@ uvec2 tile_rect_cell(uvec4 rect, uint k) {
     return uvec2(rect.x + k % columns, rect.y + k / columns);
 }
 
-// The cell after tile `xy` of a tile rectangle, row by row.
-uvec2 tile_rect_next(uvec4 rect, uvec2 xy) {
-    return xy.x + 1u == rect.z ? uvec2(rect.x, xy.y + 1u) : uvec2(xy.x + 1u, xy.y);
+// The shape of the ellipse q(p - uv) <= q_max that footprint_row_columns needs, per splat.
+// With q = A dx^2 + 2B dx dy + C dy^2 and det = AC - B^2, the ellipse's row at dy spans
+// dx = -B dy / A +- sqrt(q_max / A - det dy^2 / A^2): inside the band |dx + B dy / A| <=
+// sqrt(q_max / A) and within |dy| <= sqrt(q_max A / det).
+struct FootprintRows {
+    vec2 uv;
+    float b_a;          // B / A
+    float half_width;   // sqrt(q_max / A)
+    float dy_extent;    // sqrt(q_max A / det), widened by 0.1 % and a thousandth of a pixel
+    float pad;          // pixels added on both sides against rounding
+    bool ellipse;       // false: a degenerate conic, whose rows span the whole rectangle
+};
+
+FootprintRows footprint_rows(vec2 uv, vec3 conic, float q_max) {
+    float a = conic.x, b = conic.y, c = conic.z;
+    float det = a * c - b * b;
+    float q = max(q_max, 0.0);
+    FootprintRows r;
+    r.uv = uv;
+    r.ellipse = det > 0.0 && a > 0.0 && c > 0.0;
+    r.b_a = b / a;
+    r.half_width = sqrt(q / a);
+    r.dy_extent = sqrt(q * a / det) * 1.001 + 1e-3;
+    r.pad = 1.0 + 1e-3 * (r.half_width + abs(r.b_a) * r.dy_extent);
+    return r;
 }
 
-// How many of cells [first, end) of `rect` the ellipse q(p - uv) <= q_max reaches. One loop
-// over the cells rather than a loop per row: a SIMD vector of a CPU driver runs a loop for
-// as long as any of its lanes does, so nested loops take up to (most rows) x (most columns)
-// rounds, one loop only (most cells). Callers keep end - first <= TILE_RECT_CHUNK (lavapipe's
-// loop cap).
+// Columns [x0, x1) of tile row ty, cut to the rectangle's, that the ellipse may reach: those
+// whose pixel-centre box meets the band |dx + B dy / A| <= sqrt(q_max / A) over the row's
+// pixel-centre rows, widened by FootprintRows.pad; empty (x0 = x1) where the rows miss the
+// ellipse's height. A superset of the columns footprint_touches_tile passes (that test, on
+// the same continuous box, is the exact one). The band is a little wider than the ellipse's
+// own rows near its top and bottom, and costs no square root per row: the exact row span
+// (two square roots) made emit's walk 17 against 16.5 ms and project's 11.3 against 10.6
+// (biker at 1280x960, three runs each in turn).
+uvec2 footprint_row_columns(FootprintRows r, uvec4 rect, uint ty) {
+    float band_lo = float(ty * TILE_SIZE) - r.uv.y;
+    float band_hi = band_lo + float(TILE_SIZE - 1u);
+    float centre_lo = -r.b_a * band_lo, centre_hi = -r.b_a * band_hi;
+    float x_lo = min(centre_lo, centre_hi) - r.half_width;
+    float x_hi = max(centre_lo, centre_hi) + r.half_width;
+    // Tile tx's pixel centres span x = TILE_SIZE tx .. TILE_SIZE tx + TILE_SIZE - 1.
+    float first = floor((r.uv.x + x_lo - r.pad - float(TILE_SIZE - 1u)) / float(TILE_SIZE));
+    float end = floor((r.uv.x + x_hi + r.pad) / float(TILE_SIZE)) + 1.0;
+    vec2 columns = clamp(vec2(first, end), vec2(rect.x), vec2(rect.z));
+    bool misses = band_lo > r.dy_extent || band_hi < -r.dy_extent;
+    uvec2 span = misses ? uvec2(rect.x) : uvec2(columns.x, max(columns.x, columns.y));
+    return r.ellipse ? span : rect.xz;
+}
+
+// A walk over the cells of a tile rectangle that a splat's footprint may reach, for the
+// loops that count (project) or write (emit) the tiles it touches: row by row, over each
+// row's candidate columns (footprint_row_columns) only, each then tested exactly with
+// footprint_touches_tile. The rectangle is the 3-sigma square of the largest axis; a thin or
+// faint splat reaches a fraction of it. A SIMD vector of a CPU driver runs a loop for as
+// long as any of its lanes does: on biker at 1280x960 the vectors' longest rectangles sum to
+// 3.4 times their most touched tiles. Cells are numbered as in tile_rect_cell, and a round of
+// cells [first, end) walks at most end - first steps: one per candidate, or one for a row
+// without any.
+struct FootprintWalk {
+    uvec2 xy;       // the cell
+    uint row_end;   // end of its row's candidate columns; xy.x >= row_end: none left
+};
+
+FootprintWalk footprint_walk_start(FootprintRows r, uvec4 rect, uint first) {
+    uvec2 xy = tile_rect_cell(rect, first);
+    uvec2 columns = footprint_row_columns(r, rect, xy.y);
+    return FootprintWalk(uvec2(max(xy.x, columns.x), xy.y), columns.y);
+}
+
+// The walk's cell number in its rectangle (row by row from (x0, y0)); past a row's last
+// column it is the next row's first.
+uint footprint_walk_cell(uvec4 rect, FootprintWalk w) {
+    return (w.xy.y - rect.y) * (rect.z - rect.x) + (w.xy.x - rect.x);
+}
+
+// Whether the walk's cell is one of its row's candidates.
+bool footprint_walk_on_candidate(FootprintWalk w) {
+    return w.xy.x < w.row_end;
+}
+
+// The walk's next candidate: along the row, else the next row's first.
+void footprint_walk_next(inout FootprintWalk w, FootprintRows r, uvec4 rect) {
+    w.xy.x += 1u;
+    if (w.xy.x >= w.row_end) {
+        w.xy.y += 1u;
+        uvec2 columns = footprint_row_columns(r, rect, w.xy.y);
+        w.xy.x = columns.x;
+        w.row_end = columns.y;
+    }
+}
+
+// How many of cells [first, end) of `rect` the ellipse q(p - uv) <= q_max reaches. Callers
+// keep end - first <= TILE_RECT_CHUNK (lavapipe's loop cap).
 uint count_touched_cells(vec2 uv, vec3 conic, float q_max, uvec4 rect, uint first, uint end) {
     uint touched = 0u;
-    uvec2 xy = tile_rect_cell(rect, first);
-    for (uint k = first; k < end; ++k) {
-        touched += footprint_touches_tile(uv, conic, q_max, xy.x, xy.y) ? 1u : 0u;
-        xy = tile_rect_next(rect, xy);
+    FootprintRows rows = footprint_rows(uv, conic, q_max);
+    FootprintWalk w = footprint_walk_start(rows, rect, first);
+    while (footprint_walk_cell(rect, w) < end) {
+        touched += footprint_walk_on_candidate(w)
+                && footprint_touches_tile(uv, conic, q_max, w.xy.x, w.xy.y) ? 1u : 0u;
+        footprint_walk_next(w, rows, rect);
     }
     return touched;
 }
