@@ -166,7 +166,7 @@ fn each_stage_matches_its_cpu_twin_on_needles() {
 fn stages_match_cpu_twins(scene: &Scene, cam: &Camera) {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
-    let gpu_scene = renderer.upload(&scene).unwrap();
+    let gpu_scene = renderer.upload(scene).unwrap();
     let (gpu_image, stats) = renderer
         .render(&gpu_scene, cam, &RenderOptions::default())
         .unwrap();
