@@ -78,7 +78,8 @@ pub const SORT_OWN_WORKGROUP: u32 = 8;
 /// many keys gives them longer runs (up to [`SORT_OWN_MAX_ITEMS`]; see
 /// [`SORT_PARALLEL_BLOCKS`]).
 pub const SORT_OWN_MIN_ITEMS: u32 = 4096;
-/// The longest run of keys a sort thread owns in the CPU-driver layout.
+/// The longest run of keys a sort thread owns in the CPU-driver layout: its loops take 4,096
+/// passes of 4 keys and 512 over its counters, far under lavapipe's cap of 65,535.
 pub const SORT_OWN_MAX_ITEMS: u32 = 16384;
 /// Keys one radix-sort workgroup handles in the CPU-driver layout, at the least: more than
 /// [`SORT_BLOCK`], since every run costs its thread two passes over its whole histogram.
