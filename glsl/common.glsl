@@ -208,16 +208,22 @@ bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) 
     return footprint_q_min_in_tile(uv, conic, tx, ty) <= q_max;
 }
 
+// Half extents (x, y) of the ellipse q(p - uv) <= q_max's bounding box, sqrt(q_max C / det)
+// and sqrt(q_max A / det), widened by 0.1 % and a thousandth of a pixel so that rounding never
+// cuts off a pixel the rasterizer would draw.
+vec2 footprint_half_extent(vec3 conic, float q_max) {
+    float det = conic.x * conic.z - conic.y * conic.y;
+    return sqrt(max(q_max, 0.0) * vec2(conic.z, conic.x) / det) * 1.001 + 1e-3;
+}
+
 // The box (x0, y0, x1, y1) of the pixel centres of tile (tx, ty) that the ellipse
-// q(p - uv) <= q_max may reach: the tile's pixel box cut to the ellipse's bounding box, whose
-// half extents are sqrt(q_max C / det) and sqrt(q_max A / det). Empty (x0 > x1 or y0 > y1) when
-// no pixel centre of the tile lies in that bounding box. A margin of 0.1 % and a thousandth
-// of a pixel keeps rounding from cutting off a pixel the rasterizer would draw.
+// q(p - uv) <= q_max may reach: the tile's pixel box cut to the ellipse's bounding box
+// (footprint_half_extent). Empty (x0 > x1 or y0 > y1) when no pixel centre of the tile lies
+// in that bounding box.
 vec4 footprint_pixel_box_in_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
     vec2 lo = vec2(tx * TILE_SIZE, ty * TILE_SIZE);
     vec2 hi = lo + float(TILE_SIZE - 1u);
-    float det = conic.x * conic.z - conic.y * conic.y;
-    vec2 half_extent = sqrt(max(q_max, 0.0) * vec2(conic.z, conic.x) / det) * 1.001 + 1e-3;
+    vec2 half_extent = footprint_half_extent(conic, q_max);
     return vec4(max(lo, ceil(uv - half_extent)), min(hi, floor(uv + half_extent)));
 }
 
@@ -241,7 +247,7 @@ struct FootprintRows {
     vec2 uv;
     float b_a;          // B / A
     float half_width;   // sqrt(q_max / A)
-    float dy_extent;    // sqrt(q_max A / det), widened by 0.1 % and a thousandth of a pixel
+    float dy_extent;    // the ellipse's half height (footprint_half_extent)
     float pad;          // pixels added on both sides against rounding
     bool ellipse;       // false: a degenerate conic, whose rows span the whole rectangle
 };
@@ -255,7 +261,7 @@ FootprintRows footprint_rows(vec2 uv, vec3 conic, float q_max) {
     r.ellipse = det > 0.0 && a > 0.0 && c > 0.0;
     r.b_a = b / a;
     r.half_width = sqrt(q / a);
-    r.dy_extent = sqrt(q * a / det) * 1.001 + 1e-3;
+    r.dy_extent = footprint_half_extent(conic, q_max).y;
     r.pad = 1.0 + 1e-3 * (r.half_width + abs(r.b_a) * r.dy_extent);
     return r;
 }
