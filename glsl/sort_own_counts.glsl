@@ -56,15 +56,12 @@ void load_four(uint i, out uvec4 keys, out uvec4 values) {
 #endif
 }
 
-// Keys i .. i + 3 of the pass's input, as load_four.
+// Keys i .. i + 3 of the pass's input, as load_four (the compiler drops the values' fetch
+// where they are unused).
 uvec4 load_four_keys(uint i) {
-#if SORT_PAIRS_IN
-    uvec4 a = texelFetch(pairs_in_texels, int(i / 2u));
-    uvec4 b = texelFetch(pairs_in_texels, int(i / 2u + 1u));
-    return uvec4(a.x, a.z, b.x, b.z);
-#else
-    return texelFetch(keys_in_texels, int(i / 4u));
-#endif
+    uvec4 keys, values;
+    load_four(i, keys, values);
+    return keys;
 }
 
 // The invocation's counters, one per digit: the run's keys of that digit (count) or its next
