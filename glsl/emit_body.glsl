@@ -14,9 +14,7 @@
 // for lavapipe's cap on an invocation's loop iterations; on an image of more than
 // TILE_RECT_CHUNK tiles the host dispatches more rounds, and a splat whose rectangle goes on
 // past the round leaves its next pair's slot in `progress` for the next.
-// (The cutoff-tiles pass has the same cap per cutoff splat, at about 65,535 / (1 + planes)
-// pairs; the pairs past it stay unclassified, which draws them exactly, at the partial
-// pairs' cost.)
+// (The cutoff-tiles pass has a cap of its own: see cutoff_tiles_body.glsl.)
 #include "common.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;

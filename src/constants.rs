@@ -22,6 +22,12 @@ pub const RASTER_CHUNK: u32 = 12288;
 /// more of a large image (from 2,896 x 2,896 pixels up) takes several rounds (dispatches),
 /// each carrying on where the last stopped.
 pub const TILE_RECT_CHUNK: u32 = 32768;
+/// Most loop iterations one invocation of the cutoff-tiles kernel takes, for the same cap: it
+/// classifies pairs until this over (1 + clip planes) passes are spent, and leaves the pairs
+/// after them unclassified, which draws them exactly at the partial pairs' cost. A CPU driver's
+/// SIMD vector of 8 invocations reaches it only past about 131,000 pairs (one plane) for the
+/// workgroup's 256 cutoff splats.
+pub const CUTOFF_TILES_LOOP_BUDGET: u32 = 32768;
 /// Threads per workgroup of the one-item-per-thread kernels (project, emit, tile ranges).
 pub const LINEAR_WORKGROUP: u32 = 256;
 
@@ -155,6 +161,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("RASTER_WORKGROUP", RASTER_WORKGROUP),
     ("RASTER_CHUNK", RASTER_CHUNK),
     ("TILE_RECT_CHUNK", TILE_RECT_CHUNK),
+    ("CUTOFF_TILES_LOOP_BUDGET", CUTOFF_TILES_LOOP_BUDGET),
     ("LINEAR_WORKGROUP", LINEAR_WORKGROUP),
     ("LINEAR_GRID_X", LINEAR_GRID_X),
     ("SCAN_WORKGROUP", SCAN_WORKGROUP),

@@ -522,6 +522,66 @@ fn cutoff_tile_classes_change_no_pixel() {
     common::assert_no_validation_messages(&ctx);
 }
 
+/// A workgroup's 256 cutoff splats that each cover hundreds of tiles (about 800 here, 230,000
+/// pairs in all) outrun the cutoff-tiles kernel's loop budget (CUTOFF_TILES_LOOP_BUDGET) on a
+/// CPU driver, whose first SIMD vector of 8 invocations takes the workgroup's splats in turn.
+/// The pairs it leaves unclassified are drawn exactly, so the image matches the one without tile
+/// classes.
+#[test]
+fn cutoff_tiles_past_the_loop_budget_change_no_pixel() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let mut scene = rara::synth::shell(0, 0, 1);
+    let mut rng = Rng::new(7);
+    for _ in 0..300 {
+        let mean = Vec3::new(
+            rng.range(-0.4, 1.0),
+            rng.range(-0.8, 0.8),
+            rng.range(-0.3, 0.3),
+        );
+        let color = [
+            rng.range(0.0, 1.0),
+            rng.range(0.0, 1.0),
+            rng.range(0.0, 1.0),
+        ];
+        let sh = color.map(rara::scene::rgb_to_sh_dc);
+        scene.push(mean, 0.4, Vec3::splat(0.25), rng.rotation(), &sh);
+    }
+    let camera = Camera::look_at(
+        Vec3::new(0.0, 0.0, -3.0),
+        Vec3::ZERO,
+        Vec3::NEG_Y,
+        50.0,
+        1280,
+        960,
+    )
+    .unwrap();
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    // Every splat is cutoff: within 0.7 of the plane x = 0.3, under 3 sigma (0.75).
+    let region = ClipRegion::planes(vec![Plane::new(Vec3::X, -0.3).unwrap()]).unwrap();
+    let options = RenderOptions {
+        clip: Clip::rara(region),
+        ..RenderOptions::default()
+    };
+    renderer.set_cutoff_tile_classes(false);
+    let (plain, _) = renderer.render(&gpu_scene, &camera, &options).unwrap();
+    renderer.set_cutoff_tile_classes(true);
+    let (classified, stats) = renderer.render(&gpu_scene, &camera, &options).unwrap();
+    eprintln!(
+        "{} cutoff splats, {} cutoff pairs, {} weight 1, {} empty",
+        stats.cutoff, stats.cutoff_pairs, stats.cutoff_pairs_weight_one, stats.cutoff_pairs_empty
+    );
+    assert!(stats.cutoff >= 256, "{} cutoff splats", stats.cutoff);
+    assert!(
+        stats.cutoff_pairs > 131_072,
+        "{} cutoff pairs",
+        stats.cutoff_pairs
+    );
+    assert!(stats.cutoff_pairs_weight_one + stats.cutoff_pairs_empty > 0);
+    common::check_images("cutoff_tiles_loop_budget", &classified, &plain, 60.0, 1);
+    common::assert_no_validation_messages(&ctx);
+}
+
 /// What the GPU made of each Gaussian in the last frame.
 fn gpu_classes(splats: &[GpuProjectedSplat]) -> Vec<Option<bool>> {
     splats

@@ -60,9 +60,10 @@ impl CutoffTiles {
         })
     }
 
-    /// Records the kernel, one invocation per cutoff splat, dispatched indirectly from the
-    /// arguments emit wrote at `args` + `args_offset`. The texel kernel needs
-    /// `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
+    /// Records the kernel, one workgroup per [`crate::constants::LINEAR_WORKGROUP`] cutoff
+    /// splats, which share their pairs out (`glsl/cutoff_tiles_body.glsl`), dispatched
+    /// indirectly from the arguments emit wrote at `args` + `args_offset`. The texel kernel
+    /// needs `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
