@@ -206,6 +206,37 @@ fn sort_sizes_where_runs_grow() {
     common::assert_no_validation_messages(&ctx);
 }
 
+/// The own-counts layout writes packed pairs through bound storage buffers where they fit
+/// `maxStorageBufferRange`, and through buffer references past it: the reference path, forced
+/// here, sorts the same (split pairs of one to four passes, and packed pairs).
+#[test]
+fn sort_through_buffer_references() {
+    let ctx = common::context();
+    let mut sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
+    sorter.set_bound_output(false);
+    let block = SortLayout::OwnCounts.min_block() as usize;
+    for (k, key_bits) in [3u32, 13, 20, 32].into_iter().enumerate() {
+        let n = 3 * block + 17;
+        check_sort(
+            &sorter,
+            &ctx,
+            random_keys(n, 32, 400 + k as u64),
+            key_bits,
+            "through buffer references",
+        );
+    }
+    let pairs: Vec<u64> = random_keys(2 * block + 5, 32, 410)
+        .iter()
+        .enumerate()
+        .map(|(i, &key)| key as u64 | (i as u64) << 32)
+        .collect();
+    let got = sorter.sort_packed_pairs(&ctx, &pairs, 32).unwrap();
+    let mut expected = pairs.clone();
+    expected.sort_by_key(|&p| p as u32); // stable
+    assert!(got == expected, "packed pairs through buffer references");
+    common::assert_no_validation_messages(&ctx);
+}
+
 #[test]
 fn sort_two_million_pairs() {
     let ctx = common::context();

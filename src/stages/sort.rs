@@ -182,8 +182,13 @@ pub struct RadixSort {
     layout: SortLayout,
     /// The own-counts kernels' descriptor set layout, uniform texel buffers of the pass's
     /// input (`R32G32B32A32_UINT`): keys (binding 0) and values (binding 1) four to a texel,
-    /// and the same key buffer as packed pairs (binding 2), two to a texel.
+    /// and the same key buffer as packed pairs (binding 2), two to a texel; and the pass's
+    /// output key buffer as a storage buffer (binding 3), which the `*_bound` scatter kernels
+    /// write packed pairs to.
     texel_layout: Option<vk::DescriptorSetLayout>,
+    /// Whether packed pairs are written through bound storage buffers where the buffers allow
+    /// it ([`RadixSort::set_bound_output`]).
+    bound_output: bool,
     ctx: Context,
 }
 
@@ -212,6 +217,11 @@ struct PackedPassKernels {
     /// Scatter kernel from packed pairs to separate keys and values (the last pass of a split
     /// sort).
     scatter_from_packed: ComputePipeline,
+    /// As `scatter_to_packed`, writing through the set's storage buffer (binding 3), for
+    /// buffers that fit `maxStorageBufferRange` ([`SortTexels::bound_out`]).
+    scatter_to_packed_bound: ComputePipeline,
+    /// As `scatter_packed`, writing through the set's storage buffer.
+    scatter_packed_bound: ComputePipeline,
 }
 
 impl PackedPassKernels {
@@ -238,16 +248,29 @@ impl PackedPassKernels {
                 c"sort_scatter_own_counts_from_pairs",
                 shaders::SORT_SCATTER_OWN_COUNTS_FROM_PAIRS,
             )?,
+            scatter_to_packed_bound: scatter(
+                c"sort_scatter_own_counts_to_pairs_bound",
+                shaders::SORT_SCATTER_OWN_COUNTS_TO_PAIRS_BOUND,
+            )?,
+            scatter_packed_bound: scatter(
+                c"sort_scatter_own_counts_pairs_bound",
+                shaders::SORT_SCATTER_OWN_COUNTS_PAIRS_BOUND,
+            )?,
         })
     }
 }
 
 /// The own-counts layout's texel views of a [`SortBuffers`]' keys and values, and the
 /// descriptor sets: `sets[k]` reads `keys[k]` and `values[k]` (or the packed pairs in
-/// `keys[k]`), the input of a pass from buffer `k`.
+/// `keys[k]`), the input of a pass from buffer `k`, and binds `keys[1 - k]`, its output, as a
+/// storage buffer where `bound_out`.
 struct SortTexels {
     pool: vk::DescriptorPool,
     sets: [vk::DescriptorSet; 2],
+    /// Whether the sets bind the output key buffers (binding 3): where their packed pairs fit
+    /// the device's `maxStorageBufferRange` (128 MiB, 16.7M pairs, on lavapipe). Larger sorts
+    /// write through the buffer references.
+    bound_out: bool,
     views: Vec<vk::BufferView>,
     ctx: Context,
 }
@@ -263,15 +286,22 @@ impl SortTexels {
         capacity: u64,
     ) -> Result<Self> {
         let uniform = vk::DescriptorType::UNIFORM_TEXEL_BUFFER;
-        let sizes = [vk::DescriptorPoolSize {
-            ty: uniform,
-            descriptor_count: 6,
-        }];
+        let sizes = [
+            vk::DescriptorPoolSize {
+                ty: uniform,
+                descriptor_count: 6,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_BUFFER,
+                descriptor_count: 2,
+            },
+        ];
         let (pool, sets) = allocate_sets(ctx, &sizes, &[layout, layout])?;
         // From here on Drop frees what exists.
         let mut texels = SortTexels {
             pool,
             sets: [sets[0], sets[1]],
+            bound_out: capacity * 8 <= ctx.info().max_storage_buffer_range as u64,
             views: Vec::with_capacity(6),
             ctx: ctx.clone(),
         };
@@ -285,6 +315,19 @@ impl SortTexels {
             ] {
                 let view = write_texel_view(ctx, buffer, four, bytes, set, binding, uniform)?;
                 texels.views.push(view);
+            }
+            if texels.bound_out {
+                let out = [vk::DescriptorBufferInfo {
+                    buffer: keys[1 - k].raw,
+                    offset: 0,
+                    range: capacity * 8,
+                }];
+                let write = vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(3)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(&out);
+                unsafe { ctx.device().update_descriptor_sets(&[write], &[]) };
             }
         }
         Ok(texels)
@@ -408,7 +451,16 @@ impl RadixSort {
                         .descriptor_count(1)
                         .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 };
-                let bindings = [binding(0), binding(1), binding(2)];
+                let bindings = [
+                    binding(0),
+                    binding(1),
+                    binding(2),
+                    vk::DescriptorSetLayoutBinding::default()
+                        .binding(3)
+                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .descriptor_count(1)
+                        .stage_flags(vk::ShaderStageFlags::COMPUTE),
+                ];
                 let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
                 Some(
                     unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
@@ -441,6 +493,7 @@ impl RadixSort {
                 scan,
                 layout,
                 texel_layout,
+                bound_output: true,
                 ctx: ctx.clone(),
             }),
             Err(e) => {
@@ -513,6 +566,14 @@ impl RadixSort {
         })
     }
 
+    /// Switches the own-counts layout's writes of packed pairs through bound storage buffers
+    /// (on by default) on or off. Off, every pass writes through buffer references, as the
+    /// sorts too large for `maxStorageBufferRange` do; for comparison and tests. The result is
+    /// the same.
+    pub fn set_bound_output(&mut self, on: bool) {
+        self.bound_output = on;
+    }
+
     /// Whether this sort takes and gives packed pairs ([`RadixSort::record_form`]): in the
     /// own-counts layout.
     pub fn sorts_packed(&self) -> bool {
@@ -521,12 +582,13 @@ impl RadixSort {
 
     /// The count and scatter kernels of radix pass `pass` of `passes`, for a sort whose input
     /// and result are in `form`: the passes between hand the pairs on packed where the layout
-    /// can.
+    /// can, through the sets' storage buffers where they are `bound` ([`SortTexels`]).
     fn pass_kernels(
         &self,
         pass: u32,
         passes: u32,
         form: PairForm,
+        bound: bool,
     ) -> (&ComputePipeline, &ComputePipeline) {
         let Some(packed) = self.packed.as_ref() else {
             assert!(
@@ -543,11 +605,13 @@ impl RadixSort {
         } else {
             &self.count
         };
-        let scatter = match (packed_in, packed_out) {
-            (false, false) => &self.scatter,
-            (false, true) => &packed.scatter_to_packed,
-            (true, true) => &packed.scatter_packed,
-            (true, false) => &packed.scatter_from_packed,
+        let scatter = match (packed_in, packed_out, bound) {
+            (false, false, _) => &self.scatter,
+            (false, true, false) => &packed.scatter_to_packed,
+            (false, true, true) => &packed.scatter_to_packed_bound,
+            (true, true, false) => &packed.scatter_packed,
+            (true, true, true) => &packed.scatter_packed_bound,
+            (true, false, _) => &packed.scatter_from_packed,
         };
         (count, scatter)
     }
@@ -632,7 +696,8 @@ impl RadixSort {
                 digit_mask,
             };
             let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
-            let (count, scatter) = self.pass_kernels(pass, passes, form);
+            let bound = self.bound_output && bufs.texels.as_ref().is_some_and(|t| t.bound_out);
+            let (count, scatter) = self.pass_kernels(pass, passes, form, bound);
             count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             self.scan
