@@ -20,6 +20,11 @@
 // CUTOFF_TILES_LOOP_BUDGET / (1 + planes) passes (its loop and the loop over the planes). The
 // pairs it leaves stay unclassified, which draws them exactly at the partial pairs' cost, and
 // the workgroup's other invocations take the splats not yet begun.
+//
+// SPLAT_TEXELS (cutoff_tiles_texels.comp, CPU drivers): the splats, the cutoff records, the
+// tiles touched, the emitted keys and the clip planes are read through the frame's texel views,
+// which a CPU driver loads as gathers, where a buffer load is a scalar loop over the lanes per
+// 64-bit word.
 #include "common.glsl"
 #include "clip.glsl"
 

@@ -9,9 +9,9 @@
 // the storage buffer at binding 3 of the pass's set (SortTexels), not through the buffer
 // reference keys_out. gallivm stores either one lane at a time, but a bound buffer's lane loop
 // takes a 32-bit index into one base pointer where a reference takes a 64-bit address per lane,
-// which the loop moves through the stack lane by lane: 3 vector spills per lane instead of 4
-// (lavapipe, bench --sort 2000000, builds in turn: 61.9-68.9 -> 45.7-60.0 ms, faster in 5 of 5
-// pairs). The host uses them where the buffer fits maxStorageBufferRange.
+// which the loop moves through the stack lane by lane: 3 vector spills per lane instead of 5
+// (lavapipe, bench --sort 2000000, six runs in turn: median 70.5 -> 58.9 ms, faster in 5 of
+// 6). The host uses them where the buffer fits maxStorageBufferRange.
 #ifndef SORT_OUT_BOUND
 #define SORT_OUT_BOUND 0
 #endif
