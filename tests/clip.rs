@@ -5,6 +5,7 @@
 mod common;
 
 use glam::{DVec3, Quat, Vec3};
+use image::RgbaImage;
 use rara::clip::{
     normal_cdf, Classification, Clip, ClipMode, ClipRegion, ClipWeight, CutoffRay, Plane,
 };
@@ -13,7 +14,7 @@ use rara::metrics::{compare, ssim};
 use rara::reference;
 use rara::stages::rasterize::RasterLayout;
 use rara::synth::Rng;
-use rara::{Camera, RenderOptions, Renderer, Scene};
+use rara::{Camera, FrameStats, GpuScene, RenderOptions, Renderer, Scene};
 
 /// One region of each kind, placed through the middle of the scene.
 fn regions(scene: &Scene) -> Vec<(&'static str, ClipRegion)> {
@@ -450,6 +451,21 @@ fn needle_behind_a_plane_does_not_leak() {
     common::assert_no_validation_messages(&ctx);
 }
 
+/// One frame rendered with the per-tile classes of cutoff pairs switched off, then on (left
+/// on).
+fn render_without_and_with_tile_classes(
+    renderer: &mut Renderer,
+    scene: &GpuScene,
+    camera: &Camera,
+    options: &RenderOptions,
+) -> ((RgbaImage, FrameStats), (RgbaImage, FrameStats)) {
+    renderer.set_cutoff_tile_classes(false);
+    let plain = renderer.render(scene, camera, options).unwrap();
+    renderer.set_cutoff_tile_classes(true);
+    let classified = renderer.render(scene, camera, options).unwrap();
+    (plain, classified)
+}
+
 /// The per-tile classes of cutoff pairs (`stages::cutoff_tiles`) only save work: the image is
 /// the same with and without them to within rounding, for planes, a box and a cutaway, while
 /// some of the cutoff pairs are drawn plain or left out (45 % in these small frames, 58-69 %
@@ -480,10 +496,8 @@ fn cutoff_tile_classes_change_no_pixel() {
                 clip: Clip::rara(region),
                 ..RenderOptions::default()
             };
-            renderer.set_cutoff_tile_classes(false);
-            let (plain, plain_stats) = renderer.render(&gpu_scene, &camera, &options).unwrap();
-            renderer.set_cutoff_tile_classes(true);
-            let (classified, stats) = renderer.render(&gpu_scene, &camera, &options).unwrap();
+            let ((plain, plain_stats), (classified, stats)) =
+                render_without_and_with_tile_classes(&mut renderer, &gpu_scene, &camera, &options);
             assert_eq!(
                 plain_stats.cutoff_pairs, 0,
                 "{name} {region_name}: switched off"
@@ -563,10 +577,8 @@ fn cutoff_tiles_past_the_loop_budget_change_no_pixel() {
         clip: Clip::rara(region),
         ..RenderOptions::default()
     };
-    renderer.set_cutoff_tile_classes(false);
-    let (plain, _) = renderer.render(&gpu_scene, &camera, &options).unwrap();
-    renderer.set_cutoff_tile_classes(true);
-    let (classified, stats) = renderer.render(&gpu_scene, &camera, &options).unwrap();
+    let ((plain, _), (classified, stats)) =
+        render_without_and_with_tile_classes(&mut renderer, &gpu_scene, &camera, &options);
     eprintln!(
         "{} cutoff splats, {} cutoff pairs, {} weight 1, {} empty",
         stats.cutoff, stats.cutoff_pairs, stats.cutoff_pairs_weight_one, stats.cutoff_pairs_empty

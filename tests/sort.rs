@@ -37,6 +37,35 @@ fn check_sort(sorter: &RadixSort, ctx: &rara::Context, keys: Vec<u32>, key_bits:
     common::assert_no_validation_messages(ctx);
 }
 
+/// Sorts `keys` packed with their indices as values (key low, value high) by their low
+/// `key_bits` bits, against a stable CPU sort.
+fn check_packed_sort(
+    sorter: &RadixSort,
+    ctx: &rara::Context,
+    keys: &[u32],
+    key_bits: u32,
+    what: &str,
+) {
+    let pairs: Vec<u64> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, &key)| key as u64 | (i as u64) << 32)
+        .collect();
+    let got = sorter.sort_packed_pairs(ctx, &pairs, key_bits).unwrap();
+    let mask = (u64::MAX >> (64 - key_bits)) & u32::MAX as u64;
+    let mut expected = pairs;
+    expected.sort_by_key(|&p| p & mask); // stable
+    let n = keys.len();
+    assert_eq!(got.len(), n, "{what}");
+    if let Some(i) = (0..n).find(|&i| got[i] != expected[i]) {
+        panic!(
+            "{what}: {key_bits}-bit keys, n = {n}: position {i}: GPU {:#x}, expected {:#x}",
+            got[i], expected[i]
+        );
+    }
+    common::assert_no_validation_messages(ctx);
+}
+
 fn random_keys(n: usize, bits: u32, seed: u64) -> Vec<u32> {
     let mut rng = Rng::new(seed);
     let mask = if bits >= 32 {
@@ -146,25 +175,9 @@ fn sort_packed_pairs() {
     for (k, key_bits) in [3u32, 13, 20, 32].into_iter().enumerate() {
         for (j, &n) in sizes.iter().enumerate() {
             let keys = random_keys(n, 32, (10 * k + j) as u64);
-            let pairs: Vec<u64> = keys
-                .iter()
-                .enumerate()
-                .map(|(i, &key)| key as u64 | (i as u64) << 32)
-                .collect();
-            let got = sorter.sort_packed_pairs(&ctx, &pairs, key_bits).unwrap();
-            let mask = (u64::MAX >> (64 - key_bits)) & u32::MAX as u64;
-            let mut expected = pairs.clone();
-            expected.sort_by_key(|&p| p & mask); // stable
-            assert_eq!(got.len(), n);
-            if let Some(i) = (0..n).find(|&i| got[i] != expected[i]) {
-                panic!(
-                    "{key_bits}-bit keys, n = {n}: position {i}: GPU {:#x}, expected {:#x}",
-                    got[i], expected[i]
-                );
-            }
+            check_packed_sort(&sorter, &ctx, &keys, key_bits, "packed pairs");
         }
     }
-    common::assert_no_validation_messages(&ctx);
 }
 
 /// The CPU layout's blocks double while SORT_PARALLEL_BLOCKS or more are left: sizes on both
@@ -194,16 +207,13 @@ fn sort_sizes_where_runs_grow() {
         block *= 2;
     }
     let n = (parallel - 1) * block + 1;
-    let pairs: Vec<u64> = random_keys(n, 32, 300)
-        .iter()
-        .enumerate()
-        .map(|(i, &key)| key as u64 | (i as u64) << 32)
-        .collect();
-    let got = sorter.sort_packed_pairs(&ctx, &pairs, 32).unwrap();
-    let mut expected = pairs.clone();
-    expected.sort_by_key(|&p| p as u32); // stable
-    assert!(got == expected, "packed pairs in the longest runs, n = {n}");
-    common::assert_no_validation_messages(&ctx);
+    check_packed_sort(
+        &sorter,
+        &ctx,
+        &random_keys(n, 32, 300),
+        32,
+        "packed pairs in the longest runs",
+    );
 }
 
 /// The own-counts layout writes packed pairs through bound storage buffers where they fit
@@ -225,16 +235,13 @@ fn sort_through_buffer_references() {
             "through buffer references",
         );
     }
-    let pairs: Vec<u64> = random_keys(2 * block + 5, 32, 410)
-        .iter()
-        .enumerate()
-        .map(|(i, &key)| key as u64 | (i as u64) << 32)
-        .collect();
-    let got = sorter.sort_packed_pairs(&ctx, &pairs, 32).unwrap();
-    let mut expected = pairs.clone();
-    expected.sort_by_key(|&p| p as u32); // stable
-    assert!(got == expected, "packed pairs through buffer references");
-    common::assert_no_validation_messages(&ctx);
+    check_packed_sort(
+        &sorter,
+        &ctx,
+        &random_keys(2 * block + 5, 32, 410),
+        32,
+        "packed pairs through buffer references",
+    );
 }
 
 #[test]

@@ -681,6 +681,7 @@ impl RadixSort {
         let mut src = 0;
         let bits = self.layout.radix_bits();
         let passes = self.passes_for(key_bits);
+        let bound = self.bound_output && bufs.texels.as_ref().is_some_and(|t| t.bound_out);
         for pass in 0..passes {
             let label = labels.passes[pass as usize];
             if let Some(t) = timer.as_deref_mut() {
@@ -696,7 +697,6 @@ impl RadixSort {
                 digit_mask,
             };
             let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
-            let bound = self.bound_output && bufs.texels.as_ref().is_some_and(|t| t.bound_out);
             let (count, scatter) = self.pass_kernels(pass, passes, form, bound);
             count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
