@@ -11,6 +11,17 @@ struct SortInfo {
     uint block_keys;    // keys per block, as sort_prepare.comp chose them
     uvec4 block_args;   // indirect dispatch: one workgroup per block
     uvec4 linear_args;  // indirect dispatch: one invocation per key, LINEAR_WORKGROUP wide
+    // Segmented sorts (CPU-driver layout, sort_segments.comp): the first pass sorts by the top
+    // digit, and the passes after it sort each of its buckets on its own by the other digits,
+    // least significant first.
+    uint segmented;     // 1 for a segmented sort
+    uint seg_runs;      // runs of the passes that sort the buckets in runs (SortRuns below)
+    uvec2 seg_pad;
+    uvec4 pass_args[3]; // indirect dispatch of passes 1, 2, 3: a workgroup per SORT_OWN_WORKGROUP
+                        // runs of a segmented sort, none for a pass that sort_local_*.comp
+                        // made, block_args where the sort is not segmented
+    uvec4 local_args;   // indirect dispatch of sort_local_*.comp: a workgroup per
+                        // SORT_OWN_WORKGROUP buckets where every bucket is small enough
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer SortInfoRef { SortInfo s; };
 
@@ -19,5 +30,10 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer SortInfoRef
 uint key_digit(uint key, uint shift, uint digit_mask) {
     return (key >> shift) & digit_mask;
 }
+
+// A segmented sort's table (sort_segments.comp): its SORT_OWN_RADIX buckets, keys [x, y) each,
+// then from entry SORT_OWN_RADIX on the runs of its passes after the first, a uvec4 each:
+// keys [x, y) of one bucket, whose count of digit d goes to hist[z + d w].
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer SortRuns { uvec4 v[]; };
 
 #endif

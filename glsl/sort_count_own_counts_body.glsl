@@ -9,28 +9,42 @@ layout(push_constant) uniform Push {
     U32s hist;
     uint shift;
     uint digit_mask;
+    SortRuns runs;      // segmented sorts: the runs of the passes after the first
+    uint seg_shift;     // segmented sorts: the pass's digit
+    uint seg_digit_mask;
+    uint from_table;    // 1 in the passes after the first: segmented sorts take the runs table
 } pc;
 
 void main() {
-    uvec2 run = own_run(pc.info.s.num_keys, pc.info.s.block_keys);
+    bool from_table = pc.from_table != 0u && pc.info.s.segmented != 0u;
+    uvec4 run = own_run(pc.info, pc.runs, from_table);
+    if (run.z == NO_RUN) {
+        return;
+    }
+    uvec2 digit = pass_digit(pc.info, uvec2(pc.shift, pc.digit_mask),
+                             uvec2(pc.seg_shift, pc.seg_digit_mask));
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
         own_counts[d] = 0u;
     }
-    // The run's whole groups of four keys without a test per key, then its last 0-3 keys one
-    // by one: gallivm runs a key's work under a mask whether the test passes or not (lavapipe,
+    // The run's whole groups of four keys without a test per key, then its first and last
+    // 0-3 keys one by one, in one loop since counts do not care for order (a segmented pass's
+    // run starts where its bucket does, anywhere):
+    // gallivm runs a key's work under a mask whether the test passes or not (lavapipe,
     // bench --sort 2000000 with LP_NUM_THREADS=1, three runs in turn: 150-154 -> 127-132 ms).
-    uint whole = run.x + ((run.y - run.x) & ~3u);
-    for (uint i = run.x; i < whole; i += 4u) {
+    uint aligned = min((run.x + 3u) & ~3u, run.y);
+    uint whole = aligned + ((run.y - aligned) & ~3u);
+    uint head = aligned - run.x;
+    for (uint i = aligned; i < whole; i += 4u) {
         uvec4 four = load_four_keys(i);
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {
-            own_counts[key_digit(four[j], pc.shift, pc.digit_mask)] += 1u;
+            own_counts[key_digit(four[j], digit.x, digit.y)] += 1u;
         }
     }
-    for (uint i = whole; i < run.y; ++i) {
-        own_counts[key_digit(load_four_keys(i & ~3u)[i & 3u], pc.shift, pc.digit_mask)] += 1u;
+    for (uint k = 0u; k < head + (run.y - whole); ++k) {
+        uint i = k < head ? run.x + k : whole + (k - head);
+        own_counts[key_digit(load_four_keys(i & ~3u)[i & 3u], digit.x, digit.y)] += 1u;
     }
-    uint num_blocks = pc.info.s.num_blocks;
     for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
-        pc.hist.v[hist_index(d, num_blocks)] = own_counts[d];
+        pc.hist.v[run.z + d * run.w] = own_counts[d];
     }
 }

@@ -74,16 +74,26 @@ uvec4 load_four_keys(uint i) {
 // turn beat shared memory: 160-164 -> 111-114 ms for the whole sort).
 uint own_counts[SORT_OWN_RADIX];
 
-// This invocation's run of keys: [first, end), empty past num_keys. A block's
-// runs share it evenly: SORT_OWN_MIN_ITEMS keys each or a power-of-two multiple of that,
-// as sort_prepare.comp chose.
-uvec2 own_run(uint num_keys, uint block_keys) {
-    uint run_keys = block_keys / SORT_OWN_WORKGROUP;
-    uint first = gl_GlobalInvocationID.x * run_keys;
-    return uvec2(first, max(first, min(first + run_keys, num_keys)));
+// This invocation's run of the pass: keys [x, y), and its column of the histogram, whose
+// entry for digit d is hist[z + d w]. Passes of a segmented sort after its first take their
+// runs from the table of sort_segments.comp (`from_table`), where a dispatch's last workgroup
+// may have invocations past the last run: they get z = NO_RUN and must return. Otherwise a
+// block's runs share it evenly: SORT_OWN_MIN_ITEMS keys each or a power-of-two multiple of
+// that, as sort_prepare.comp chose, empty past num_keys, one column per run in order.
+#define NO_RUN 0xffffffffu
+uvec4 own_run(SortInfoRef info, SortRuns runs, bool from_table) {
+    uint r = gl_GlobalInvocationID.x;
+    if (from_table) {
+        return r < info.s.seg_runs ? runs.v[SORT_OWN_RADIX + r] : uvec4(0u, 0u, NO_RUN, 0u);
+    }
+    uint run_keys = info.s.block_keys / SORT_OWN_WORKGROUP;
+    uint first = r * run_keys;
+    uint end = max(first, min(first + run_keys, info.s.num_keys));
+    return uvec4(first, end, r, info.s.num_blocks * SORT_OWN_WORKGROUP);
 }
 
-// Index of (digit, this invocation's run) in the histogram of num_blocks blocks.
-uint hist_index(uint digit, uint num_blocks) {
-    return digit * (num_blocks * SORT_OWN_WORKGROUP) + gl_GlobalInvocationID.x;
+// The digit a pass sorts by, (shift, mask) for key_digit: a segmented sort's passes take the
+// top digit first (`segmented`), the others the least significant first (`plain`).
+uvec2 pass_digit(SortInfoRef info, uvec2 plain, uvec2 segmented) {
+    return info.s.segmented != 0u ? segmented : plain;
 }

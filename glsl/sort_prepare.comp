@@ -1,6 +1,7 @@
 // Radix sort, step 0: clamp the key count to the buffers' capacity and derive the indirect
 // dispatch arguments of the passes.
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
 #include "sort_common.glsl"
 
@@ -13,6 +14,8 @@ layout(push_constant) uniform Push {
     uint hist_per_block; // histogram entries per block in the layout
     uint min_block;     // keys per block (workgroup) of the layout, at the least
     uint max_block;     // at the most: min_block times a power of two
+    uint segment_min;   // segment sorts of this many keys or more (0: never)
+    uint pad;
 } pc;
 
 void main() {
@@ -30,4 +33,10 @@ void main() {
     pc.info.s.hist_len = blocks * pc.hist_per_block;
     pc.info.s.block_args = uvec4(blocks, 1u, 1u, 0u);
     pc.info.s.linear_args = uvec4(linear_grid(n), 0u);
+    pc.info.s.segmented = pc.segment_min != 0u && n >= pc.segment_min ? 1u : 0u;
+    pc.info.s.seg_runs = 0u;
+    [[unroll]] for (uint k = 0u; k < 3u; ++k) {
+        pc.info.s.pass_args[k] = pc.info.s.block_args;
+    }
+    pc.info.s.local_args = uvec4(0u, 1u, 1u, 0u);
 }

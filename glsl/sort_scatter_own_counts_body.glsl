@@ -37,14 +37,21 @@ layout(push_constant) uniform Push {
     U32s hist;          // scanned histogram: first output position of (digit, run)
     uint shift;
     uint digit_mask;
+    SortRuns runs;      // segmented sorts: the runs of the passes after the first
+    uint seg_shift;     // segmented sorts: the pass's digit
+    uint seg_digit_mask;
+    uint from_table;    // 1 in the passes after the first: segmented sorts take the runs table
 } pc;
+
+// The pass's digit (pass_digit), set by main.
+uvec2 digit;
 
 // Writes the run's next key of `key`'s digit, with its value, at the digit's next output
 // position.
 void scatter_pair(uint key, uint value) {
-    uint digit = key_digit(key, pc.shift, pc.digit_mask);
-    uint dst = own_counts[digit];
-    own_counts[digit] = dst + 1u;
+    uint d = key_digit(key, digit.x, digit.y);
+    uint dst = own_counts[d];
+    own_counts[d] = dst + 1u;
 #if SORT_PAIRS_OUT
     // One 64-bit store: gallivm writes each component of a store in a loop of its own over
     // the lanes, so a pair costs one loop instead of two.
@@ -60,16 +67,29 @@ void scatter_pair(uint key, uint value) {
 }
 
 void main() {
-    uvec2 run = own_run(pc.info.s.num_keys, pc.info.s.block_keys);
-    uint num_blocks = pc.info.s.num_blocks;
-    for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
-        own_counts[d] = pc.hist.v[hist_index(d, num_blocks)];
+    bool from_table = pc.from_table != 0u && pc.info.s.segmented != 0u;
+    uvec4 run = own_run(pc.info, pc.runs, from_table);
+    if (run.z == NO_RUN) {
+        return;
     }
-    // The run's whole groups of four keys without a test per key, then its last 0-3 keys one
-    // by one: gallivm runs a key's work under a mask whether the test passes or not (lavapipe,
-    // bench --sort 2000000 with LP_NUM_THREADS=1, three runs in turn: 150-154 -> 127-132 ms).
-    uint whole = run.x + ((run.y - run.x) & ~3u);
-    for (uint i = run.x; i < whole; i += 4u) {
+    digit = pass_digit(pc.info, uvec2(pc.shift, pc.digit_mask),
+                       uvec2(pc.seg_shift, pc.seg_digit_mask));
+    for (uint d = 0u; d < SORT_OWN_RADIX; ++d) {
+        own_counts[d] = pc.hist.v[run.z + d * run.w];
+    }
+    // In order: the run's first 0-3 keys one by one (a segmented pass's run starts where its
+    // bucket does, anywhere), its whole groups of four keys without a test per key, then its
+    // last 0-3 keys one by one: gallivm runs a key's work under a mask whether the test passes
+    // or not (lavapipe, bench --sort 2000000 with LP_NUM_THREADS=1, three runs in turn:
+    // 150-154 -> 127-132 ms).
+    uint aligned = min((run.x + 3u) & ~3u, run.y);
+    uint whole = aligned + ((run.y - aligned) & ~3u);
+    for (uint i = run.x; i < aligned; ++i) {
+        uvec4 keys, values;
+        load_four(i & ~3u, keys, values);
+        scatter_pair(keys[i & 3u], values[i & 3u]);
+    }
+    for (uint i = aligned; i < whole; i += 4u) {
         uvec4 keys, values;
         load_four(i, keys, values);
         [[unroll]] for (uint j = 0u; j < 4u; ++j) {

@@ -101,6 +101,25 @@ const _: () = assert!(SORT_OWN_MAX_BLOCK.is_power_of_two() && SORT_OWN_MIN_BLOCK
 /// `bench --sort 2000000` (16 blocks of 16,384-key runs against 62 of 4,096), eight runs in
 /// turn: median 56.6 -> 51.0 ms.
 pub const SORT_PARALLEL_BLOCKS: u32 = 16;
+/// Sorts of this many keys or more are segmented in the CPU-driver layout on CPU devices (of
+/// 3 or 4 radix passes; see `RadixSort::set_segment_min_keys`): the first pass sorts by the
+/// top digit, and then one invocation per bucket sorts it by the other digits
+/// (`glsl/sort_segments.comp`, `glsl/sort_local_body.glsl`), its keys staying in the cache from
+/// pass to pass instead of streaming through it twice a pass. lavapipe, `bench --sort`,
+/// random 32-bit keys, segmented against not, three runs each in turn in a noisy hour:
+/// 4,000,000 keys 73-85 against 98-122 ms, 1,048,576 keys 18.5-22.1 against 23.4-33.3 ms,
+/// 524,288 keys 8.4-13.8 against 10.8-21.0 ms, 262,144 keys 5.2-6.3 against 6.2-7.6 ms. Keys
+/// whose top digit takes few values (depths) fill buckets too large for one invocation and
+/// gain nothing (runs within the buckets: 21-29 against 24-31 ms at 1,048,576, 45-58 against
+/// 46-67 ms at 2,000,000). The threshold keeps the frames' sorts of the scenes measured here
+/// (up to 500k Gaussians, tile sorts of 2 passes) as they were.
+pub const SORT_SEGMENT_MIN_KEYS: u32 = 1 << 20;
+/// The loop iterations that one invocation of `glsl/sort_local_body.glsl` may take: it sorts
+/// a whole bucket of a segmented sort by the digits after the top one, so the bucket's size
+/// is bounded ([`local_max_keys`](crate::stages::sort::local_max_keys)) to keep it under
+/// lavapipe's cap of 65,535 loop iterations per invocation, with a margin. Where a bucket is
+/// larger, the passes after the first sort all the keys, each bucket's runs apart.
+pub const SORT_LOCAL_LOOP_BUDGET: u32 = 58_000;
 /// Smallest subgroup size the kernels support (real devices have 4 or more): the sort's
 /// scatter and the workgroup scan keep one shared-memory slot per subgroup.
 pub const MIN_SUBGROUP_SIZE: u32 = 4;

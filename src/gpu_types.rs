@@ -76,6 +76,22 @@ pub struct GpuSortInfo {
     pub block_args: [u32; 4],
     /// Indirect dispatch arguments: one invocation per key.
     pub linear_args: [u32; 4],
+    /// 1 where the sort is segmented (CPU-driver layout, sorts of
+    /// [`SORT_SEGMENT_MIN_KEYS`](crate::constants::SORT_SEGMENT_MIN_KEYS) or more): the first
+    /// pass sorts by the top digit, the others each of its buckets by the other digits.
+    pub segmented: u32,
+    /// Runs of the passes of a segmented sort that sort its buckets in runs
+    /// (`sort_segments.comp` lists them).
+    pub seg_runs: u32,
+    /// Unused.
+    pub seg_pad: [u32; 2],
+    /// Indirect dispatch arguments of passes 1, 2 and 3: a workgroup per `SORT_OWN_WORKGROUP`
+    /// runs of a segmented sort, none for a pass that `sort_local_*.comp` made, `block_args`
+    /// where the sort is not segmented.
+    pub pass_args: [[u32; 4]; 3],
+    /// Indirect dispatch arguments of `sort_local_*.comp`: a workgroup per `SORT_OWN_WORKGROUP`
+    /// buckets of a segmented sort whose buckets are all small enough, else none.
+    pub local_args: [u32; 4],
 }
 
 /// `ClipParams` in clip.glsl: the clip region and mode of a frame (see [`crate::clip::Clip`]).
@@ -110,7 +126,8 @@ const _: () = assert!(std::mem::size_of::<GpuClipParams>() == 48 + 16 * MAX_CLIP
 const _: () = assert!(std::mem::size_of::<GpuCutoffRecord>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuProjectedSplat>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuFrameParams>() == 128);
-const _: () = assert!(std::mem::size_of::<GpuSortInfo>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuSortInfo>() == 128);
 
 /// Byte offset of the block histogram in the sort's scratch buffer (after [`GpuSortInfo`]).
-pub const SORT_HIST_OFFSET: u64 = 64;
+pub const SORT_HIST_OFFSET: u64 = 128;
+const _: () = assert!(std::mem::size_of::<GpuSortInfo>() as u64 <= SORT_HIST_OFFSET);

@@ -624,5 +624,12 @@ fn bench_writes_table_json_and_trace() {
 
     let out = rara(&["bench", "--sort", "5000"]);
     assert_success(&out);
-    assert!(String::from_utf8_lossy(&out.stdout).contains("GPU / CPU throughput"));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("GPU / CPU throughput"), "{text}");
+    // Every pass's median, and how the sort went (5,000 keys: not segmented).
+    assert!(
+        text.contains("GPU passes (median ms): sort setup ") && text.contains("sort pass 3 "),
+        "{text}"
+    );
+    assert!(text.contains("not segmented"), "{text}");
 }

@@ -89,6 +89,11 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuSortInfo, block_keys),
         offset_of!(GpuSortInfo, block_args),
         offset_of!(GpuSortInfo, linear_args),
+        offset_of!(GpuSortInfo, segmented),
+        offset_of!(GpuSortInfo, seg_runs),
+        offset_of!(GpuSortInfo, seg_pad),
+        offset_of!(GpuSortInfo, pass_args),
+        offset_of!(GpuSortInfo, local_args),
     ];
     assert_layout(shaders::SORT_PREPARE, "SortInfo", &sort);
     let clip = [

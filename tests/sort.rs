@@ -5,7 +5,10 @@ mod common;
 use rara::constants::{
     SCAN_BLOCK, SCAN_RUN, SCAN_RUN_WORKGROUP, SORT_OWN_WORKGROUP, SORT_PARALLEL_BLOCKS,
 };
-use rara::stages::sort::{RadixSort, SortLayout};
+use rara::stages::sort::{
+    local_max_keys, PairForm, RadixSort, Segmentation, SortLayout, TILE_SORT_LABELS,
+};
+use rara::vk::Buffer;
 
 /// Both layouts run on every device, so the GPU one is checked here too.
 const LAYOUTS: [SortLayout; 2] = [SortLayout::ShortRuns, SortLayout::OwnCounts];
@@ -64,6 +67,73 @@ fn check_packed_sort(
         );
     }
     common::assert_no_validation_messages(ctx);
+}
+
+/// Sorts `keys` with their indices as values by their low `key_bits` bits in `form`, through
+/// the sort's buffers as a frame records it, against a stable CPU sort; returns how the sort
+/// ran its passes after the first.
+fn check_segmented_sort(
+    sorter: &RadixSort,
+    ctx: &rara::Context,
+    keys: &[u32],
+    key_bits: u32,
+    form: PairForm,
+    what: &str,
+) -> Segmentation {
+    let n = keys.len();
+    let values: Vec<u32> = (0..n as u32).collect();
+    let bufs = sorter.buffers(ctx, n as u64).unwrap();
+    let packed: Vec<u64> = keys
+        .iter()
+        .zip(&values)
+        .map(|(&k, &v)| k as u64 | (v as u64) << 32)
+        .collect();
+    match form {
+        PairForm::Packed => bufs.keys[0].upload(bytemuck::cast_slice(&packed)).unwrap(),
+        PairForm::Split => {
+            bufs.keys[0].upload(bytemuck::cast_slice(keys)).unwrap();
+            bufs.values[0]
+                .upload(bytemuck::cast_slice(&values))
+                .unwrap();
+        }
+    }
+    let count = Buffer::from_slice(ctx, "sort count", &[n as u32]).unwrap();
+    let out = ctx
+        .run_commands(|cmd| {
+            sorter.record_form(
+                ctx,
+                cmd,
+                &bufs,
+                count.address,
+                key_bits,
+                form,
+                &TILE_SORT_LABELS,
+                None,
+            )
+        })
+        .unwrap();
+    let got: Vec<u64> = match form {
+        PairForm::Packed => bufs.keys[out].download_as(n).unwrap(),
+        PairForm::Split => {
+            let k: Vec<u32> = bufs.keys[out].download_as(n).unwrap();
+            let v: Vec<u32> = bufs.values[out].download_as(n).unwrap();
+            k.iter()
+                .zip(&v)
+                .map(|(&k, &v)| k as u64 | (v as u64) << 32)
+                .collect()
+        }
+    };
+    let mask = (u64::MAX >> (64 - key_bits)) & u32::MAX as u64;
+    let mut expected = packed;
+    expected.sort_by_key(|&p| p & mask); // stable
+    if let Some(i) = (0..n).find(|&i| got[i] != expected[i]) {
+        panic!(
+            "{what}: {key_bits}-bit keys, n = {n}, {form:?}: position {i}: GPU {:#x}, expected {:#x}",
+            got[i], expected[i]
+        );
+    }
+    common::assert_no_validation_messages(ctx);
+    bufs.segmentation().unwrap()
 }
 
 fn random_keys(n: usize, bits: u32, seed: u64) -> Vec<u32> {
@@ -244,19 +314,112 @@ fn sort_through_buffer_references() {
     );
 }
 
+/// 2M pairs: in the CPU layout a segmented sort at the default threshold, its buckets sorted
+/// one per invocation.
 #[test]
 fn sort_two_million_pairs() {
     let ctx = common::context();
-    for layout in LAYOUTS {
-        let sorter = RadixSort::with_layout(&ctx, layout).unwrap();
-        check_sort(
-            &sorter,
-            &ctx,
-            random_keys(2_000_000, 32, 99),
+    let keys = random_keys(2_000_000, 32, 99);
+    let short = RadixSort::with_layout(&ctx, SortLayout::ShortRuns).unwrap();
+    check_sort(&short, &ctx, keys.clone(), 32, "2M random pairs");
+    let own = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
+    let how = check_segmented_sort(&own, &ctx, &keys, 32, PairForm::Split, "2M random pairs");
+    assert_eq!(how, Segmentation::LocalBuckets);
+}
+
+/// Segmented sorts in the CPU layout, with every sort of many keys segmented here: the first
+/// pass by the top digit, then each bucket by the other digits, by one invocation where every
+/// bucket is small enough (2 and 3 passes, up to the largest bucket it takes, which keeps
+/// within lavapipe's loop cap) and in runs within the buckets where one is larger (skewed keys,
+/// one key past that bucket size). Split and packed pairs, buckets starting anywhere, against a
+/// stable CPU sort; each case also checks which way the sort went. Sorts with a single pass for
+/// the local kernel (two passes, or three of separate keys and values) are not segmented, and
+/// with segmentation off nothing is.
+#[test]
+fn segmented_sorts() {
+    use Segmentation::{BucketRuns, LocalBuckets, None as Plain};
+    let ctx = common::context();
+    let mut sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
+    sorter.set_segment_min_keys(Some(1));
+    // Buckets of the top byte: one holding `big` keys (top byte 0x40), the others random.
+    let one_big_bucket = |big: usize, others: usize, seed: u64| -> Vec<u32> {
+        let mut keys: Vec<u32> = random_keys(others, 32, seed)
+            .into_iter()
+            .map(|k| if k >> 24 == 0x40 { k ^ 0x8000_0000 } else { k })
+            .collect();
+        let low = random_keys(big, 24, seed + 1);
+        keys.extend(low.into_iter().map(|k| 0x4000_0000 | k));
+        let mut rng = Rng::new(seed + 2);
+        for i in (1..keys.len()).rev() {
+            keys.swap(i, rng.next_u64() as usize % (i + 1));
+        }
+        keys
+    };
+    // Depth-like keys: the top byte takes two values, so a bucket holds half the keys.
+    let depth_like: Vec<u32> = random_keys(200_001, 25, 31)
+        .into_iter()
+        .map(|k| 0x3f00_0000 + k)
+        .collect();
+    // (keys, key bits, way of the split sort, way of the packed sort, what)
+    let cases: Vec<(Vec<u32>, u32, Segmentation, Segmentation, &str)> = vec![
+        (
+            random_keys(100_003, 32, 20),
             32,
-            "2M random pairs",
-        );
+            LocalBuckets,
+            LocalBuckets,
+            "random 32-bit keys",
+        ),
+        (
+            random_keys(300_001, 20, 21),
+            20,
+            Plain,
+            LocalBuckets,
+            "20-bit keys, 16 buckets",
+        ),
+        (
+            random_keys(60_000, 3, 22),
+            20,
+            Plain,
+            LocalBuckets,
+            "few distinct keys, 1 bucket",
+        ),
+        (
+            random_keys(80_000, 3, 23),
+            20,
+            Plain,
+            BucketRuns,
+            "few distinct keys, too many",
+        ),
+        (depth_like, 32, BucketRuns, BucketRuns, "depth-like keys"),
+        (
+            random_keys(300_001, 32, 24),
+            13,
+            Plain,
+            Plain,
+            "13 of 32 bits, 2 passes",
+        ),
+    ];
+    for (keys, key_bits, split_way, packed_way, what) in &cases {
+        for (form, way) in [(PairForm::Split, split_way), (PairForm::Packed, packed_way)] {
+            let how = check_segmented_sort(&sorter, &ctx, keys, *key_bits, form, what);
+            assert_eq!(how, *way, "{what}, {form:?}");
+        }
     }
+    // The largest bucket one invocation sorts, by 3 digits (packed pairs) or 2 (separate keys
+    // and values, whose last pass the runs make), and one key more.
+    for (form, local_passes) in [(PairForm::Packed, 3), (PairForm::Split, 2)] {
+        let limit = local_max_keys(local_passes) as usize;
+        for (big, way) in [(limit, LocalBuckets), (limit + 1, BucketRuns)] {
+            let keys = one_big_bucket(big, 60_000, 25 + big as u64);
+            let what = format!("a bucket of {big} keys");
+            let how = check_segmented_sort(&sorter, &ctx, &keys, 32, form, &what);
+            assert_eq!(how, way, "{what}, {form:?}");
+        }
+    }
+    sorter.set_segment_min_keys(None);
+    let (keys, key_bits, _, _, what) = &cases[0];
+    let how = check_segmented_sort(&sorter, &ctx, keys, *key_bits, PairForm::Packed, what);
+    assert_eq!(how, Plain);
 }
 
 /// `data` scanned on the GPU by `scan`, with the grand total it stores.

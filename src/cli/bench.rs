@@ -7,7 +7,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use rara::clip::{Clip, ClipMode, Plane};
-use rara::stages::sort::{PairForm, RadixSort, TILE_SORT_LABELS};
+use rara::stages::sort::{PairForm, RadixSort, Segmentation, TILE_SORT_LABELS};
 use rara::timing::PassTimer;
 use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
@@ -465,6 +465,8 @@ fn bench_sort(n: u64) -> Result<()> {
     let count = Buffer::from_slice(&ctx, "sort count", &[n as u32])?;
     let mut timer = PassTimer::new(&ctx)?;
     let mut gpu_ms = Vec::new();
+    // Each pass's times, in the sort's order (the warm-up's first).
+    let mut pass_ms: Vec<(&str, Vec<f64>)> = Vec::new();
     let mut gpu_result = Vec::new();
     for _ in 0..RUNS + 1 {
         if sort.sorts_packed() {
@@ -491,7 +493,14 @@ fn bench_sort(n: u64) -> Result<()> {
                 Some(&mut timer),
             )
         })?;
-        gpu_ms.push(timer.read()?.iter().map(|p| p.ms).sum::<f64>());
+        let passes = timer.read()?;
+        gpu_ms.push(passes.iter().map(|p| p.ms).sum::<f64>());
+        for p in passes {
+            match pass_ms.iter_mut().find(|(name, _)| *name == p.name) {
+                Some((_, ms)) => ms.push(p.ms),
+                None => pass_ms.push((p.name, vec![p.ms])),
+            }
+        }
         gpu_result = if sort.sorts_packed() {
             let pairs = bufs.keys[out].download_as::<u64>(n as usize)?;
             pairs.into_iter().map(|p| p as u32).collect()
@@ -537,5 +546,25 @@ fn bench_sort(n: u64) -> Result<()> {
         rate(c)
     );
     println!("  GPU / CPU throughput: {:.2}x", c / g);
+    let passes: Vec<String> = pass_ms
+        .iter_mut()
+        .map(|(name, ms)| {
+            ms.remove(0); // warm-up
+            format!("{name} {:.2}", median(ms))
+        })
+        .collect();
+    println!("  GPU passes (median ms): {}", passes.join(", "));
+    let how = match bufs.segmentation()? {
+        Segmentation::None => "not segmented: every pass sorts all the keys by one digit",
+        Segmentation::LocalBuckets => {
+            "segmented: pass 0 sorts by the top digit, pass 1 then sorts each of its buckets \
+             by the other digits, one invocation per bucket"
+        }
+        Segmentation::BucketRuns => {
+            "segmented: pass 0 sorts by the top digit, the others all the keys in runs \
+             within its buckets (a bucket too large for one invocation)"
+        }
+    };
+    println!("  {how}");
     Ok(())
 }

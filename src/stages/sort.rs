@@ -24,11 +24,12 @@ use bytemuck::{Pod, Zeroable};
 
 use super::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::constants::{
-    SORT_BLOCK, SORT_OWN_MAX_BLOCK, SORT_OWN_MIN_BLOCK, SORT_OWN_RADIX, SORT_OWN_RADIX_BITS,
-    SORT_OWN_WORKGROUP, SORT_RADIX, SORT_RADIX_BITS,
+    SORT_BLOCK, SORT_LOCAL_LOOP_BUDGET, SORT_OWN_MAX_BLOCK, SORT_OWN_MIN_BLOCK, SORT_OWN_MIN_ITEMS,
+    SORT_OWN_RADIX, SORT_OWN_RADIX_BITS, SORT_OWN_WORKGROUP, SORT_RADIX, SORT_RADIX_BITS,
+    SORT_SEGMENT_MIN_KEYS,
 };
 use crate::error::{Error, Result, VkContext};
-use crate::gpu_types::SORT_HIST_OFFSET;
+use crate::gpu_types::{GpuSortInfo, SORT_HIST_OFFSET};
 use crate::shaders;
 use crate::timing::PassTimer;
 use crate::vk::descriptors::{allocate_sets, write_texel_view};
@@ -43,6 +44,39 @@ struct PreparePush {
     hist_per_block: u32,
     min_block: u32,
     max_block: u32,
+    segment_min: u32,
+    pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SegmentsPush {
+    info: u64,
+    hist: u64,
+    table: u64,
+    passes: u32,
+    local_passes: u32,
+    local_max_keys: u32,
+    pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct LocalPush {
+    info: u64,
+    table: u64,
+}
+
+/// What the own-counts kernels of a pass need beyond the GPU layout's push constants: the
+/// runs table and digit of a segmented sort, used where the GPU side chose to segment it.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SegmentedPass {
+    runs: u64,
+    seg_shift: u32,
+    seg_digit_mask: u32,
+    from_table: u32,
+    pad: u32,
 }
 
 #[repr(C)]
@@ -53,6 +87,7 @@ struct CountPush {
     hist: u64,
     shift: u32,
     digit_mask: u32,
+    segmented: SegmentedPass,
 }
 
 #[repr(C)]
@@ -66,6 +101,7 @@ struct ScatterPush {
     hist: u64,
     shift: u32,
     digit_mask: u32,
+    segmented: SegmentedPass,
 }
 
 /// Byte offset of `block_args` in `SortInfo`.
@@ -74,6 +110,10 @@ const BLOCK_ARGS_OFFSET: u64 = 16;
 pub(crate) const LINEAR_ARGS_OFFSET: u64 = 32;
 /// Byte offset of `hist_len` in `SortInfo`.
 const HIST_LEN_OFFSET: u64 = 8;
+/// Byte offset of `pass_args` in `SortInfo` (passes 1, 2 and 3, 16 bytes each).
+const PASS_ARGS_OFFSET: u64 = 64;
+/// Byte offset of `local_args` in `SortInfo`.
+const LOCAL_ARGS_OFFSET: u64 = 112;
 
 /// How the count and scatter kernels split the work. Both sort the same way (and are tested
 /// alike); they differ in speed by device.
@@ -178,6 +218,8 @@ pub struct RadixSort {
     /// The own-counts layout's kernels that read or write packed pairs: the passes between
     /// the first and the last of a sort, and sorts of packed pairs.
     packed: Option<PackedPassKernels>,
+    /// The own-counts layout's kernels of segmented sorts.
+    segments: Option<SegmentKernels>,
     scan: PrefixSum,
     layout: SortLayout,
     /// The own-counts kernels' descriptor set layout, uniform texel buffers of the pass's
@@ -189,6 +231,9 @@ pub struct RadixSort {
     /// Whether packed pairs are written through bound storage buffers where the buffers allow
     /// it ([`RadixSort::set_bound_output`]).
     bound_output: bool,
+    /// Sorts of this many keys or more are segmented where the layout can; `None`: none
+    /// ([`RadixSort::set_segment_min_keys`]).
+    segment_min_keys: Option<u32>,
     ctx: Context,
 }
 
@@ -256,6 +301,64 @@ impl PackedPassKernels {
                 c"sort_scatter_own_counts_pairs_bound",
                 shaders::SORT_SCATTER_OWN_COUNTS_PAIRS_BOUND,
             )?,
+        })
+    }
+}
+
+/// The most keys a bucket of a segmented sort's first pass may hold for one invocation to sort
+/// it by `local_passes` digits after the top one (`glsl/sort_local_body.glsl`, 2 or 3): its
+/// loops take 263 iterations and one per 4 keys to count the bucket, then 264 and one per 4
+/// keys per pass, and all of them together stay within [`SORT_LOCAL_LOOP_BUDGET`] (lavapipe
+/// ends an invocation after 65,535 loop iterations): 114,946 keys for one pass, 76,278 for
+/// two, 56,945 for three.
+pub fn local_max_keys(local_passes: u32) -> u32 {
+    assert!((1..=3).contains(&local_passes), "1 to 3 local passes");
+    4 * (SORT_LOCAL_LOOP_BUDGET - 263 - 264 * local_passes) / (local_passes + 1)
+}
+
+/// How many of the passes after the first of a sort of `passes` passes (2 to 4) the local
+/// kernels would make where every bucket is small enough: all of them, but the last of a sort
+/// of separate keys and values (`glsl/sort_local_body.glsl`), which the kernels that sort the
+/// buckets in runs then make. Sorts are segmented only where this is 2 or 3: a bucket stays in
+/// the cache from one local pass to the next, and a single one gains nothing (the tile sort of
+/// playbot at 1280x960, 1.05M pairs in 2 passes: 11.1-12.7 ms against 12.9-13.6 ms segmented).
+fn local_passes(passes: u32, form: PairForm) -> u32 {
+    match form {
+        PairForm::Split => passes.saturating_sub(2),
+        PairForm::Packed => passes.saturating_sub(1),
+    }
+}
+
+/// The own-counts layout's kernels of a segmented sort ([`RadixSort::set_segment_min_keys`]):
+/// after the first pass, `buckets` lists its buckets and chooses how the others run;
+/// `local[k]` sorts each small bucket by the k + 2 digits after the top one.
+struct SegmentKernels {
+    buckets: ComputePipeline,
+    local: [ComputePipeline; 2],
+}
+
+impl SegmentKernels {
+    fn new(ctx: &Context, set_layout: vk::DescriptorSetLayout) -> Result<Self> {
+        // The local kernels read one buffer and write the other through two sets: the sort's
+        // set of buffer 1, then that of buffer 0.
+        let local = |name, spirv| {
+            ComputePipeline::with_set_layouts::<LocalPush>(
+                ctx,
+                name,
+                spirv,
+                &[set_layout, set_layout],
+            )
+        };
+        Ok(SegmentKernels {
+            buckets: ComputePipeline::new::<SegmentsPush>(
+                ctx,
+                c"sort_segments",
+                shaders::SORT_SEGMENTS,
+            )?,
+            local: [
+                local(c"sort_local_2", shaders::SORT_LOCAL_2)?,
+                local(c"sort_local_3", shaders::SORT_LOCAL_3)?,
+            ],
         })
     }
 }
@@ -360,6 +463,9 @@ pub struct SortBuffers {
     /// `SortInfo` header followed by the histograms (per block or per run, by layout).
     pub info: Buffer,
     scan: PrefixSumScratch,
+    /// The own-counts layout's table of a segmented sort's buckets and runs
+    /// (`sort_segments.comp`), a `uvec4` each.
+    table: Option<Buffer>,
     capacity: u64,
 }
 
@@ -373,12 +479,40 @@ impl SortBuffers {
             .sum::<u64>()
             + self.info.size
             + self.scan.device_bytes()
+            + self.table.as_ref().map_or(0, |t| t.size)
     }
 
     /// Most pairs these buffers hold.
     pub fn capacity(&self) -> u64 {
         self.capacity
     }
+
+    /// How the last sort recorded on these buffers, once it has run, took its passes after the
+    /// first (the GPU side chooses). Reads the sort's header back.
+    pub fn segmentation(&self) -> Result<Segmentation> {
+        let info = self.info.download_as::<GpuSortInfo>(1)?[0];
+        Ok(if info.segmented == 0 {
+            Segmentation::None
+        } else if info.local_args[0] != 0 {
+            Segmentation::LocalBuckets
+        } else {
+            Segmentation::BucketRuns
+        })
+    }
+}
+
+/// How the last sort recorded on a [`SortBuffers`] ran its passes after the first
+/// ([`SortBuffers::segmentation`]; see [`RadixSort::set_segment_min_keys`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Segmentation {
+    /// Not segmented: every pass sorted all the keys by one digit, least significant first.
+    None,
+    /// The first pass sorted by the top digit, then one invocation per bucket sorted it by the
+    /// other digits (`sort_local_*.comp`).
+    LocalBuckets,
+    /// The first pass sorted by the top digit, then the other passes sorted all the keys in runs
+    /// that keep within their bucket (a bucket was too large for one invocation).
+    BucketRuns,
 }
 
 /// Most radix passes: 32-bit keys in the GPU layout's 4-bit digits.
@@ -481,19 +615,28 @@ impl RadixSort {
                 texel_layout
                     .map(|l| PackedPassKernels::new(ctx, l))
                     .transpose()?,
+                // Segmented sorts on CPU devices only: the local kernels read through texel
+                // views what they wrote through storage buffers in the same dispatch, which a
+                // GPU's texture cache need not see (sort_local_body.glsl).
+                texel_layout
+                    .filter(|_| ctx.info().device_type == vk::PhysicalDeviceType::CPU)
+                    .map(|l| SegmentKernels::new(ctx, l))
+                    .transpose()?,
                 PrefixSum::new(ctx)?,
             ))
         })();
         match kernels {
-            Ok((prepare, count, scatter, packed, scan)) => Ok(RadixSort {
+            Ok((prepare, count, scatter, packed, segments, scan)) => Ok(RadixSort {
                 prepare,
                 count,
                 scatter,
                 packed,
+                segments,
                 scan,
                 layout,
                 texel_layout,
                 bound_output: true,
+                segment_min_keys: Some(SORT_SEGMENT_MIN_KEYS),
                 ctx: ctx.clone(),
             }),
             Err(e) => {
@@ -521,7 +664,22 @@ impl RadixSort {
     pub fn buffers(&self, ctx: &Context, capacity: u64) -> Result<SortBuffers> {
         let capacity = capacity.max(1).next_multiple_of(4);
         let blocks = capacity.div_ceil(self.layout.min_block() as u64);
-        let hist_len = blocks * self.layout.hist_per_block() as u64;
+        let mut hist_len = blocks * self.layout.hist_per_block() as u64;
+        // A segmented sort's runs: at most one per SORT_OWN_MIN_ITEMS keys, and one more per
+        // bucket for its cut at the bucket's end; the table lists the buckets first.
+        let max_seg_runs = capacity.div_ceil(SORT_OWN_MIN_ITEMS as u64) + SORT_OWN_RADIX as u64;
+        let table = match self.segments {
+            Some(_) => {
+                hist_len = hist_len.max(max_seg_runs * SORT_OWN_RADIX as u64);
+                Some(Buffer::new(
+                    ctx,
+                    "sort segments",
+                    (SORT_OWN_RADIX as u64 + max_seg_runs) * 16,
+                    MemoryLocation::GpuOnly,
+                )?)
+            }
+            None => None,
+        };
         let gpu = MemoryLocation::GpuOnly;
         let key_bytes = match self.packed {
             Some(_) => capacity * 8,
@@ -561,6 +719,7 @@ impl RadixSort {
                 gpu,
             )?,
             scan: self.scan.scratch(ctx, hist_len)?,
+            table,
             capacity,
             texels,
         })
@@ -572,6 +731,18 @@ impl RadixSort {
     /// the same.
     pub fn set_bound_output(&mut self, on: bool) {
         self.bound_output = on;
+    }
+
+    /// Which sorts the own-counts layout segments on CPU devices: those of `min_keys` keys or
+    /// more (by default [`SORT_SEGMENT_MIN_KEYS`]) of packed pairs in 3 or 4 passes or of
+    /// separate keys and values in 4 (see `local_passes` in this file), or none. A segmented sort
+    /// sorts by its top digit first and then each of that digit's buckets on its own by the
+    /// other digits, least significant first: one invocation per bucket where every bucket is
+    /// small enough ([`local_max_keys`]), else in runs that stay within their bucket
+    /// (`glsl/sort_segments.comp`); [`SortBuffers::segmentation`] tells which a sort took. The
+    /// result is the same; for comparison and tests. The GPU layout ignores it.
+    pub fn set_segment_min_keys(&mut self, min_keys: Option<u32>) {
+        self.segment_min_keys = min_keys.map(|n| n.max(1));
     }
 
     /// Whether this sort takes and gives packed pairs ([`RadixSort::record_form`]): in the
@@ -665,6 +836,17 @@ impl RadixSort {
         }
         let info = bufs.info.address;
         let hist = info + SORT_HIST_OFFSET;
+        let passes = self.passes_for(key_bits);
+        let bound = self.bound_output && bufs.texels.as_ref().is_some_and(|t| t.bound_out);
+        // Where the GPU side may segment the sort (sort_prepare.comp decides by the count):
+        // the local kernels write through the sets' storage buffers, so only where those are
+        // bound.
+        let segments = self
+            .segments
+            .as_ref()
+            .zip(self.segment_min_keys)
+            .filter(|_| bound && local_passes(passes, form) >= 2);
+        let table = bufs.table.as_ref().map_or(0, |t| t.address);
         let push = PreparePush {
             count,
             info,
@@ -672,6 +854,8 @@ impl RadixSort {
             hist_per_block: self.layout.hist_per_block(),
             min_block: self.layout.min_block(),
             max_block: self.layout.max_block(),
+            segment_min: segments.map_or(0, |(_, min_keys)| min_keys),
+            pad: 0,
         };
         self.prepare.dispatch(cmd, &push, [1, 1, 1]);
         compute_barrier(ctx, cmd);
@@ -680,25 +864,47 @@ impl RadixSort {
         }
         let mut src = 0;
         let bits = self.layout.radix_bits();
-        let passes = self.passes_for(key_bits);
-        let bound = self.bound_output && bufs.texels.as_ref().is_some_and(|t| t.bound_out);
+        // (shift, mask) of digit k of the key.
+        let digit = |k: u32| {
+            let shift = k * bits;
+            (shift, (1u32 << bits.min(key_bits - shift)) - 1)
+        };
         for pass in 0..passes {
             let label = labels.passes[pass as usize];
             if let Some(t) = timer.as_deref_mut() {
                 t.begin_pass(cmd, label);
             }
-            let shift = pass * bits;
-            let digit_mask = (1u32 << bits.min(key_bits - shift)) - 1;
+            if let (Some((kernels, _)), 1) = (segments, pass) {
+                self.record_buckets(ctx, cmd, bufs, kernels, passes, form);
+            }
+            let (shift, digit_mask) = digit(pass);
+            // A segmented sort takes the top digit first, then the others from the least
+            // significant.
+            let (seg_shift, seg_digit_mask) = digit(if pass == 0 { passes - 1 } else { pass - 1 });
+            let segmented = SegmentedPass {
+                runs: table,
+                seg_shift,
+                seg_digit_mask,
+                from_table: (pass > 0) as u32,
+                pad: 0,
+            };
+            // The GPU side wrote block_args to pass_args where it did not segment the sort.
+            let args = if segments.is_some() && pass > 0 {
+                PASS_ARGS_OFFSET + 16 * (pass as u64 - 1)
+            } else {
+                BLOCK_ARGS_OFFSET
+            };
             let push = CountPush {
                 keys: bufs.keys[src].address,
                 info,
                 hist,
                 shift,
                 digit_mask,
+                segmented,
             };
             let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
             let (count, scatter) = self.pass_kernels(pass, passes, form, bound);
-            count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
+            count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, args);
             compute_barrier(ctx, cmd);
             self.scan
                 .record(ctx, cmd, hist, info + HIST_LEN_OFFSET, None, &bufs.scan);
@@ -711,8 +917,9 @@ impl RadixSort {
                 hist,
                 shift,
                 digit_mask,
+                segmented,
             };
-            scatter.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, BLOCK_ARGS_OFFSET);
+            scatter.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, args);
             compute_barrier(ctx, cmd);
             if let Some(t) = timer.as_deref_mut() {
                 t.end_pass(cmd, label);
@@ -720,6 +927,47 @@ impl RadixSort {
             src = 1 - src;
         }
         src
+    }
+
+    /// Records what follows a segmented sort's first pass (see
+    /// [`RadixSort::set_segment_min_keys`]): `sort_segments.comp` lists the buckets and
+    /// chooses, and where every bucket is small the local kernel sorts each by the digits
+    /// after the top one ([`local_passes`] of them; the passes it makes then dispatch no
+    /// workgroup). It leaves the pairs where those passes would have.
+    fn record_buckets(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        bufs: &SortBuffers,
+        kernels: &SegmentKernels,
+        passes: u32,
+        form: PairForm,
+    ) {
+        let info = bufs.info.address;
+        let table = bufs.table.as_ref().map_or(0, |t| t.address);
+        let local_passes = local_passes(passes, form);
+        let push = SegmentsPush {
+            info,
+            hist: info + SORT_HIST_OFFSET,
+            table,
+            passes,
+            local_passes,
+            local_max_keys: local_max_keys(local_passes),
+            pad: 0,
+        };
+        kernels.buckets.dispatch(cmd, &push, [1, 1, 1]);
+        compute_barrier(ctx, cmd);
+        let Some(texels) = bufs.texels.as_ref() else {
+            return;
+        };
+        kernels.local[local_passes as usize - 2].dispatch_indirect_with_sets(
+            cmd,
+            &LocalPush { info, table },
+            &[texels.sets[1], texels.sets[0]],
+            bufs.info.raw,
+            LOCAL_ARGS_OFFSET,
+        );
+        compute_barrier(ctx, cmd);
     }
 
     /// Sorts `keys` with their `values` on the GPU (upload, sort, read back), comparing only the

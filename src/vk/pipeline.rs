@@ -186,6 +186,20 @@ impl ComputePipeline {
         self.dispatch_indirect(cmd, push, args, offset);
     }
 
+    /// Like [`ComputePipeline::dispatch_indirect`], with descriptor sets 0, 1, ... bound to
+    /// `sets`.
+    pub fn dispatch_indirect_with_sets<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        push: &P,
+        sets: &[vk::DescriptorSet],
+        args: vk::Buffer,
+        offset: u64,
+    ) {
+        self.bind_sets(cmd, sets);
+        self.dispatch_indirect(cmd, push, args, offset);
+    }
+
     /// Records an indirect dispatch whose workgroup counts the GPU wrote at `args`+`offset`.
     pub fn dispatch_indirect<P: bytemuck::Pod>(
         &self,
