@@ -10,12 +10,16 @@
 //! ([`SortLayout`]) do the same sort: one for GPUs (4-bit digits, counters in registers, ranks
 //! from subgroup scans, at any subgroup size of
 //! [`MIN_SUBGROUP_SIZE`](crate::constants::MIN_SUBGROUP_SIZE) or more) and one for CPU drivers
-//! (8-bit digits, one histogram per invocation, in a private array).
+//! (8-bit digits, one histogram per invocation, in a private array). On CPU devices a sort of
+//! many keys is segmented: its first pass sorts by the top digit, and then each of that
+//! digit's buckets is sorted on its own, by one invocation where it is small enough, so its
+//! keys stay in the cache ([`RadixSort::set_segment_min_keys`]).
 //!
 //! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_{count,scatter}.comp` (GPU layout),
 //! `glsl/sort_{count,scatter}_own_counts*.comp` (CPU layout, a variant per way the pass
 //! holds its input and output; shared code in `glsl/sort_own_counts.glsl` and the
-//! `*_body.glsl` files).
+//! `*_body.glsl` files), `glsl/sort_segments.comp` and `glsl/sort_local_{2,3}.comp`
+//! (segmented sorts, CPU devices).
 
 use std::ffi::CStr;
 
