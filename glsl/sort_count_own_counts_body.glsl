@@ -9,7 +9,7 @@ layout(push_constant) uniform Push {
     U32s hist;
     uint shift;
     uint digit_mask;
-    SortRuns runs;      // segmented sorts: the runs of the passes after the first
+    SortRuns runs;      // segmented sorts: sort_segments.comp's table of buckets and runs
     uint seg_shift;     // segmented sorts: the pass's digit
     uint seg_digit_mask;
     uint from_table;    // 1 in the passes after the first: segmented sorts take the runs table

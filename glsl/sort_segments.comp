@@ -61,7 +61,10 @@ void main() {
             largest = max(largest, end - start);
             ++b;
             start = end;
-            end = b + 1u < SORT_OWN_RADIX ? pc.hist.v[(b + 1u) * columns] : n;
+            end = n;
+            if (b + 1u < SORT_OWN_RADIX) {
+                end = pc.hist.v[(b + 1u) * columns];
+            }
             first_run = r;
         }
     }
