@@ -1,21 +1,20 @@
 // Radix sort, the passes after the first of a segmented sort whose buckets are all small
 // (CPU-driver layout; sort_segments.comp chose it): each invocation sorts one bucket of the
-// first pass by the other LOCAL_PASSES digits, least significant first, counting, scanning
-// and scattering its keys by each digit in turn with counters of its own (a private array,
-// see own_counts in sort_own_counts.glsl). A bucket, and the part of the other buffer it is
-// scattered to, stay in the cache through its passes; the passes of a sort over all the keys
-// each stream the whole input through the cache twice (count, then scatter) and the output
-// once. The pairs ping-pong between the sort's two buffers as the passes of a plain sort
-// would, so the result is where theirs would be: local pass k reads buffer (k + 1) % 2 and
-// writes buffer k % 2, each invocation only its bucket's part of each. The bucket's counts of
-// all the digits come from one loop over it before the first pass. Every pass writes packed
-// pairs through the bound storage buffers (SORT_OUT_BOUND in
+// first pass by the other LOCAL_PASSES digits, least significant first: it counts the bucket's
+// keys by all of them in one loop, then scans and scatters them digit by digit, with counters
+// of its own (private arrays, see own_counts in sort_own_counts.glsl). A bucket, and the part
+// of the other buffer it is scattered to, stay in the cache through its passes; the passes of a
+// sort over all the keys each stream the whole input through the cache twice (count, then
+// scatter) and the output once. The pairs ping-pong between the sort's two buffers as the
+// passes of a plain sort would, so the result is where theirs would be: local pass k reads
+// buffer (k+1) % 2 and writes buffer k % 2, each invocation only its bucket's part of each.
+// Every pass writes packed pairs through the bound storage buffers (SORT_OUT_BOUND in
 // sort_scatter_own_counts_body.glsl). Separate keys and values, a sort's result in the other
 // form, are not written here: a key takes 4 bytes of the buffer, where other invocations could
 // still be reading packed pairs of their own buckets, so a sort of separate keys and values
 // leaves its last pass to the kernels that sort the buckets in runs. Only 2 or 3 passes are
-// worth the kernel (stages::sort::local_passes): their bucket stays in the cache from one
-// pass to the next.
+// worth the kernel (stages::sort::local_passes): their bucket stays in the cache from one pass
+// to the next.
 //
 // A pass reads through the texel views what the pass before wrote through the storage
 // buffers, in the same dispatch: a CPU driver sees the stores at once, a GPU's texture cache
@@ -48,7 +47,6 @@ layout(set = 1, binding = 3, std430) restrict writeonly buffer PairsOut1 {
 };
 
 layout(push_constant) uniform Push {
-    SortInfoRef info;
     SortRuns table;     // the buckets, entries 0 .. SORT_OWN_RADIX - 1
 } pc;
 

@@ -67,7 +67,6 @@ struct SegmentsPush {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct LocalPush {
-    info: u64,
     table: u64,
 }
 
@@ -966,7 +965,7 @@ impl RadixSort {
         };
         kernels.local[local_passes as usize - 2].dispatch_indirect_with_sets(
             cmd,
-            &LocalPush { info, table },
+            &LocalPush { table },
             &[texels.sets[1], texels.sets[0]],
             bufs.info.raw,
             LOCAL_ARGS_OFFSET,
