@@ -31,6 +31,15 @@ uint key_digit(uint key, uint shift, uint digit_mask) {
     return (key >> shift) & digit_mask;
 }
 
+// Keys [range.x, range.y) as the own-counts and local kernels walk them, four at a time from a
+// texel of four (or two of two) where they can: (aligned, whole), the keys [range.x, aligned)
+// before the first multiple of 4 (0-3 keys), the whole groups of four [aligned, whole), and
+// the last 0-3 keys [whole, range.y).
+uvec2 groups_of_four(uvec2 range) {
+    uint aligned = min((range.x + 3u) & ~3u, range.y);
+    return uvec2(aligned, aligned + ((range.y - aligned) & ~3u));
+}
+
 // A segmented sort's table (sort_segments.comp): its SORT_OWN_RADIX buckets, keys [x, y) each,
 // then from entry SORT_OWN_RADIX on the runs of its passes after the first, a uvec4 each:
 // keys [x, y) of one bucket, whose count of digit d goes to hist[z + d w].

@@ -31,8 +31,9 @@ void main() {
     // run starts where its bucket does, anywhere):
     // gallivm runs a key's work under a mask whether the test passes or not (lavapipe,
     // bench --sort 2000000 with LP_NUM_THREADS=1, three runs in turn: 150-154 -> 127-132 ms).
-    uint aligned = min((run.x + 3u) & ~3u, run.y);
-    uint whole = aligned + ((run.y - aligned) & ~3u);
+    uvec2 groups = groups_of_four(run.xy);
+    uint aligned = groups.x;
+    uint whole = groups.y;
     uint head = aligned - run.x;
     for (uint i = aligned; i < whole; i += 4u) {
         uvec4 four = load_four_keys(i);

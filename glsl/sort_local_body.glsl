@@ -96,8 +96,9 @@ void count_digits(uvec2 range) {
     }
     // Whole groups of four keys without a test per key, the first and last 0-3 one by one
     // (a bucket starts anywhere), as in sort_count_own_counts_body.glsl.
-    uint aligned = min((range.x + 3u) & ~3u, range.y);
-    uint whole = aligned + ((range.y - aligned) & ~3u);
+    uvec2 groups = groups_of_four(range);
+    uint aligned = groups.x;
+    uint whole = groups.y;
     uint head = aligned - range.x;
     for (uint i = aligned; i < whole; i += 4u) {
         uvec4 keys, values;
@@ -128,8 +129,9 @@ void local_pass(uint k, bool from1, uvec2 range) {
         next += c;
     }
     // In order, which keeps the sort stable: the first keys, the groups of four, the last.
-    uint aligned = min((range.x + 3u) & ~3u, range.y);
-    uint whole = aligned + ((range.y - aligned) & ~3u);
+    uvec2 groups = groups_of_four(range);
+    uint aligned = groups.x;
+    uint whole = groups.y;
     for (uint i = range.x; i < aligned; ++i) {
         uvec2 pair = load_one(from1, i);
         scatter_pair(k, from1, shift, pair.x, pair.y);

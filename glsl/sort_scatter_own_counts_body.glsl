@@ -82,8 +82,9 @@ void main() {
     // last 0-3 keys one by one: gallivm runs a key's work under a mask whether the test passes
     // or not (lavapipe, bench --sort 2000000 with LP_NUM_THREADS=1, three runs in turn:
     // 150-154 -> 127-132 ms).
-    uint aligned = min((run.x + 3u) & ~3u, run.y);
-    uint whole = aligned + ((run.y - aligned) & ~3u);
+    uvec2 groups = groups_of_four(run.xy);
+    uint aligned = groups.x;
+    uint whole = groups.y;
     for (uint i = run.x; i < aligned; ++i) {
         uvec4 keys, values;
         load_four(i & ~3u, keys, values);

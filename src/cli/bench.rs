@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use rara::clip::{Clip, ClipMode, Plane};
 use rara::stages::sort::{PairForm, RadixSort, Segmentation, TILE_SORT_LABELS};
-use rara::timing::PassTimer;
+use rara::timing::{PassTimer, PassTiming};
 use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
 
@@ -92,30 +92,8 @@ impl ModeResult {
     /// Median over the frames of each group's milliseconds, groups in pass order; `group`
     /// maps a pass name to its group, and a frame's passes of one group are summed.
     fn medians_by(&self, group: impl Fn(&'static str) -> &'static str) -> Vec<(String, f64)> {
-        let mut names: Vec<&'static str> = Vec::new();
-        for p in self.frames.iter().flat_map(|f| &f.passes) {
-            if !names.contains(&group(p.name)) {
-                names.push(group(p.name));
-            }
-        }
-        let per_group = |name: &str| -> f64 {
-            let mut v: Vec<f64> = self
-                .frames
-                .iter()
-                .map(|f| {
-                    f.passes
-                        .iter()
-                        .filter(|p| group(p.name) == name)
-                        .map(|p| p.ms)
-                        .sum()
-                })
-                .collect();
-            median(&mut v)
-        };
-        names
-            .iter()
-            .map(|n| (n.to_string(), per_group(n)))
-            .collect()
+        let runs: Vec<&[PassTiming]> = self.frames.iter().map(|f| &f.passes[..]).collect();
+        medians_by(&runs, group)
     }
 
     /// Median per pass, in pass order.
@@ -136,6 +114,36 @@ impl ModeResult {
             }
         })
     }
+}
+
+/// Median over `runs` (each run's passes) of each group's milliseconds, groups in pass order;
+/// `group` maps a pass name to its group, and a run's passes of one group are summed.
+fn medians_by(
+    runs: &[&[PassTiming]],
+    group: impl Fn(&'static str) -> &'static str,
+) -> Vec<(String, f64)> {
+    let mut names: Vec<&'static str> = Vec::new();
+    for p in runs.iter().flat_map(|r| r.iter()) {
+        if !names.contains(&group(p.name)) {
+            names.push(group(p.name));
+        }
+    }
+    let per_group = |name: &str| -> f64 {
+        let mut v: Vec<f64> = runs
+            .iter()
+            .map(|r| {
+                r.iter()
+                    .filter(|p| group(p.name) == name)
+                    .map(|p| p.ms)
+                    .sum()
+            })
+            .collect();
+        median(&mut v)
+    };
+    names
+        .iter()
+        .map(|n| (n.to_string(), per_group(n)))
+        .collect()
 }
 
 fn mean(v: &[f64]) -> f64 {
@@ -465,8 +473,8 @@ fn bench_sort(n: u64) -> Result<()> {
     let count = Buffer::from_slice(&ctx, "sort count", &[n as u32])?;
     let mut timer = PassTimer::new(&ctx)?;
     let mut gpu_ms = Vec::new();
-    // Each pass's times, in the sort's order (the warm-up's first).
-    let mut pass_ms: Vec<(&str, Vec<f64>)> = Vec::new();
+    // Each run's passes (the warm-up's first).
+    let mut runs: Vec<Vec<PassTiming>> = Vec::new();
     let mut gpu_result = Vec::new();
     for _ in 0..RUNS + 1 {
         if sort.sorts_packed() {
@@ -495,12 +503,7 @@ fn bench_sort(n: u64) -> Result<()> {
         })?;
         let passes = timer.read()?;
         gpu_ms.push(passes.iter().map(|p| p.ms).sum::<f64>());
-        for p in passes {
-            match pass_ms.iter_mut().find(|(name, _)| *name == p.name) {
-                Some((_, ms)) => ms.push(p.ms),
-                None => pass_ms.push((p.name, vec![p.ms])),
-            }
-        }
+        runs.push(passes);
         gpu_result = if sort.sorts_packed() {
             let pairs = bufs.keys[out].download_as::<u64>(n as usize)?;
             pairs.into_iter().map(|p| p as u32).collect()
@@ -546,12 +549,10 @@ fn bench_sort(n: u64) -> Result<()> {
         rate(c)
     );
     println!("  GPU / CPU throughput: {:.2}x", c / g);
-    let passes: Vec<String> = pass_ms
-        .iter_mut()
-        .map(|(name, ms)| {
-            ms.remove(0); // warm-up
-            format!("{name} {:.2}", median(ms))
-        })
+    let measured: Vec<&[PassTiming]> = runs[1..].iter().map(|r| &r[..]).collect();
+    let passes: Vec<String> = medians_by(&measured, |name| name)
+        .iter()
+        .map(|(name, ms)| format!("{name} {ms:.2}"))
         .collect();
     println!("  GPU passes (median ms): {}", passes.join(", "));
     let how = match bufs.segmentation()? {
