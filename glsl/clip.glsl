@@ -282,7 +282,7 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
 // 23-47 % and 24-41 % of its cutoff pairs), yet the rasterizer pays the per-pixel weight for
 // every pixel of every cutoff pair. This stage therefore bounds the weight over the tile's rays and
 // the splat's alpha over the tile's pixels: a FULL pair is drawn as a plain splat (its value
-// carries PAIR_WEIGHT_ONE), an EMPTY pair leaves every tile list (its key is the tile count,
+// loses PAIR_WEIGHTED), an EMPTY pair leaves every tile list (its key is the tile count,
 // which sorts after every tile), and only a PARTIAL pair takes the weight path.
 #define TILE_CLASS_PARTIAL 0u
 #define TILE_CLASS_FULL 1u

@@ -1,7 +1,7 @@
 // Stage 4, emit: one invocation per drawn Gaussian, in depth order, writes a (tile id, splat
-// index) pair for every tile it touches, at the offset the prefix sum gave it. The pairs come
-// out in (depth, index) order, so the stable sort by tile id leaves every tile's list in that
-// order. Pairs past the capacity are not written: the host sees the total, grows the buffers
+// index) pair for every tile it touches, at the offset the prefix sum gave it; a cutoff
+// splat's pairs carry PAIR_WEIGHTED. The pairs come out in (depth, index) order, so the stable
+// sort by tile id leaves every tile's list in that order. Pairs past the capacity are not written: the host sees the total, grows the buffers
 // and renders the frame again.
 //
 // RECORD_CUTOFF_PAIRS (emit_rara.comp, rara clipping by planes with the mass weight): each
@@ -85,6 +85,9 @@ void main() {
     if (pc.round_index > 0u) {
         slot = pc.progress.v[j];
     }
+    // A cutoff splat's pairs take the clip weight in the rasterizer (until cutoff_tiles.comp
+    // finds a tile where it is 1 throughout).
+    uint value = p.cutoff != NO_CUTOFF ? i | PAIR_WEIGHTED : i;
     FootprintRows rows = footprint_rows(p.uv, p.conic, q_max);
     FootprintWalk w = footprint_walk_start(rows, rect, first_cell);
     while (footprint_walk_cell(rect, w) < end_cell) {
@@ -92,7 +95,7 @@ void main() {
                 && footprint_touches_tile(p.uv, p.conic, q_max, w.xy.x, w.xy.y)) {
             if (slot < capacity) {
                 pc.keys.v[slot] = w.xy.y * f.size.z + w.xy.x;
-                pc.values.v[slot] = i;
+                pc.values.v[slot] = value;
             }
             ++slot;
         }

@@ -32,9 +32,10 @@
 //
 // RaRa clipping: with mode rara each pixel first intersects its ray with the clip region (at
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
-// ray (clip.glsl), from its cutoff record (the splat carries the record's index). Splats that
-// are not cutoff take the plain path, and so do cutoff splats in the tiles where their weight
-// is 1 at every pixel (PAIR_WEIGHT_ONE in the pair's value, set by cutoff_tiles.comp).
+// ray (clip.glsl), from its cutoff record (the splat carries the record's index). The pairs
+// that take this path carry PAIR_WEIGHTED in their value: emit sets it on every pair of a
+// cutoff splat, and cutoff_tiles.comp clears it where the weight is 1 at every pixel of the
+// tile. The other pairs take the plain path.
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
 // + 1 or CLIP_WEIGHT_LENGTH + 1.
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
@@ -79,8 +80,8 @@ layout(push_constant) uniform Push {
     uint flags;
 } pc;
 
-// A splat as the compositing loop takes it: conic and opacity (negated for a cutoff splat),
-// centre, colour and, with rara clipping, its cutoff record index.
+// A splat as the compositing loop takes it: conic and opacity, centre, colour and, with rara
+// clipping, its cutoff record index.
 struct Staged {
     vec4 co;
     vec2 uv;
@@ -96,19 +97,22 @@ CutoffRecord fetch_cutoff_record(uint i) {
     return texel_cutoff_record(i);
 }
 
-// The splat of the pair at `entry` of the sorted pairs (its rect is not fetched: unused).
-Staged fetch_splat(uint entry) {
-    uint value = texelFetch(sorted_values, int(entry)).x;
-    ProjectedSplat p = texel_splat(value & ~PAIR_WEIGHT_ONE);
-    float opacity = p.opacity;
-#if CUTOFF_WEIGHT != 0
-    // As in staging below: the sign of the opacity marks a cutoff splat, and a pair of weight
-    // 1 across the tile is drawn as a plain one.
-    bool cutoff = p.cutoff != NO_CUTOFF && (value & PAIR_WEIGHT_ONE) == 0u;
-    opacity = cutoff ? -opacity : opacity;
-#endif
+// Entry k of the pairs from `base`, as a handle for the loops below: the pair's value (the
+// splat index, with PAIR_WEIGHTED when the pair takes the clip weight).
+uint entry_handle(uint base, uint k) {
+    return texelFetch(sorted_values, int(base + k)).x;
+}
+
+// Whether the entry takes the clip weight.
+bool handle_weighted(uint h) {
+    return (h & PAIR_WEIGHTED) != 0u;
+}
+
+// The entry's splat (its rect is not fetched: unused).
+Staged handle_splat(uint h) {
+    ProjectedSplat p = texel_splat(h & ~PAIR_WEIGHTED);
     Staged s;
-    s.co = vec4(p.conic, opacity);
+    s.co = vec4(p.conic, p.opacity);
     s.uv = p.uv;
     s.rgb = p.color;
     s.cutoff = p.cutoff;
@@ -117,7 +121,7 @@ Staged fetch_splat(uint entry) {
 
 // Splat k of the entries from `base`.
 Staged splat_at(uint base, uint k) {
-    return fetch_splat(base + k);
+    return handle_splat(entry_handle(base, k));
 }
 #else
 // A staged splat is 9 words. The first 8 go in one 32-byte element of
@@ -132,12 +136,13 @@ Staged splat_at(uint base, uint k) {
 shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
 shared uint64_t batch_tail[RASTER_BATCH];  // (blue bits, cutoff record index)
 
-// Staged splat k of the batch.
+// Staged splat k of the batch. Staging negates a weighted pair's opacity (handle_weighted).
 Staged splat_at(uint base, uint k) {
     u64vec4 w = batch_words[k];
     uvec2 tail = unpackUint2x32(batch_tail[k]);
     Staged s;
     s.co = vec4(uintBitsToFloat(unpackUint2x32(w.x)), uintBitsToFloat(unpackUint2x32(w.y)));
+    s.co.w = abs(s.co.w);
     s.uv = uintBitsToFloat(unpackUint2x32(w.z));
     s.rgb = vec3(uintBitsToFloat(unpackUint2x32(w.w)), uintBitsToFloat(tail.x));
     s.cutoff = tail.y;
@@ -155,6 +160,21 @@ void stage(uint slot, vec4 co, vec2 uv, vec3 color, uint cutoff) {
 // Cutoff record i.
 CutoffRecord fetch_cutoff_record(uint i) {
     return load_cutoff_record(pc.cutoffs, i);
+}
+
+// Entry k of the batch, as a handle for the loops below: its slot.
+uint entry_handle(uint base, uint k) {
+    return k;
+}
+
+// Whether the entry takes the clip weight: the sign of its staged opacity.
+bool handle_weighted(uint h) {
+    return (unpackUint2x32(batch_words[h].y).y & 0x80000000u) != 0u;
+}
+
+// The entry's splat.
+Staged handle_splat(uint h) {
+    return splat_at(0u, h);
 }
 
 shared uint pixels_done;
@@ -199,8 +219,7 @@ uint done_count() {
 }
 #endif
 
-// Composites splat s (with the opacity made positive) over the strip
-// (SPEC section 4); `cutoff` applies its clip weight. Returns whether any pixel of the strip
+// Composites splat s over the strip (SPEC section 4); `cutoff` applies its clip weight. Returns whether any pixel of the strip
 // was still open.
 bool composite(Staged s, bool cutoff) {
     vec4 co = s.co;
@@ -340,21 +359,19 @@ void strip_spans(vec3 eye) {
 #endif
 
 #if CUTOFF_WEIGHT != 0
-// Composites the run of plain (cutoff false) or cutoff splats that starts with s, entry k of
-// splat_at(base, .), over the strip, and fetches the entry after the run into s (k is then
-// its index). Returns whether any pixel of the strip is still open.
-bool composite_run(uint base, uint count, bool cutoff, inout uint k, inout Staged s) {
+// Composites the run of plain (weighted false) or weighted entries that starts with entry k,
+// whose handle is h, over the strip, and leaves in k and h the entry after the run. Returns
+// whether any pixel of the strip is still open.
+bool composite_run(uint base, uint count, bool weighted, inout uint k, inout uint h) {
     bool open;
     do {
-        Staged t = s;
-        t.co.w = cutoff ? -t.co.w : t.co.w;
-        open = composite(t, cutoff);
+        open = composite(handle_splat(h), weighted);
         ++k;
         if (!open || k == count) {
             break;
         }
-        s = splat_at(base, k);
-    } while ((s.co.w < 0.0) == cutoff);
+        h = entry_handle(base, k);
+    } while (handle_weighted(h) == weighted);
     return open;
 }
 #endif
@@ -369,29 +386,33 @@ void composite_entries(uint base, uint count) {
         }
     }
 #else
-    // Runs of plain splats and runs of cutoff splats each go through a loop of their own, so
-    // that the weight code runs once per cutoff splat rather than for every splat: CPU drivers
-    // execute an if's body under a mask whatever the condition, but leave a loop once no lane
-    // continues it (lavapipe, plant at 640x480 with almost no cutoff splats: rasterize 105 ->
-    // 96 ms against a do-while over a predicated body; 95 ms with the plain loop alone).
-    // Each run's loop is a do-while that composites the splat in hand and fetches the next one
-    // at the end of its body. Such a driver tests for live lanes only at the end of a loop's
-    // body, so a loop that found the run's end at its top would run one more whole body, under
-    // an empty mask, per run: a cutoff splat between plain ones cost its own weight, a second
-    // one and a plain splat's compositing.
+    // Runs of plain entries and runs of weighted ones each go through a loop of their own, so
+    // that the weight code runs once per weighted entry rather than for every entry: CPU
+    // drivers execute an if's body under a mask whatever the condition, but leave a loop once
+    // no lane continues it (lavapipe, plant at 640x480 with almost no cutoff splats: rasterize
+    // 105 -> 96 ms against a do-while over a predicated body; 95 ms with the plain loop alone).
+    // Each run's loop is a do-while that composites the entry in hand and looks at the next
+    // one at the end of its body. Such a driver tests for live lanes only at the end of a
+    // loop's body, so a loop that found the run's end at its top would run one more whole
+    // body, under an empty mask, per run: a weighted entry between plain ones cost its own
+    // weight, a second one and a plain splat's compositing.
+    // The loops carry the next entry's handle, one word, and fetch its splat at the top of the
+    // body. Carrying the fetched splat instead (ten words, every one a masked move on a CPU
+    // driver) cost 1-2 % more (lavapipe, one thread, biker at 1280x960: rasterize 96.5-97.9
+    // against 98.4-101.4 ms under a plane, 153-173 against 155-161 ms with nothing cutoff).
     if (count == 0u) {
         return;
     }
     uint k = 0u;
     bool open = true;
-    Staged s = splat_at(base, 0u);
+    uint h = entry_handle(base, 0u);
     do {
-        if (s.co.w >= 0.0) {
-            open = composite_run(base, count, false, k, s);
+        if (!handle_weighted(h)) {
+            open = composite_run(base, count, false, k, h);
         }
-        // Here s is a cutoff splat, unless the list or the pixels ran out.
+        // Here h is a weighted entry, unless the list or the pixels ran out.
         if (open && k < count) {
-            open = composite_run(base, count, true, k, s);
+            open = composite_run(base, count, true, k, h);
         }
     } while (open && k < count);
 #endif
@@ -462,14 +483,11 @@ void main() {
             uint entry = batch + slot;
             if (entry < end) {
                 uint value = pc.values.v[entry];
-                ProjectedSplat p = load_splat(pc.splats, value & ~PAIR_WEIGHT_ONE);
+                ProjectedSplat p = load_splat(pc.splats, value & ~PAIR_WEIGHTED);
 #if CUTOFF_WEIGHT != 0
-                // The sign of the staged opacity marks a cutoff splat, so the loop that walks
-                // the plain ones learns it from a load it makes anyway. A pair that
-                // cutoff_tiles.comp found to have weight 1 across the tile (PAIR_WEIGHT_ONE) is
-                // drawn as a plain one.
-                bool cutoff = p.cutoff != NO_CUTOFF && (value & PAIR_WEIGHT_ONE) == 0u;
-                stage(slot, vec4(p.conic, cutoff ? -p.opacity : p.opacity), p.uv, p.color,
+                // The sign of the staged opacity marks a weighted pair (handle_weighted).
+                bool weighted = (value & PAIR_WEIGHTED) != 0u;
+                stage(slot, vec4(p.conic, weighted ? -p.opacity : p.opacity), p.uv, p.color,
                       p.cutoff);
 #else
                 stage(slot, vec4(p.conic, p.opacity), p.uv, p.color, 0u);

@@ -59,7 +59,7 @@ const _: () =
 /// Most Gaussians a scene may have: the prefix sum over them dispatches one workgroup per
 /// `SCAN_BLOCK` elements along X (67,107,840).
 pub const MAX_GAUSSIANS: u64 = SCAN_BLOCK as u64 * LINEAR_GRID_X as u64;
-const _: () = assert!(MAX_GAUSSIANS <= PAIR_WEIGHT_ONE as u64);
+const _: () = assert!(MAX_GAUSSIANS <= PAIR_WEIGHTED as u64);
 const _: () = assert!(MAX_GAUSSIANS <= SCAN_RUNS_MAX);
 /// Bits per radix-sort digit in the GPU layout (`SortLayout::ShortRuns`).
 pub const SORT_RADIX_BITS: u32 = 4;
@@ -150,10 +150,11 @@ pub const COUNTER_CUTOFF_PAIRS_EMPTY: u32 = 7;
 /// Number of counter slots.
 pub const COUNTER_SLOTS: u32 = 8;
 
-/// Bit of a pair's value (the splat index) that emit sets when a cutoff splat's clip weight is 1
-/// at every pixel of the pair's tile, so the rasterizer draws it there as a plain splat. Splat
-/// indices stay below `MAX_GAUSSIANS` < 2^31.
-pub const PAIR_WEIGHT_ONE: u32 = 1 << 31;
+/// Bit of a pair's value (the splat index) that marks a pair the rasterizer draws with the
+/// per-pixel clip weight: emit sets it on every pair of a cutoff splat, and the cutoff-tiles
+/// stage clears it where the weight is 1 at every pixel of the pair's tile. Splat indices stay
+/// below `MAX_GAUSSIANS` < 2^31.
+pub const PAIR_WEIGHTED: u32 = 1 << 31;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -210,7 +211,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
         COUNTER_CUTOFF_PAIRS_WEIGHT_ONE,
     ),
     ("COUNTER_CUTOFF_PAIRS_EMPTY", COUNTER_CUTOFF_PAIRS_EMPTY),
-    ("PAIR_WEIGHT_ONE", PAIR_WEIGHT_ONE),
+    ("PAIR_WEIGHTED", PAIR_WEIGHTED),
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),

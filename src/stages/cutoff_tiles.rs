@@ -1,8 +1,8 @@
 //! Stage 4b, rara clipping by planes with the mass weight only: classifies each cutoff splat's
 //! pairs by tile (`glsl/cutoff_tiles.comp`). A pair whose clip weight is 1 at every pixel of
-//! its tile is marked to be drawn as a plain splat ([`crate::constants::PAIR_WEIGHT_ONE`]), a
-//! pair that adds nothing to its tile leaves every tile list, and only the rest pay the
-//! rasterizer's per-pixel weight.
+//! its tile loses the [`crate::constants::PAIR_WEIGHTED`] that emit gave it, so it is drawn as
+//! a plain splat there; a pair that adds nothing to its tile leaves every tile list, and only
+//! the rest pay the rasterizer's per-pixel weight.
 //!
 //! On CPU drivers (with the strips rasterizer) the kernel reads the splats, the cutoff records,
 //! the tiles touched, the emitted keys and the clip planes through the frame's texel views
