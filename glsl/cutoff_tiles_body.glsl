@@ -44,6 +44,9 @@ layout(push_constant) uniform Push {
     CutoffRecords cutoffs;
     U32s keys;              // in and out: tile ids, in emit's order
     U32s values;            // in and out: splat indices
+    // Out, with the tile lists (CPU drivers; else 0): per tile, set where a pair stays
+    // weighted, and at [tile count] when pairs were left unclassified (tile_lists.comp).
+    U32s tile_flags;
 } pc;
 
 // Plane k of the clip region. The texel kernel fetches it, a gather on a CPU driver. A load
@@ -84,6 +87,7 @@ void main() {
     uint empty = 0u;
     bool live = true;
     uint passes_left = CUTOFF_TILES_LOOP_BUDGET / (1u + config.w);
+    bool tile_lists = uint64_t(pc.tile_flags) != 0ul;
     do {
         if (slot == end) {
             uint k = atomicAdd(next_record, 1u);
@@ -136,11 +140,17 @@ void main() {
             } else if (tile_class == TILE_CLASS_FULL) {
                 pc.values.v[slot] = i;
                 ++weight_one;
+            } else if (tile_lists) {
+                pc.tile_flags.v[tile] = 1u;
             }
             ++slot;
         }
         --passes_left;
     } while (live && passes_left > 0u);
+    // Out of passes with a splat in hand: pairs may stay unclassified, weighted, in any tile.
+    if (tile_lists && live && passes_left == 0u) {
+        pc.tile_flags.v[tile_count] = 1u;
+    }
     if (pairs > 0u) {
         atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS], pairs);
         atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE], weight_one);

@@ -66,6 +66,9 @@
 layout(local_size_x = TILE_SIZE / C, local_size_y = STRIPS) in;
 
 #define ROUND_FIRST 1u
+// The dispatch walks a list of tiles (tile_lists.comp), workgroup x taking tiles.v[x], rather
+// than the grid of tiles.
+#define ROUND_TILE_LIST 2u
 
 layout(push_constant) uniform Push {
     FrameParamsRef frame;
@@ -76,6 +79,7 @@ layout(push_constant) uniform Push {
     U32s counters;
     ClipParamsRef clip;
     CutoffRecords cutoffs;
+    U32s tiles;         // with ROUND_TILE_LIST: the tile ids to walk
     uint round_index;
     uint flags;
 } pc;
@@ -422,6 +426,10 @@ void main() {
     FrameParams f = load_frame_params(pc.frame);
     uint lid = gl_LocalInvocationIndex;
     uvec2 tile = gl_WorkGroupID.xy;
+    if ((pc.flags & ROUND_TILE_LIST) != 0u) {
+        uint id = pc.tiles.v[gl_WorkGroupID.x];
+        tile = uvec2(id % f.size.z, id / f.size.z);
+    }
     first_pixel = tile * TILE_SIZE + uvec2(gl_LocalInvocationID.x * C, gl_LocalInvocationID.y * P);
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
     band2 = pc.clip.p.band.y;

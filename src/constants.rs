@@ -147,8 +147,11 @@ pub const COUNTER_CUTOFF_PAIRS: u32 = 5;
 pub const COUNTER_CUTOFF_PAIRS_WEIGHT_ONE: u32 = 6;
 /// Counter slot: of those, pairs dropped from the tile lists (nothing added to the tile).
 pub const COUNTER_CUTOFF_PAIRS_EMPTY: u32 = 7;
+/// Counter slot: tiles the weighted rasterize kernel walked, with the tile lists (CPU drivers,
+/// rara clipping by planes with the mass weight; else 0).
+pub const COUNTER_WEIGHTED_TILES: u32 = 8;
 /// Number of counter slots.
-pub const COUNTER_SLOTS: u32 = 8;
+pub const COUNTER_SLOTS: u32 = 9;
 
 /// Bit of a pair's value (the splat index) that marks a pair the rasterizer draws with the
 /// per-pixel clip weight: emit sets it on every pair of a cutoff splat, and the cutoff-tiles
@@ -211,6 +214,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
         COUNTER_CUTOFF_PAIRS_WEIGHT_ONE,
     ),
     ("COUNTER_CUTOFF_PAIRS_EMPTY", COUNTER_CUTOFF_PAIRS_EMPTY),
+    ("COUNTER_WEIGHTED_TILES", COUNTER_WEIGHTED_TILES),
     ("PAIR_WEIGHTED", PAIR_WEIGHTED),
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),

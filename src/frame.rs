@@ -6,7 +6,7 @@ use crate::camera::tile_grid;
 use crate::constants::{
     COUNTER_CUTOFF, COUNTER_CUTOFF_PAIRS, COUNTER_CUTOFF_PAIRS_EMPTY,
     COUNTER_CUTOFF_PAIRS_WEIGHT_ONE, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS,
-    COUNTER_VISIBLE, MAX_INTERSECTIONS, RASTER_CHUNK,
+    COUNTER_VISIBLE, COUNTER_WEIGHTED_TILES, MAX_INTERSECTIONS, RASTER_CHUNK,
 };
 use crate::error::Result;
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
@@ -14,6 +14,7 @@ use crate::renderer::FrameStats;
 use crate::renderer::GpuScene;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
+use crate::stages::tile_lists::TileListsLayout;
 use crate::stages::write_target::image_target_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
 use crate::vk::descriptors::{allocate_sets, write_texel_view};
@@ -69,7 +70,7 @@ pub struct FrameMemory {
     pub per_intersection: u64,
     /// Pairs the sort buffers hold (grown from the frames' counts).
     pub intersection_capacity: u64,
-    /// Per-pixel state (16 B) and per-tile ranges.
+    /// Per-pixel state (16 B), and per tile its range (8 B) and tile-list entries (12 B).
     pub per_pixel: u64,
     /// Parameters and counters.
     pub fixed: u64,
@@ -118,6 +119,8 @@ pub(crate) struct FrameResources {
     /// The (tile id, splat index) pairs and their sort.
     pub(crate) sort: SortBuffers,
     pub(crate) ranges: Buffer,
+    /// The tile lists of the strips rasterizer under rara clipping ([`TileListsLayout`]).
+    pub(crate) tile_lists: Buffer,
     /// Per pixel (premultiplied colour, transmittance), for the write-target stage.
     pub(crate) state: Buffer,
     /// Which sort buffer holds the sorted pairs of the last frame.
@@ -219,7 +222,7 @@ impl FrameSlot {
                 + r.cutoff_pairs.as_ref().map_or(0, |b| b.size);
             m.per_intersection = r.sort.device_bytes();
             m.intersection_capacity = r.capacity;
-            m.per_pixel = r.ranges.size + r.state.size;
+            m.per_pixel = r.ranges.size + r.tile_lists.size + r.state.size;
         }
         m
     }
@@ -253,6 +256,7 @@ impl FrameSlot {
             cutoff_pairs: counters[COUNTER_CUTOFF_PAIRS as usize],
             cutoff_pairs_weight_one: counters[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE as usize],
             cutoff_pairs_empty: counters[COUNTER_CUTOFF_PAIRS_EMPTY as usize],
+            weighted_tiles: counters[COUNTER_WEIGHTED_TILES as usize],
             max_tile_len,
             complete,
             ..FrameStats::default()
@@ -324,6 +328,15 @@ impl FrameSlot {
                 depth_sort: sort.buffers(ctx, n)?,
                 sort: sort.buffers(ctx, capacity)?,
                 ranges: Buffer::new(ctx, "tile ranges", (gx * gy) as u64 * 8, gpu)?,
+                tile_lists: Buffer::new(
+                    ctx,
+                    "tile lists",
+                    TileListsLayout {
+                        tile_count: gx * gy,
+                    }
+                    .size(),
+                    gpu,
+                )?,
                 state: Buffer::new(ctx, "raster state", pixels * 16, gpu)?,
                 sorted: 0,
             });

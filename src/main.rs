@@ -293,6 +293,14 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             stats.cutoff_pairs_partial()
         );
     }
+    if stats.weighted_tiles > 0 {
+        let (gx, gy) = rara::camera::tile_grid(camera.width, camera.height);
+        println!(
+            "tiles by rasterize kernel: {} of {} weighted (hold a partial pair), the rest plain",
+            stats.weighted_tiles,
+            gx * gy
+        );
+    }
     println!(
         "{}",
         cli::describe_memory(&gpu_scene, &renderer.headless_memory())

@@ -22,6 +22,7 @@ use crate::stages::prefix_sum::PrefixSum;
 use crate::stages::project::{Project, ProjectPush};
 use crate::stages::rasterize::{RasterLayout, Rasterize, RasterizePush};
 use crate::stages::sort::{RadixSort, DEPTH_SORT_LABELS, TILE_SORT_LABELS};
+use crate::stages::tile_lists::{TileLists, TileListsLayout, TileListsPush};
 use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
 use crate::stages::write_target::{WriteTarget, WriteTargetPush};
 use crate::stages::FrameTexelsLayout;
@@ -222,6 +223,9 @@ pub struct FrameStats {
     /// ... and those left out of the tile lists, adding nothing to the tile. The rest pay the
     /// per-pixel weight.
     pub cutoff_pairs_empty: u32,
+    /// Tiles the weighted rasterize kernel walked, when the frame split the tiles by kernel
+    /// (the strips rasterizer under rara clipping by planes with the mass weight; else 0).
+    pub weighted_tiles: u32,
     /// Longest tile list.
     pub max_tile_len: u32,
     /// Whether every tile pair and tile-list entry fitted the frame slot's buffers. `false`
@@ -278,6 +282,10 @@ pub struct Renderer {
     cutoff_tiles: CutoffTiles,
     /// Whether frames that allow it classify cutoff pairs by tile (on unless switched off).
     cutoff_tile_classes: bool,
+    tile_lists: TileLists,
+    /// Whether frames that allow it split the tiles by rasterize kernel (on unless switched
+    /// off).
+    tile_lists_on: bool,
     sort: RadixSort,
     tile_ranges: TileRanges,
     rasterize: Rasterize,
@@ -331,6 +339,8 @@ impl Renderer {
             emit: Emit::new(ctx, texels)?,
             cutoff_tiles: CutoffTiles::new(ctx, texels)?,
             cutoff_tile_classes: true,
+            tile_lists: TileLists::new(ctx)?,
+            tile_lists_on: true,
             sort: RadixSort::new(ctx)?,
             tile_ranges: TileRanges::new(ctx, texels)?,
             rasterize: Rasterize::new(ctx, layout, texels)?,
@@ -352,6 +362,19 @@ impl Renderer {
     /// for profiling what they save and for testing that they change nothing.
     pub fn set_cutoff_tile_classes(&mut self, on: bool) {
         self.cutoff_tile_classes = on;
+    }
+
+    /// Switches the split of the tiles by rasterize kernel ([`crate::stages::tile_lists`]) on
+    /// (the default) or off. It applies to the strips rasterizer under rara clipping with
+    /// per-tile classes, changes no pixel and only saves work; off is for profiling and
+    /// testing.
+    pub fn set_tile_lists(&mut self, on: bool) {
+        self.tile_lists_on = on;
+    }
+
+    /// The rasterizer layout the renderer was built with.
+    pub fn raster_layout(&self) -> RasterLayout {
+        self.rasterize.layout()
     }
 
     /// The context the renderer was made with.
@@ -639,6 +662,17 @@ impl Renderer {
         } else {
             None
         };
+        // With the strips rasterizer, such frames run the weighted kernel only over the tiles
+        // that hold a weighted pair (stages::tile_lists).
+        let tile_lists = (cutoff_pairs.is_some()
+            && self.tile_lists_on
+            && self.rasterize.layout() == RasterLayout::Strips)
+            .then_some((
+                &f.tile_lists,
+                TileListsLayout {
+                    tile_count: gx * gy,
+                },
+            ));
         let ctx = &self.ctx;
         let device = ctx.device();
         let counters_at = |slot: u32| f.counters.address + 4 * slot as u64;
@@ -656,6 +690,9 @@ impl Renderer {
             device.cmd_update_buffer(cmd, f.clip_params.raw, 0, bytemuck::bytes_of(&clip_params));
             device.cmd_fill_buffer(cmd, f.counters.raw, 0, vk::WHOLE_SIZE, 0);
             device.cmd_fill_buffer(cmd, f.ranges.raw, 0, vk::WHOLE_SIZE, 0);
+        }
+        if let Some((buffer, layout)) = &tile_lists {
+            self.tile_lists.record_reset(ctx, cmd, buffer, layout);
         }
         compute_barrier(ctx, cmd);
 
@@ -778,11 +815,28 @@ impl Renderer {
                 cutoffs: cutoffs_address,
                 keys: f.sort.keys[0].address,
                 values: f.sort.values[0].address,
+                tile_flags: tile_lists.map_or(0, |(b, _)| b.address + TileListsLayout::FLAGS),
             };
             self.cutoff_tiles
                 .record(cmd, &push, frame_texels, pairs.raw, CUTOFF_ARGS_OFFSET);
             compute_barrier(ctx, cmd);
             timer.end_pass(cmd, c"cutoff tiles");
+        }
+
+        if let Some((buffer, layout)) = tile_lists {
+            timer.begin_pass(cmd, c"tile lists");
+            let push = TileListsPush {
+                flags: buffer.address + TileListsLayout::FLAGS,
+                args: buffer.address,
+                weighted: buffer.address + layout.weighted(),
+                plain: buffer.address + layout.plain(),
+                counters: f.counters.address,
+                tile_count: layout.tile_count,
+                pad: 0,
+            };
+            self.tile_lists.record(cmd, &push);
+            compute_barrier(ctx, cmd);
+            timer.end_pass(cmd, c"tile lists");
         }
 
         let sorted = self.sort.record(
@@ -819,12 +873,20 @@ impl Renderer {
             counters: f.counters.address,
             clip: f.clip_params.address,
             cutoffs: cutoffs_address,
+            tiles: 0,
             round_index: 0,
             flags: 0,
         };
         let cutoff_weight = rara.then_some(options.clip.weight);
-        self.rasterize
-            .record(cmd, &push, (gx, gy), rounds, cutoff_weight, frame_texels);
+        self.rasterize.record(
+            cmd,
+            &push,
+            (gx, gy),
+            rounds,
+            cutoff_weight,
+            tile_lists,
+            frame_texels,
+        );
         compute_barrier(ctx, cmd);
         timer.end_pass(cmd, c"rasterize");
 

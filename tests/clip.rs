@@ -536,6 +536,64 @@ fn cutoff_tile_classes_change_no_pixel() {
     common::assert_no_validation_messages(&ctx);
 }
 
+/// The split of the tiles by rasterize kernel (`stages::tile_lists`, the strips rasterizer
+/// under rara clipping by planes with the mass weight) only saves work: the image is
+/// bit-identical with and without it, and the weighted kernel walks some tiles but not all.
+#[test]
+fn tile_lists_change_no_pixel() {
+    let ctx = common::context();
+    let mut renderer = Renderer::with_raster_layout(&ctx, RasterLayout::Strips).unwrap();
+    let mut cases = vec![
+        ("shell", rara::synth::shell(6000, 1, 3), None),
+        ("layers", rara::synth::layers(12000, 2, 5), None),
+    ];
+    if let Some((ply, Some(cams))) = common::real_scene("plant_capture_sh0") {
+        eprintln!("real-scene case 'plant_capture_sh0' RAN");
+        let camera = Camera::load_one(&cams, 0)
+            .unwrap()
+            .resized(320, None)
+            .unwrap();
+        cases.push(("plant", rara::ply::load_ply(&ply).unwrap().0, Some(camera)));
+    }
+    let mut split = 0;
+    for (name, scene, camera) in cases {
+        let camera = camera.unwrap_or_else(|| orbit_camera(&scene, 240));
+        let (gx, gy) = rara::camera::tile_grid(camera.width, camera.height);
+        let gpu_scene = renderer.upload(&scene).unwrap();
+        for (region_name, region) in regions(&scene) {
+            let options = RenderOptions {
+                background: Vec3::new(0.1, 0.1, 0.15),
+                clip: Clip::rara(region),
+                ..RenderOptions::default()
+            };
+            renderer.set_tile_lists(false);
+            let (whole_grid, whole_stats) = renderer.render(&gpu_scene, &camera, &options).unwrap();
+            renderer.set_tile_lists(true);
+            let (listed, stats) = renderer.render(&gpu_scene, &camera, &options).unwrap();
+            eprintln!(
+                "  {name} {region_name}: {} of {} tiles weighted, {} partial pairs",
+                stats.weighted_tiles,
+                gx * gy,
+                stats.cutoff_pairs_partial()
+            );
+            assert_eq!(whole_stats.weighted_tiles, 0, "{name} {region_name}: off");
+            assert!(stats.weighted_tiles <= stats.cutoff_pairs_partial());
+            if stats.weighted_tiles > 0 && stats.weighted_tiles < gx * gy {
+                split += 1;
+            }
+            common::check_images(
+                &format!("tile_lists_{name}_{region_name}"),
+                &listed,
+                &whole_grid,
+                f64::INFINITY,
+                0,
+            );
+        }
+    }
+    assert!(split >= 4, "{split} frames split their tiles");
+    common::assert_no_validation_messages(&ctx);
+}
+
 /// A workgroup's 256 cutoff splats that each cover hundreds of tiles (about 800 here, 230,000
 /// pairs in all) outrun the cutoff-tiles kernel's loop budget (CUTOFF_TILES_LOOP_BUDGET) on a
 /// CPU driver, whose first SIMD vector of 8 invocations takes the workgroup's splats in turn.
@@ -590,6 +648,11 @@ fn cutoff_tiles_past_the_loop_budget_change_no_pixel() {
         stats.cutoff_pairs
     );
     assert!(stats.cutoff_pairs_weight_one + stats.cutoff_pairs_empty > 0);
+    // Pairs left unclassified may be weighted in any tile: on a CPU driver (the strips
+    // rasterizer, whose tile lists this is) every tile takes the weighted kernel.
+    if renderer.raster_layout() == RasterLayout::Strips {
+        assert_eq!(stats.weighted_tiles, 80 * 60, "weighted tiles");
+    }
     common::check_images("cutoff_tiles_loop_budget", &classified, &plain, 60.0, 1);
     common::assert_no_validation_messages(&ctx);
 }

@@ -38,6 +38,9 @@ pub struct CutoffTilesPush {
     pub keys: u64,
     /// In and out: the pairs' values (splat indices).
     pub values: u64,
+    /// Out, with the tile lists ([`super::tile_lists`]; else 0): per tile, set where a pair
+    /// stays weighted, and after the last tile, set when pairs were left unclassified.
+    pub tile_flags: u64,
 }
 
 /// The cutoff-tiles kernel.

@@ -16,6 +16,7 @@ pub mod prefix_sum;
 pub mod project;
 pub mod rasterize;
 pub mod sort;
+pub mod tile_lists;
 pub mod tile_ranges;
 pub mod write_target;
 

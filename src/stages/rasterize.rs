@@ -7,12 +7,13 @@ use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
 use super::sh_texel;
+use super::tile_lists::TileListsLayout;
 use crate::clip::ClipWeight;
 use crate::constants::MAX_INTERSECTIONS;
 use crate::error::{Error, Result};
 use crate::renderer::GpuScene;
 use crate::shaders;
-use crate::vk::{compute_barrier, ComputePipeline, Context};
+use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context};
 
 /// Device addresses and round of the rasterizer.
 #[repr(C)]
@@ -35,6 +36,8 @@ pub struct RasterizePush {
     pub clip: u64,
     /// Cutoff side records (0 when the frame is not rara-clipped).
     pub cutoffs: u64,
+    /// With `ROUND_TILE_LIST` in `flags`: the ids of the tiles to walk, one per workgroup.
+    pub tiles: u64,
     /// Which RASTER_CHUNK of every tile list this dispatch walks.
     pub round_index: u32,
     /// ROUND_FIRST on the first round.
@@ -42,6 +45,7 @@ pub struct RasterizePush {
 }
 
 const ROUND_FIRST: u32 = 1;
+const ROUND_TILE_LIST: u32 = 2;
 
 /// Texels of `R32G32B32A32_UINT` per projected splat (64 bytes) in the strips kernels' view.
 const SPLAT_TEXELS: u64 = 4;
@@ -186,10 +190,14 @@ impl Rasterize {
         Ok(())
     }
 
-    /// Records `rounds` dispatches over the `tiles` grid; each walks the next RASTER_CHUNK
+    /// Records `rounds` rounds over the `tiles` grid; each walks the next RASTER_CHUNK
     /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping,
-    /// `None` when no splat is cutoff. The strips kernels need `frame_texels`, the frame's
+    /// `None` when no splat is cutoff. With `lists` (the frame's tile-lists buffer and its
+    /// layout, [`super::tile_lists`]; mass weight only) each round runs the plain kernel over
+    /// the plain list and the weighted kernel over the weighted list, as indirect dispatches;
+    /// else one kernel over the whole grid. The strips kernels need `frame_texels`, the frame's
     /// set of [`super::frame_texels_set_layout`].
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -197,6 +205,7 @@ impl Rasterize {
         tiles: (u32, u32),
         rounds: u32,
         cutoff_weight: Option<ClipWeight>,
+        lists: Option<(&Buffer, TileListsLayout)>,
         frame_texels: Option<vk::DescriptorSet>,
     ) {
         let pipeline = match cutoff_weight {
@@ -204,11 +213,29 @@ impl Rasterize {
             Some(ClipWeight::Mass) => &self.mass,
             Some(ClipWeight::Length) => &self.length,
         };
+        debug_assert!(lists.is_none() || cutoff_weight == Some(ClipWeight::Mass));
         for round in 0..rounds {
             let mut p = *push;
             p.round_index = round;
             p.flags = if round == 0 { ROUND_FIRST } else { 0 };
-            pipeline.dispatch_in(cmd, &p, frame_texels, [tiles.0, tiles.1, 1]);
+            match lists {
+                Some((buffer, layout)) => {
+                    p.flags |= ROUND_TILE_LIST;
+                    // The two lists hold disjoint tiles: no barrier between them.
+                    for (kernel, list, args) in [
+                        (&self.plain, layout.plain(), TileListsLayout::PLAIN_ARGS),
+                        (
+                            &self.mass,
+                            layout.weighted(),
+                            TileListsLayout::WEIGHTED_ARGS,
+                        ),
+                    ] {
+                        p.tiles = buffer.address + list;
+                        kernel.dispatch_indirect_in(cmd, &p, frame_texels, buffer.raw, args);
+                    }
+                }
+                None => pipeline.dispatch_in(cmd, &p, frame_texels, [tiles.0, tiles.1, 1]),
+            }
             if round + 1 < rounds {
                 compute_barrier(&self.ctx, cmd);
             }
