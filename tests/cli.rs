@@ -581,6 +581,20 @@ fn bench_writes_table_json_and_trace() {
         .map(|c| c[0].as_u64().unwrap())
         .sum();
     assert!(classified > 0);
+    // On a CPU driver the tiles that hold a partial pair take the weighted kernel, the rest
+    // the plain one; elsewhere one kernel walks the grid.
+    let weighted_tiles = |mode: &str| -> u64 {
+        report["modes"][mode]["weighted_tiles_per_frame"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c.as_u64().unwrap())
+            .sum()
+    };
+    if report["device"].as_str().unwrap().contains("llvmpipe") {
+        assert!(weighted_tiles("rara") > 0);
+    }
+    assert_eq!(weighted_tiles("hard") + weighted_tiles("original"), 0);
     assert!(report["rara_over_hard_per_frame_median"].as_f64().unwrap() > 0.0);
 
     // One event per pass per frame, each mode on its own track, frames in the order they were

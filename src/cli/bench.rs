@@ -355,6 +355,15 @@ fn print_table(
                 100.0 * partial / all
             );
         }
+        let weighted = sum(|f| f.weighted_tiles);
+        if weighted > 0.0 {
+            let (gx, gy) = rara::camera::tile_grid(camera.width, camera.height);
+            println!(
+                "rara tiles by rasterize kernel: {:.0} of {} per frame weighted (hold a partial pair), the rest plain",
+                weighted / r.frames.len() as f64,
+                gx * gy
+            );
+        }
     }
 }
 
@@ -400,6 +409,7 @@ fn json_report(
                 "cutoff_pairs_per_frame": r.frames.iter()
                     .map(|f| [f.cutoff_pairs, f.cutoff_pairs_weight_one, f.cutoff_pairs_empty])
                     .collect::<Vec<_>>(),
+                "weighted_tiles_per_frame": r.frames.iter().map(|f| f.weighted_tiles).collect::<Vec<_>>(),
             }),
         );
     }
