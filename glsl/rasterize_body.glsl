@@ -402,8 +402,8 @@ void composite_entries(uint base, uint count) {
     // weight, a second one and a plain splat's compositing.
     // The loops carry the next entry's handle, one word, and fetch its splat at the top of the
     // body. Carrying the fetched splat instead (ten words, every one a masked move on a CPU
-    // driver) cost 1-2 % more (lavapipe, one thread, biker at 1280x960: rasterize 96.5-97.9
-    // against 98.4-101.4 ms under a plane, 153-173 against 155-161 ms with nothing cutoff).
+    // driver) cost 1-2 % more (lavapipe, one thread, biker at 1280x960 under a plane:
+    // rasterize 96.5-97.9 against 98.4-101.4 ms).
     if (count == 0u) {
         return;
     }

@@ -8,7 +8,7 @@
 // weighted kernel pays one weighted compositing body per tile list whether or not the tile has
 // a weighted pair (its loop over a run of weighted entries is entered once, under an empty
 // mask, after the last plain run). lavapipe, one thread, biker at 1280x960 with nothing cutoff
-// (a plane far away): rasterize 157-162 ms for the weighted kernel against 146-150 ms for the
+// (a plane far away): rasterize 159-164 ms for the weighted kernel against 146-153 ms for the
 // plain one, the same image.
 //
 // cutoff_tiles.comp sets flags[tile] for every tile where it leaves a pair weighted, and
