@@ -563,14 +563,16 @@ fn bench_writes_table_json_and_trace() {
         );
     }
     // The sweeping plane cuts the shell: rara has cutoff Gaussians, the other modes none.
-    let cutoffs = |mode: &str| -> u64 {
-        report["modes"][mode]["cutoff_per_frame"]
+    // A per-frame count of the report, summed over the frames of a mode.
+    let total = |mode: &str, key: &str| -> u64 {
+        report["modes"][mode][key]
             .as_array()
             .unwrap()
             .iter()
             .map(|c| c.as_u64().unwrap())
             .sum()
     };
+    let cutoffs = |mode: &str| total(mode, "cutoff_per_frame");
     assert!(cutoffs("rara") > 0);
     assert_eq!(cutoffs("hard") + cutoffs("original"), 0);
     // rara's cutoff pairs were classified by tile (the bench clips by a plane, mass weight).
@@ -583,14 +585,7 @@ fn bench_writes_table_json_and_trace() {
     assert!(classified > 0);
     // On a CPU driver the tiles that hold a partial pair take the weighted kernel, the rest
     // the plain one; elsewhere one kernel walks the grid.
-    let weighted_tiles = |mode: &str| -> u64 {
-        report["modes"][mode]["weighted_tiles_per_frame"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|c| c.as_u64().unwrap())
-            .sum()
-    };
+    let weighted_tiles = |mode: &str| total(mode, "weighted_tiles_per_frame");
     if report["device"].as_str().unwrap().contains("llvmpipe") {
         assert!(weighted_tiles("rara") > 0);
     }

@@ -78,11 +78,7 @@ fn gpu_matches_cpu(name: &str, scene: &Scene, camera: &Camera, layout: RasterLay
         .unwrap();
     for (region_name, region) in regions(scene) {
         for (mode_name, clip) in modes(&region) {
-            let options = RenderOptions {
-                background: Vec3::new(0.1, 0.1, 0.15),
-                clip,
-                ..RenderOptions::default()
-            };
+            let options = over_grey(clip);
             let (gpu, stats) = renderer.render(&gpu_scene, camera, &options).unwrap();
             let cpu = reference::render(scene, camera, &options);
             let d = common::check_images(
@@ -466,6 +462,39 @@ fn render_without_and_with_tile_classes(
     (plain, classified)
 }
 
+/// Options that clip with `clip` over a dark, not black, background, so that an error in a
+/// pixel's transmittance shows.
+fn over_grey(clip: Clip) -> RenderOptions {
+    RenderOptions {
+        background: Vec3::new(0.1, 0.1, 0.15),
+        clip,
+        ..RenderOptions::default()
+    }
+}
+
+/// The scenes and cameras of the per-tile tests: two synthetic scenes framed by
+/// `orbit_camera` and, where the real scenes are found, plant from its camera 0 at 320 pixels
+/// wide.
+fn tile_class_cases() -> Vec<(&'static str, Scene, Camera)> {
+    let mut cases = vec![];
+    for (name, scene) in [
+        ("shell", rara::synth::shell(6000, 1, 3)),
+        ("layers", rara::synth::layers(12000, 2, 5)),
+    ] {
+        let camera = orbit_camera(&scene, 240);
+        cases.push((name, scene, camera));
+    }
+    if let Some((ply, Some(cams))) = common::real_scene("plant_capture_sh0") {
+        eprintln!("real-scene case 'plant_capture_sh0' RAN");
+        let camera = Camera::load_one(&cams, 0)
+            .unwrap()
+            .resized(320, None)
+            .unwrap();
+        cases.push(("plant", rara::ply::load_ply(&ply).unwrap().0, camera));
+    }
+    cases
+}
+
 /// The per-tile classes of cutoff pairs (`stages::cutoff_tiles`) only save work: the image is
 /// the same with and without them to within rounding, for planes, a box and a cutaway, while
 /// some of the cutoff pairs are drawn plain or left out (45 % in these small frames, 58-69 %
@@ -474,28 +503,11 @@ fn render_without_and_with_tile_classes(
 fn cutoff_tile_classes_change_no_pixel() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
-    let mut cases = vec![
-        ("shell", rara::synth::shell(6000, 1, 3), None),
-        ("layers", rara::synth::layers(12000, 2, 5), None),
-    ];
-    if let Some((ply, Some(cams))) = common::real_scene("plant_capture_sh0") {
-        eprintln!("real-scene case 'plant_capture_sh0' RAN");
-        let camera = Camera::load_one(&cams, 0)
-            .unwrap()
-            .resized(320, None)
-            .unwrap();
-        cases.push(("plant", rara::ply::load_ply(&ply).unwrap().0, Some(camera)));
-    }
     let (mut all, mut weight_one, mut empty) = (0u64, 0u64, 0u64);
-    for (name, scene, camera) in cases {
-        let camera = camera.unwrap_or_else(|| orbit_camera(&scene, 240));
+    for (name, scene, camera) in tile_class_cases() {
         let gpu_scene = renderer.upload(&scene).unwrap();
         for (region_name, region) in regions(&scene) {
-            let options = RenderOptions {
-                background: Vec3::new(0.1, 0.1, 0.15),
-                clip: Clip::rara(region),
-                ..RenderOptions::default()
-            };
+            let options = over_grey(Clip::rara(region));
             let ((plain, plain_stats), (classified, stats)) =
                 render_without_and_with_tile_classes(&mut renderer, &gpu_scene, &camera, &options);
             assert_eq!(
@@ -543,29 +555,12 @@ fn cutoff_tile_classes_change_no_pixel() {
 fn tile_lists_change_no_pixel() {
     let ctx = common::context();
     let mut renderer = Renderer::with_raster_layout(&ctx, RasterLayout::Strips).unwrap();
-    let mut cases = vec![
-        ("shell", rara::synth::shell(6000, 1, 3), None),
-        ("layers", rara::synth::layers(12000, 2, 5), None),
-    ];
-    if let Some((ply, Some(cams))) = common::real_scene("plant_capture_sh0") {
-        eprintln!("real-scene case 'plant_capture_sh0' RAN");
-        let camera = Camera::load_one(&cams, 0)
-            .unwrap()
-            .resized(320, None)
-            .unwrap();
-        cases.push(("plant", rara::ply::load_ply(&ply).unwrap().0, Some(camera)));
-    }
     let mut split = 0;
-    for (name, scene, camera) in cases {
-        let camera = camera.unwrap_or_else(|| orbit_camera(&scene, 240));
+    for (name, scene, camera) in tile_class_cases() {
         let (gx, gy) = rara::camera::tile_grid(camera.width, camera.height);
         let gpu_scene = renderer.upload(&scene).unwrap();
         for (region_name, region) in regions(&scene) {
-            let options = RenderOptions {
-                background: Vec3::new(0.1, 0.1, 0.15),
-                clip: Clip::rara(region),
-                ..RenderOptions::default()
-            };
+            let options = over_grey(Clip::rara(region));
             renderer.set_tile_lists(false);
             let (whole_grid, whole_stats) = renderer.render(&gpu_scene, &camera, &options).unwrap();
             renderer.set_tile_lists(true);
