@@ -1,8 +1,8 @@
 // Stage 4b, cutoff tiles (rara clipping by planes with the mass weight): classifies the cutoff
 // splats' pairs, which emit_rara.comp wrote at cutoff_pairs, by tile (cutoff_tile_class in
 // clip.glsl). A pair whose weight is 1 at every pixel of its tile loses the PAIR_WEIGHTED that
-// emit gave it, and the rasterizer draws it there as a plain splat; a pair that adds nothing to any
-// pixel of its tile gets the key `tile count`, which the sort puts after every tile and the
+// emit gave it, and the rasterizer draws it there as a plain splat; a pair that adds nothing
+// to any pixel of its tile gets the key `tile count`, which the sort puts after every tile and the
 // tile-ranges stage leaves out. Either way the pair keeps its slot, so the counts of the earlier
 // stages stay exact. Dispatched indirectly over the cutoff splats, so the rest pay nothing.
 //

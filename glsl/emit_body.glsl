@@ -1,8 +1,8 @@
 // Stage 4, emit: one invocation per drawn Gaussian, in depth order, writes a (tile id, splat
 // index) pair for every tile it touches, at the offset the prefix sum gave it; a cutoff
 // splat's pairs carry PAIR_WEIGHTED. The pairs come out in (depth, index) order, so the stable
-// sort by tile id leaves every tile's list in that order. Pairs past the capacity are not written: the host sees the total, grows the buffers
-// and renders the frame again.
+// sort by tile id leaves every tile's list in that order. Pairs past the capacity are not
+// written: the host sees the total, grows the buffers and renders the frame again.
 //
 // RECORD_CUTOFF_PAIRS (emit_rara.comp, rara clipping by planes with the mass weight): each
 // cutoff splat also records where its pairs start, and the first invocation writes the

@@ -223,8 +223,8 @@ uint done_count() {
 }
 #endif
 
-// Composites splat s over the strip (SPEC section 4); `cutoff` applies its clip weight. Returns whether any pixel of the strip
-// was still open.
+// Composites splat s over the strip (SPEC section 4); `cutoff` applies its clip weight.
+// Returns whether any pixel of the strip was still open.
 bool composite(Staged s, bool cutoff) {
     vec4 co = s.co;
     vec2 uv = s.uv;

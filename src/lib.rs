@@ -8,6 +8,8 @@
 //!    Gaussian, and the side record of each cutoff Gaussian;
 //! 2. `prefix_sum`: offsets of each Gaussian's tile pairs;
 //! 3. `emit`: one (tile, depth) key and splat index per tile its visible footprint reaches;
+//!    under rara clipping by planes, `cutoff_tiles` then classifies each cutoff splat's pairs
+//!    by tile, and on CPU drivers `tile_lists` splits the tiles by rasterize kernel;
 //! 4. `sort`: stable GPU radix sort of the pairs ([`stages::sort::RadixSort`]);
 //! 5. `tile_ranges`: each tile's run of pairs;
 //! 6. `rasterize`: per-pixel front-to-back compositing, one workgroup per 16x16 tile, with the
