@@ -21,7 +21,8 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 
 layout(push_constant) uniform Push {
     U32s flags;         // per tile, then one for the whole grid
-    U32s args;          // out: the weighted list's dispatch (x, y, z, pad), then the plain one's
+    U32s weighted_args; // out: the weighted list's dispatch (x, y, z), x counted here
+    U32s plain_args;    // out: the plain list's dispatch
     U32s weighted;      // out: ids of the tiles with a weighted pair, in no particular order
     U32s plain;         // out: ids of the other tiles
     U32s counters;      // out: COUNTER_WEIGHTED_TILES
@@ -36,9 +37,9 @@ void main() {
     }
     bool weighted = pc.flags.v[tile] != 0u || pc.flags.v[pc.tile_count] != 0u;
     if (weighted) {
-        pc.weighted.v[atomicAdd(pc.args.v[0], 1u)] = tile;
+        pc.weighted.v[atomicAdd(pc.weighted_args.v[0], 1u)] = tile;
         atomicAdd(pc.counters.v[COUNTER_WEIGHTED_TILES], 1u);
     } else {
-        pc.plain.v[atomicAdd(pc.args.v[4], 1u)] = tile;
+        pc.plain.v[atomicAdd(pc.plain_args.v[0], 1u)] = tile;
     }
 }

@@ -827,7 +827,8 @@ impl Renderer {
             timer.begin_pass(cmd, c"tile lists");
             let push = TileListsPush {
                 flags: buffer.address + TileListsLayout::FLAGS,
-                args: buffer.address,
+                weighted_args: buffer.address + TileListsLayout::WEIGHTED_ARGS,
+                plain_args: buffer.address + TileListsLayout::PLAIN_ARGS,
                 weighted: buffer.address + layout.weighted(),
                 plain: buffer.address + layout.plain(),
                 counters: f.counters.address,

@@ -55,8 +55,10 @@ impl TileListsLayout {
 pub struct TileListsPush {
     /// Per-tile flags from the cutoff-tiles stage, then the whole grid's.
     pub flags: u64,
-    /// Out: the two dispatches' arguments (weighted, then plain).
-    pub args: u64,
+    /// Out: the weighted list's dispatch arguments.
+    pub weighted_args: u64,
+    /// Out: the plain list's dispatch arguments.
+    pub plain_args: u64,
     /// Out: ids of the tiles with a weighted pair.
     pub weighted: u64,
     /// Out: ids of the other tiles.
@@ -96,14 +98,16 @@ impl TileLists {
         buffer: &Buffer,
         layout: &TileListsLayout,
     ) {
-        let args: [u32; 8] = [0, 1, 1, 0, 0, 1, 1, 0];
+        let empty_dispatch: [u32; 4] = [0, 1, 1, 0];
         unsafe {
-            ctx.device().cmd_update_buffer(
-                cmd,
-                buffer.raw,
-                TileListsLayout::WEIGHTED_ARGS,
-                bytemuck::bytes_of(&args),
-            );
+            for offset in [TileListsLayout::WEIGHTED_ARGS, TileListsLayout::PLAIN_ARGS] {
+                ctx.device().cmd_update_buffer(
+                    cmd,
+                    buffer.raw,
+                    offset,
+                    bytemuck::bytes_of(&empty_dispatch),
+                );
+            }
             ctx.device().cmd_fill_buffer(
                 cmd,
                 buffer.raw,
