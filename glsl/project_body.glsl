@@ -97,10 +97,24 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
                        dot(vec3(r0.z, r1.z, r2.z), j0));
     vec3 m1 = s * vec3(dot(vec3(r0.x, r1.x, r2.x), j1), dot(vec3(r0.y, r1.y, r2.y), j1),
                        dot(vec3(r0.z, r1.z, r2.z), j1));
-    float a = dot(m0, m0) + 0.3;
+    // The footprint bound (MAX_FOOTPRINT_SIGMA_PX, constants.rs), tested before any square:
+    // past it a, c and det would overflow or lose every digit. Written so that NaN fails it.
+    vec3 m_abs = max(abs(m0), abs(m1));
+    float m_max = max(m_abs.x, max(m_abs.y, m_abs.z));
+    if (!(m_max <= float(MAX_FOOTPRINT_SIGMA_PX))) {
+        atomicAdd(pc.counters.v[COUNTER_OVERSIZED], 1u);
+        skip(i);
+        return false;
+    }
+    float aa = dot(m0, m0), cc = dot(m1, m1);
+    float a = aa + 0.3;
     float b = dot(m0, m1);
-    float c = dot(m1, m1) + 0.3;
-    float det = a * c - b * b;
+    float c = cc + 0.3;
+    // det = a c - b^2 (SPEC section 3) by Lagrange's identity, |m0 x m1|^2 + 0.3 (|m0|^2 +
+    // |m1|^2) + 0.09: the same number without the cancellation that leaves a c - b^2 with no
+    // correct digit for a long needle (a c ~ 1e16 against det ~ 1e8), and never <= 0.
+    vec3 m_cross = cross(m0, m1);
+    float det = dot(m_cross, m_cross) + 0.3 * (aa + cc) + 0.09;
     if (det <= 0.0) {
         skip(i);
         return false;
@@ -111,10 +125,14 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     float radius = ceil(3.0 * sqrt(lambda));
     vec2 uv = vec2(fx * t.x / t.z + f.focal.z, fy * t.y / t.z + f.focal.w);
     int gx = int(f.size.z), gy = int(f.size.w);
-    int x0 = clamp(int((uv.x - radius) / float(TILE_SIZE)), 0, gx);
-    int x1 = clamp(int((uv.x + radius + float(TILE_SIZE - 1u)) / float(TILE_SIZE)), 0, gx);
-    int y0 = clamp(int((uv.y - radius) / float(TILE_SIZE)), 0, gy);
-    int y1 = clamp(int((uv.y + radius + float(TILE_SIZE - 1u)) / float(TILE_SIZE)), 0, gy);
+    // clamp(int(v), 0, g) of SPEC section 3, clamped before the conversion: the same tiles
+    // wherever int(v) is defined, and defined for a centre far off screen too (int() of a float
+    // beyond the int range is undefined in GLSL).
+    float tile = float(TILE_SIZE);
+    int x0 = int(clamp((uv.x - radius) / tile, 0.0, float(gx)));
+    int x1 = int(clamp((uv.x + radius + tile - 1.0) / tile, 0.0, float(gx)));
+    int y0 = int(clamp((uv.y - radius) / tile, 0.0, float(gy)));
+    int y1 = int(clamp((uv.y + radius + tile - 1.0) / tile, 0.0, float(gy)));
     // Tiles of the 3-sigma rectangle that the splat's visible footprint reaches (common.glsl);
     // a splat below 1/255 opacity draws nowhere. Only the first TILE_RECT_CHUNK cells are
     // counted here (lavapipe's loop cap): project_touched.comp counts the rest of a larger

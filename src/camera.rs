@@ -104,14 +104,16 @@ impl Camera {
         check_size(width, height)?;
         let down = forward.cross(right);
         let fy = height as f32 / (2.0 * (fov_y_deg.to_radians() / 2.0).tan());
-        Ok(Camera {
+        let camera = Camera {
             width,
             height,
             position: eye,
             rotation: Mat3::from_cols(right, down, forward),
             fx: fy,
             fy,
-        })
+        };
+        camera.validate()?;
+        Ok(camera)
     }
 
     /// The same camera rendering at `width` pixels: `fx, fy` scale by `width / self.width`;
@@ -120,39 +122,28 @@ impl Camera {
         let k = width as f32 / self.width as f32;
         let height = height.unwrap_or_else(|| (self.height as f32 * k).round() as u32);
         check_size(width, height)?;
-        Ok(Camera {
+        let camera = Camera {
             width,
             height,
             fx: self.fx * k,
             fy: self.fy * k,
             ..*self
-        })
+        };
+        camera.validate()?;
+        Ok(camera)
     }
 
-    /// Reads every camera of an INRIA `cameras.json` file.
+    /// Reads every camera of an INRIA `cameras.json` file (at most
+    /// [`MAX_CAMERAS_FILE_BYTES`], counted as it is read, so a pipe or a device is bounded too).
     pub fn load_all(path: impl AsRef<Path>) -> Result<Vec<Camera>> {
         let path = path.as_ref();
-        let io = |source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        // Real camera files are kilobytes; refuse to read an arbitrarily large one into memory.
-        let len = std::fs::metadata(path).map_err(io)?.len();
-        if len > MAX_CAMERAS_FILE_BYTES {
-            return Err(Error::Cameras {
-                path: path.to_path_buf(),
-                message: format!(
-                    "{len} bytes is too large for a cameras.json (at most {MAX_CAMERAS_FILE_BYTES})"
-                ),
-            });
-        }
-        let text = std::fs::read_to_string(path).map_err(io)?;
+        let text = crate::input::read_text_limited(path, MAX_CAMERAS_FILE_BYTES, "cameras.json")?;
         Camera::parse_all(&text, path)
     }
 
     /// [`Camera::load_all`] from the text of a cameras.json; `path` only names the source in
-    /// errors. Every camera is checked: finite values, positive focal lengths, an image size
-    /// the renderer accepts ([`check_size`]).
+    /// errors. Every camera is checked ([`Camera::validate`]): finite values, a rotation that
+    /// is one, positive focal lengths, an image size the renderer accepts.
     pub fn parse_all(text: &str, path: &Path) -> Result<Vec<Camera>> {
         let err = |message: String| Error::Cameras {
             path: path.to_path_buf(),
@@ -167,31 +158,62 @@ impl Camera {
         cams.iter()
             .enumerate()
             .map(|(n, c)| {
-                let finite = c
-                    .position
-                    .iter()
-                    .chain(c.rotation.iter().flatten())
-                    .all(|v| v.is_finite())
-                    && c.fx.is_finite()
-                    && c.fy.is_finite();
-                if !finite || c.fx <= 0.0 || c.fy <= 0.0 {
-                    return Err(err(format!(
-                        "camera {n}: needs finite values and positive fx/fy"
-                    )));
-                }
-                check_size(c.width, c.height).map_err(|e| err(format!("camera {n}: {e}")))?;
                 // rotation[r][c]: rows as written; from_cols_array_2d takes columns, so transpose.
                 let rotation = Mat3::from_cols_array_2d(&c.rotation).transpose();
-                Ok(Camera {
+                let camera = Camera {
                     width: c.width,
                     height: c.height,
                     position: Vec3::from_array(c.position),
                     rotation,
                     fx: c.fx,
                     fy: c.fy,
-                })
+                };
+                camera
+                    .validate()
+                    .map_err(|e| err(format!("camera {n}: {e}")))?;
+                Ok(camera)
             })
             .collect()
+    }
+
+    /// Checks that the camera is one the renderer can use: finite values; a rotation that is
+    /// a rotation (orthonormal to within [`ROTATION_TOLERANCE`] per entry of `R^T R - I`, with
+    /// determinant +1); focal lengths in `(0, MAX_FOCAL_PX]`; an image size [`check_size`]
+    /// accepts. A zero, scaled, sheared or mirrored matrix would otherwise render a black or
+    /// distorted frame without a word.
+    pub fn validate(&self) -> Result<()> {
+        let finite = self.position.is_finite()
+            && self.rotation.is_finite()
+            && self.fx.is_finite()
+            && self.fy.is_finite();
+        if !finite {
+            return Err(Error::InvalidInput(
+                "the camera has a NaN or infinite value (position, rotation, fx or fy)".into(),
+            ));
+        }
+        if !(self.fx > 0.0 && self.fy > 0.0 && self.fx <= MAX_FOCAL_PX && self.fy <= MAX_FOCAL_PX) {
+            return Err(Error::InvalidInput(format!(
+                "focal lengths fx {} and fy {} must be positive and at most {MAX_FOCAL_PX} pixels",
+                self.fx, self.fy
+            )));
+        }
+        let r = self.rotation;
+        let gram = r.transpose() * r;
+        let off = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| (gram.col(j)[i] - if i == j { 1.0 } else { 0.0 }).abs())
+            .fold(0f32, f32::max);
+        if off > ROTATION_TOLERANCE {
+            return Err(Error::InvalidInput(format!(
+                "rotation is not a rotation: its columns are not orthonormal (R^T R differs from                  the identity by {off:.3e}, more than {ROTATION_TOLERANCE:.0e})"
+            )));
+        }
+        if r.determinant() <= 0.0 {
+            return Err(Error::InvalidInput(
+                "rotation is a reflection (determinant -1), not a rotation".into(),
+            ));
+        }
+        check_size(self.width, self.height)
     }
 
     /// Camera `index` of a cameras.json file, with a clear error when it is out of range.
@@ -242,6 +264,14 @@ pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
 
 /// Largest cameras.json [`Camera::load_all`] reads.
 pub const MAX_CAMERAS_FILE_BYTES: u64 = 64 << 20;
+
+/// Largest focal length in pixels: a field of view of 0.09 degrees across 16,384 pixels. It
+/// keeps the projection's Jacobian, and so every splat's 2D covariance, finite in `f32`.
+pub const MAX_FOCAL_PX: f32 = 1e7;
+
+/// How far `R^T R` of a camera rotation may differ from the identity, per entry: files written
+/// with 6 significant digits are within 1e-5; 1e-3 still accepts 4 digits.
+pub const ROTATION_TOLERANCE: f32 = 1e-3;
 
 /// Largest image side the renderer produces (the `maxImageDimension2D` most GPUs have).
 pub const MAX_IMAGE_SIDE: u32 = 16384;

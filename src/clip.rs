@@ -218,20 +218,30 @@ fn check_plane_count(n: usize) -> Result<()> {
 
 /// The six half-spaces of an oriented box.
 fn box_planes(center: Vec3, half_extents: Vec3, rotation: Quat) -> Result<Vec<Plane>> {
-    let q_len = rotation.length();
-    if !(center.is_finite()
-        && half_extents.is_finite()
-        && half_extents.min_element() > 0.0
-        && q_len.is_finite()
-        && q_len > 0.0)
-    {
+    if !center.is_finite() {
         return Err(Error::InvalidInput(format!(
-            "clip box needs a finite centre, positive half extents and a non-zero rotation, \
-             got half extents ({}, {}, {})",
+            "clip box needs a finite centre, got ({}, {}, {})",
+            center.x, center.y, center.z
+        )));
+    }
+    if !(half_extents.is_finite() && half_extents.min_element() > 0.0) {
+        return Err(Error::InvalidInput(format!(
+            "clip box needs positive half extents, got ({}, {}, {})",
             half_extents.x, half_extents.y, half_extents.z
         )));
     }
-    let rotation = rotation / q_len;
+    // In f64: the squared length of a tiny (but finite) quaternion underflows in f32.
+    let q64 = [rotation.w, rotation.x, rotation.y, rotation.z].map(f64::from);
+    let q_len = q64.iter().map(|c| c * c).sum::<f64>().sqrt();
+    if !(q_len.is_finite() && q_len > 0.0) {
+        return Err(Error::InvalidInput(format!(
+            "clip box rotation (w, x, y, z) = ({}, {}, {}, {}) is not a rotation: a quaternion \
+             needs a finite, non-zero length",
+            rotation.w, rotation.x, rotation.y, rotation.z
+        )));
+    }
+    let [w, x, y, z] = q64.map(|c| (c / q_len) as f32);
+    let rotation = Quat::from_xyzw(x, y, z, w);
     let mut planes = Vec::with_capacity(6);
     for (axis, h) in [Vec3::X, Vec3::Y, Vec3::Z]
         .into_iter()
@@ -528,6 +538,10 @@ pub struct BoxSpec {
     pub rotation: Option<[f32; 4]>,
 }
 
+/// Largest clip file [`ClipFile::read`] reads: a clip holds at most 16 half-spaces, a few
+/// hundred bytes.
+pub const MAX_CLIP_FILE_BYTES: u64 = 1 << 20;
+
 /// A sphere in a [`ClipFile`].
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -541,11 +555,13 @@ pub struct SphereSpec {
 impl ClipFile {
     /// Parses a clip JSON file (values are checked by [`ClipFile::into_clip`]).
     pub fn read(path: &Path) -> Result<ClipFile> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        serde_json::from_str(&text)
+        let text = crate::input::read_text_limited(path, MAX_CLIP_FILE_BYTES, "clip file")?;
+        ClipFile::parse(&text, path)
+    }
+
+    /// [`ClipFile::read`] from the file's text; `path` only names the source in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<ClipFile> {
+        serde_json::from_str(text)
             .map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))
     }
 

@@ -150,8 +150,20 @@ pub const COUNTER_CUTOFF_PAIRS_EMPTY: u32 = 7;
 /// Counter slot: tiles the weighted rasterize kernel walked, with the tile lists (CPU drivers,
 /// rara clipping by planes with the mass weight; else 0).
 pub const COUNTER_WEIGHTED_TILES: u32 = 8;
+/// Counter slot: Gaussians not drawn because their footprint exceeds
+/// [`MAX_FOOTPRINT_SIGMA_PX`].
+pub const COUNTER_OVERSIZED: u32 = 9;
 /// Number of counter slots.
-pub const COUNTER_SLOTS: u32 = 9;
+pub const COUNTER_SLOTS: u32 = 10;
+
+/// The footprint bound (README, "Formats and conventions"): a Gaussian is not drawn when
+/// one of its three scaled axes, projected by the Jacobian onto the image's x or y axis, spans
+/// more than this many pixels (`|m_k| > B` for a component of `m0 = S R^T J_0^T` or
+/// `m1 = S R^T J_1^T`). That is 4x the largest image side: such a splat is a line or a wash
+/// across the whole image, and past it `f32` no longer holds its covariance (a log-scale of 12
+/// seen from a few units away already projects to 10^7 px). Both paths test it before any
+/// product that could overflow, and count what it skips (`FrameStats::oversized`).
+pub const MAX_FOOTPRINT_SIGMA_PX: u32 = 65536;
 
 /// Bit of a pair's value (the splat index) that marks a pair the rasterizer draws with the
 /// per-pixel clip weight: emit sets it on every pair of a cutoff splat, and the cutoff-tiles
@@ -215,6 +227,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ),
     ("COUNTER_CUTOFF_PAIRS_EMPTY", COUNTER_CUTOFF_PAIRS_EMPTY),
     ("COUNTER_WEIGHTED_TILES", COUNTER_WEIGHTED_TILES),
+    ("COUNTER_OVERSIZED", COUNTER_OVERSIZED),
+    ("MAX_FOOTPRINT_SIGMA_PX", MAX_FOOTPRINT_SIGMA_PX),
     ("PAIR_WEIGHTED", PAIR_WEIGHTED),
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),

@@ -32,6 +32,15 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// An input file other than a scene (a cameras.json, a clip file) cannot be read as one:
+    /// too large, a directory, not text.
+    #[error("{path}: {message}")]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// A value given by the user (camera, size, option) is not usable.
     #[error("{0}")]
     InvalidInput(String),

@@ -5,8 +5,9 @@ use ash::vk;
 use crate::camera::tile_grid;
 use crate::constants::{
     COUNTER_CUTOFF, COUNTER_CUTOFF_PAIRS, COUNTER_CUTOFF_PAIRS_EMPTY,
-    COUNTER_CUTOFF_PAIRS_WEIGHT_ONE, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN, COUNTER_SLOTS,
-    COUNTER_VISIBLE, COUNTER_WEIGHTED_TILES, MAX_INTERSECTIONS, RASTER_CHUNK,
+    COUNTER_CUTOFF_PAIRS_WEIGHT_ONE, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN,
+    COUNTER_OVERSIZED, COUNTER_SLOTS, COUNTER_VISIBLE, COUNTER_WEIGHTED_TILES, MAX_INTERSECTIONS,
+    RASTER_CHUNK,
 };
 use crate::error::Result;
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
@@ -257,6 +258,7 @@ impl FrameSlot {
             cutoff_pairs_weight_one: counters[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE as usize],
             cutoff_pairs_empty: counters[COUNTER_CUTOFF_PAIRS_EMPTY as usize],
             weighted_tiles: counters[COUNTER_WEIGHTED_TILES as usize],
+            oversized: counters[COUNTER_OVERSIZED as usize],
             max_tile_len,
             complete,
             ..FrameStats::default()

@@ -11,6 +11,7 @@ use rara::{Camera, Context, Error, RenderOptions, Renderer, Result, Scene};
 
 mod cli;
 use cli::clip_args::{describe, ClipArgs};
+use cli::output::Output;
 
 /// Renders 3D Gaussian Splatting scenes on Vulkan compute (lavapipe or a GPU).
 #[derive(Parser)]
@@ -124,7 +125,7 @@ struct RenderArgs {
     #[command(flatten)]
     camera: CameraArgs,
     /// Background colour R,G,B in [0, 1].
-    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, default_value = "0,0,0")]
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_color, default_value = "0,0,0")]
     background: Vec3,
     /// Output PNG.
     #[arg(short, long)]
@@ -158,6 +159,17 @@ pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
         }
     }
     Ok(Vec3::from_array(v))
+}
+
+/// R,G,B with every channel in [0, 1].
+pub fn parse_color(s: &str) -> std::result::Result<Vec3, String> {
+    let c = parse_vec3(s)?;
+    if c.min_element() < 0.0 || c.max_element() > 1.0 {
+        return Err(format!(
+            "'{s}': each of R,G,B must lie in [0, 1] (0,0,0 is black, 1,1,1 white)"
+        ));
+    }
+    Ok(c)
 }
 
 pub fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
@@ -233,21 +245,39 @@ pub fn median(values: &mut [f64]) -> f64 {
     }
 }
 
+/// Prints the count of Gaussians the footprint bound skipped (`MAX_FOOTPRINT_SIGMA_PX`).
+pub fn warn_oversized(oversized: usize, total: usize) {
+    if oversized > 0 {
+        eprintln!(
+            "warning: {oversized} of {total} Gaussians not drawn: in this view their footprint \
+             spans more than {} px per standard deviation (an extreme scale, or a huge Gaussian \
+             right before the camera)",
+            rara::constants::MAX_FOOTPRINT_SIGMA_PX
+        );
+    }
+}
+
 fn cmd_render(args: &RenderArgs) -> Result<()> {
+    // Everything that can be checked before the (possibly long) load and render is.
     let camera = resolve_camera(&args.camera)?;
-    let scene = load_scene(&args.scene)?;
     let options = RenderOptions {
         background: args.background,
         clip: args.clip.build(&[])?,
         ..RenderOptions::default()
     };
+    let output = Output::prepare(&args.output, &["png"])?;
+    let scene = load_scene(&args.scene)?;
     if options.clip.region.is_some() {
         eprintln!("{}", describe(&options.clip));
     }
     if args.reference {
         let start = std::time::Instant::now();
         let img = rara::reference::render(&scene, &camera, &options);
-        save_png(&img, &args.output)?;
+        warn_oversized(
+            rara::reference::project::count_oversized(&scene, &camera, &options.clip),
+            scene.len(),
+        );
+        output.write_png(&img)?;
         println!(
             "wrote {} ({}x{}, CPU reference, {:.0} ms)",
             args.output.display(),
@@ -273,7 +303,8 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     let rendered = renderer.render(&gpu_scene, &camera, &options);
     spinner.finish_and_clear();
     let (img, stats) = rendered?;
-    save_png(&img, &args.output)?;
+    output.write_png(&img)?;
+    warn_oversized(stats.oversized as usize, gpu_scene.len() as usize);
     println!(
         "wrote {} ({}x{}) on {}: {} visible Gaussians ({} cutoff), {} tile intersections",
         args.output.display(),
@@ -459,6 +490,7 @@ fn load_png(path: &Path) -> Result<image::RgbaImage> {
 }
 
 fn cmd_compare(a: &Path, b: &Path, diff: Option<&Path>, json: bool) -> Result<()> {
+    let diff = diff.map(|p| Output::prepare(p, &["png"])).transpose()?;
     let (ia, ib) = (load_png(a)?, load_png(b)?);
     if ia.dimensions() != ib.dimensions() {
         return Err(Error::InvalidInput(format!(
@@ -473,8 +505,8 @@ fn cmd_compare(a: &Path, b: &Path, diff: Option<&Path>, json: bool) -> Result<()
     }
     let d = rara::metrics::compare(&ia, &ib);
     let ssim = rara::metrics::ssim(&ia, &ib);
-    if let Some(path) = diff {
-        save_png(&rara::metrics::diff_image(&ia, &ib), path)?;
+    if let Some(out) = diff {
+        out.write_png(&rara::metrics::diff_image(&ia, &ib))?;
     }
     // JSON has no infinity: identical images report a PSNR of null.
     let psnr = d.psnr.is_finite().then_some(d.psnr);

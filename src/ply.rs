@@ -5,7 +5,7 @@
 //! second and no count from the file is trusted before it is checked against the file size.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{BufRead, BufReader, BufWriter, Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use glam::{Quat, Vec3};
@@ -18,6 +18,8 @@ use crate::scene::{sh_coeffs, Scene};
 const MAX_HEADER_BYTES: usize = 1 << 20;
 /// Vertices decoded per chunk of the binary payload.
 const CHUNK_VERTICES: usize = 16384;
+/// Longest line of an ascii payload: a vertex of 62 properties takes about 1.5 kB.
+const MAX_ASCII_LINE_BYTES: usize = 1 << 16;
 
 /// What [`load_ply`] returns besides the scene.
 #[derive(Clone, Debug, Default)]
@@ -110,17 +112,79 @@ fn read_header_bytes(path: &Path, reader: &mut impl BufRead) -> Result<Vec<u8>> 
             .rposition(|&c| c == b'\n')
             .map_or(0, |p| p + 1);
         let line = String::from_utf8_lossy(&header[line_start..]);
-        if line.trim_end() == "end_header" {
+        if line.trim_end() == "end_header" && header.ends_with(b"\n") {
             return Ok(header);
         }
-        if n == 0 || header.len() >= MAX_HEADER_BYTES {
-            return Err(ply_err(path, "malformed header: no 'end_header' line"));
+        if header.len() >= MAX_HEADER_BYTES {
+            return Err(ply_err(
+                path,
+                format!(
+                    "malformed header: longer than {MAX_HEADER_BYTES} bytes (the limit; real \
+                     headers are a few kB) without an 'end_header' line"
+                ),
+            ));
+        }
+        if n == 0 {
+            if header.len() < 4 && !b"ply".starts_with(&header[..header.len().min(3)]) {
+                return Err(ply_err(
+                    path,
+                    "not a PLY file (it does not start with 'ply')",
+                ));
+            }
+            return Err(ply_err(
+                path,
+                "malformed header: the file ends before an 'end_header' line",
+            ));
+        }
+    }
+}
+
+/// How one property of an element is stored.
+#[derive(Clone, Debug)]
+enum Stored {
+    /// One value.
+    Scalar(ScalarType),
+    /// A count, then that many items.
+    List { count: ScalarType, item: ScalarType },
+}
+
+impl Stored {
+    fn of(path: &Path, element: &str, p: &ply_rs::ply::PropertyDef) -> Result<Stored> {
+        Ok(match &p.data_type {
+            PropertyType::Scalar(t) => Stored::Scalar(t.clone()),
+            PropertyType::List(count, item) => {
+                if matches!(count, ScalarType::Float | ScalarType::Double) {
+                    return Err(ply_err(
+                        path,
+                        format!(
+                            "element '{element}': list property '{}' has a floating-point \
+                             count type; PLY list counts are integers",
+                            p.name
+                        ),
+                    ));
+                }
+                Stored::List {
+                    count: count.clone(),
+                    item: item.clone(),
+                }
+            }
+        })
+    }
+
+    /// Bytes of a scalar, or of a list's count (its least size).
+    fn min_size(&self) -> usize {
+        match self {
+            Stored::Scalar(t) | Stored::List { count: t, .. } => scalar_size(t),
         }
     }
 }
 
 /// Loads a 3DGS PLY file: properties by name, SH degree 0-3, ascii or binary of either
 /// endianness. Gaussians with non-finite values are dropped and counted in the report.
+///
+/// A regular file's counts are checked against its size before anything is allocated for
+/// them; anything else (a pipe, a FIFO, `/dev/stdin`) is read as a stream
+/// ([`read_ply_stream`]), where memory grows only with the bytes that actually arrive.
 pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     let path = path.as_ref();
     let io = |source| Error::Io {
@@ -128,27 +192,43 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
         source,
     };
     let file = File::open(path).map_err(io)?;
-    let file_len = file.metadata().map_err(io)?.len();
-    read_ply(BufReader::with_capacity(1 << 20, file), file_len, path)
+    let meta = file.metadata().map_err(io)?;
+    if meta.is_dir() {
+        return Err(ply_err(path, "is a directory, not a PLY file"));
+    }
+    let len = meta.is_file().then_some(meta.len());
+    read_ply_from(BufReader::with_capacity(1 << 20, file), len, path)
 }
 
 /// [`load_ply`] from any seekable reader holding `len` bytes (a file, a `Cursor` over bytes
 /// received from elsewhere); `path` only names the source in errors. Every count in the header
 /// is checked against `len` before anything is allocated for it.
 pub fn read_ply<R: BufRead + Seek>(
-    mut reader: R,
+    reader: R,
     len: u64,
     path: &Path,
 ) -> Result<(Scene, LoadReport)> {
-    let file_len = len;
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    read_ply_from(reader, Some(len), path)
+}
+
+/// [`load_ply`] from a stream of unknown length (a pipe, a socket, a decompressor); `path`
+/// only names the source in errors. Nothing is reserved from the header's counts: the scene
+/// grows as vertices arrive, and a stream that ends early is a truncated payload.
+pub fn read_ply_stream<R: BufRead>(reader: R, path: &Path) -> Result<(Scene, LoadReport)> {
+    read_ply_from(reader, None, path)
+}
+
+/// The loader: `len` is the input's size when it is known (then every count is checked
+/// against it), `None` for a stream.
+fn read_ply_from<R: BufRead>(
+    mut reader: R,
+    len: Option<u64>,
+    path: &Path,
+) -> Result<(Scene, LoadReport)> {
     let header_bytes = read_header_bytes(path, &mut reader)?;
     // ply-rs expects '\n' line ends; accept '\r\n' too.
     let header_text = String::from_utf8_lossy(&header_bytes).replace('\r', "");
-    check_header_numbers(path, &header_text)?;
+    check_header_structure(path, &header_text)?;
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
     let header = parser
         .read_header(&mut header_text.as_bytes())
@@ -189,25 +269,17 @@ pub fn read_ply<R: BufRead + Seek>(
     let element_defs: Vec<_> = header.elements.values().collect();
     let vertex = element_defs[vertex_pos];
     let count = vertex.count;
+    let stored_of = |e: &ply_rs::ply::ElementDef| -> Result<Vec<Stored>> {
+        e.properties
+            .values()
+            .map(|p| Stored::of(path, &e.name, p))
+            .collect()
+    };
 
-    // Scalar types of every vertex property, in file order.
-    let mut types = Vec::with_capacity(vertex.properties.len());
-    for p in vertex.properties.values() {
-        match &p.data_type {
-            PropertyType::Scalar(t) => types.push(t.clone()),
-            PropertyType::List(..) => {
-                return Err(ply_err(
-                    path,
-                    format!(
-                        "element 'vertex': list property '{}' is not supported",
-                        p.name
-                    ),
-                ))
-            }
-        }
-    }
-    let layout = vertex_layout(path, vertex)?;
-    let stride: usize = types.iter().map(scalar_size).sum();
+    // How every vertex property is stored, in file order.
+    let stored = stored_of(vertex)?;
+    let layout = vertex_layout(path, vertex, &stored)?;
+    let min_row: usize = stored.iter().map(Stored::min_size).sum();
 
     let mut scene = Scene {
         sh_degree: layout.sh_degree,
@@ -218,68 +290,107 @@ pub fn read_ply<R: BufRead + Seek>(
         encoding: encoding_name,
         ..Default::default()
     };
+    let payload = len.map(|l| l.saturating_sub(header_bytes.len() as u64));
+    // With the size known, nothing is reserved for vertices the file cannot hold; a stream
+    // reserves nothing and grows as vertices arrive.
+    let reserve_for = if payload.is_some() { count } else { 0 };
 
     match header.encoding {
         Encoding::Ascii => {
-            // Elements before 'vertex' must be skipped line by line.
-            let skip_lines: usize = element_defs[..vertex_pos].iter().map(|e| e.count).sum();
-            let remaining = file_len.saturating_sub(header_bytes.len() as u64);
+            let before: Vec<_> = element_defs[..vertex_pos]
+                .iter()
+                .map(|e| (e.name.as_str(), e.count))
+                .collect();
             // Every ascii vertex takes at least 2 bytes per property ("0 ").
-            if (count as u128) * (2 * types.len().max(1)) as u128 > remaining as u128 {
-                return Err(ply_err(path, format!(
-                    "truncated payload: the header declares {count} vertices but only {remaining} bytes follow it"
-                )));
+            if let Some(remaining) = payload {
+                if (count as u128) * (2 * stored.len().max(1)) as u128 > remaining as u128 {
+                    return Err(ply_err(
+                        path,
+                        format!(
+                            "truncated payload: the header declares {count} vertices but only \
+                             {remaining} bytes follow it"
+                        ),
+                    ));
+                }
             }
             read_ascii(
                 path,
                 &mut reader,
-                skip_lines,
+                &before,
                 count,
-                &types,
+                &stored,
                 &layout,
+                reserve_for,
                 &mut scene,
                 &mut report,
             )?;
         }
         _ => {
-            let mut skip = 0u64;
+            // Elements before 'vertex': rows of fixed size are skipped whole, rows with a list
+            // are walked one by one (each has at least one count, so the walk ends with the
+            // input).
+            let mut before = Vec::new();
+            let mut fixed_skip = 0u64;
             for e in &element_defs[..vertex_pos] {
-                let mut size = 0u64;
-                for p in e.properties.values() {
-                    match &p.data_type {
-                        PropertyType::Scalar(t) => size += scalar_size(t) as u64,
-                        PropertyType::List(..) => {
-                            return Err(ply_err(
-                                path,
-                                format!(
-                                "element '{}' before 'vertex' has a list property; not supported",
-                                e.name
-                            ),
-                            ))
-                        }
-                    }
+                let props = stored_of(e)?;
+                if props.iter().any(|p| matches!(p, Stored::List { .. })) {
+                    before.push((e.name.as_str(), e.count, props));
+                } else {
+                    let row: u64 = props.iter().map(|p| p.min_size() as u64).sum();
+                    fixed_skip = fixed_skip.saturating_add(row.saturating_mul(e.count as u64));
                 }
-                skip = skip.saturating_add(size.saturating_mul(e.count as u64));
             }
-            let payload = file_len.saturating_sub(header_bytes.len() as u64);
-            let needed = (count as u128) * (stride as u128) + skip as u128;
-            if needed > payload as u128 {
-                return Err(ply_err(path, format!(
-                    "truncated payload: the header declares {count} vertices of {stride} bytes \
-                     ({needed} bytes with preceding elements) but only {payload} bytes follow the header"
-                )));
+            if let Some(payload) = payload {
+                let least_before: u128 = before
+                    .iter()
+                    .map(|(_, n, props)| {
+                        *n as u128 * props.iter().map(|p| p.min_size() as u128).sum::<u128>()
+                    })
+                    .sum();
+                let needed = (count as u128) * (min_row as u128) + fixed_skip as u128;
+                if needed + least_before > payload as u128 {
+                    return Err(ply_err(
+                        path,
+                        format!(
+                            "truncated payload: the header declares {count} vertices of {min_row} \
+                             bytes ({} bytes with the elements before 'vertex') but only \
+                             {payload} bytes follow the header",
+                            needed + least_before
+                        ),
+                    ));
+                }
             }
-            reader
-                .seek(SeekFrom::Start(header_bytes.len() as u64 + skip))
-                .map_err(io)?;
+            // Elements before 'vertex' are read past, not sought past, so a stream works too.
+            for (name, rows, props) in &before {
+                for row in 0..*rows {
+                    skip_binary_row(path, &mut reader, props, big_endian).map_err(|e| {
+                        ply_err(
+                            path,
+                            format!("truncated payload in element '{name}', row {row}: {e}"),
+                        )
+                    })?;
+                }
+            }
+            let skipped =
+                std::io::copy(&mut reader.by_ref().take(fixed_skip), &mut std::io::sink())
+                    .map_err(|source| Error::Io {
+                        path: path.to_path_buf(),
+                        source,
+                    })?;
+            if skipped < fixed_skip {
+                return Err(ply_err(
+                    path,
+                    "truncated payload: the file ends in the elements before 'vertex'",
+                ));
+            }
             read_binary(
                 path,
                 &mut reader,
                 count,
-                stride,
                 big_endian,
-                &types,
+                &stored,
                 &layout,
+                reserve_for,
                 &mut scene,
                 &mut report,
             )?;
@@ -288,11 +399,88 @@ pub fn read_ply<R: BufRead + Seek>(
     Ok((scene, report))
 }
 
-/// Checks the numbers of the header before ply-rs parses it: ply-rs panics on a number that
-/// does not fit its integer type (found by fuzzing, in element counts and in the format
-/// version), so every digit run outside comments must fit a `u64`, and every
-/// `element NAME COUNT` line must have a count that fits a `usize`.
-fn check_header_numbers(path: &Path, header_text: &str) -> Result<()> {
+/// Reads past one row of an element whose properties may be lists.
+fn skip_binary_row(
+    path: &Path,
+    reader: &mut impl Read,
+    props: &[Stored],
+    big_endian: bool,
+) -> std::result::Result<(), String> {
+    let mut buf = [0u8; 8];
+    for p in props {
+        match p {
+            Stored::Scalar(t) => {
+                let n = scalar_size(t);
+                reader
+                    .read_exact(&mut buf[..n])
+                    .map_err(|e| e.to_string())?;
+            }
+            Stored::List { count, item } => {
+                let items = read_list_count(path, reader, count, big_endian)?;
+                let bytes = items * scalar_size(item) as u64;
+                let got = std::io::copy(&mut reader.take(bytes), &mut std::io::sink())
+                    .map_err(|e| e.to_string())?;
+                if got < bytes {
+                    return Err("the file ends inside a list".into());
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads a binary list's count (an integer type, never negative).
+fn read_list_count(
+    _path: &Path,
+    reader: &mut impl Read,
+    count: &ScalarType,
+    big_endian: bool,
+) -> std::result::Result<u64, String> {
+    let mut buf = [0u8; 8];
+    let n = scalar_size(count);
+    reader
+        .read_exact(&mut buf[..n])
+        .map_err(|e| e.to_string())?;
+    let v = decode_integer(count, &buf[..n], big_endian);
+    u64::try_from(v).map_err(|_| format!("a list's count is negative ({v})"))
+}
+
+/// An integer scalar exactly (list counts; [`decode_scalar`] rounds large ones to `f32`).
+fn decode_integer(t: &ScalarType, b: &[u8], big_endian: bool) -> i64 {
+    macro_rules! num {
+        ($ty:ty, $n:expr) => {{
+            let arr: [u8; $n] = b[..$n].try_into().unwrap();
+            (if big_endian {
+                <$ty>::from_be_bytes(arr)
+            } else {
+                <$ty>::from_le_bytes(arr)
+            }) as i64
+        }};
+    }
+    match t {
+        ScalarType::Char => b[0] as i8 as i64,
+        ScalarType::UChar => b[0] as i64,
+        ScalarType::Short => num!(i16, 2),
+        ScalarType::UShort => num!(u16, 2),
+        ScalarType::Int => num!(i32, 4),
+        ScalarType::UInt => num!(u32, 4),
+        // Refused by `Stored::of`.
+        ScalarType::Float | ScalarType::Double => unreachable!("float list counts are refused"),
+    }
+}
+
+/// Checks the header's structure before ply-rs parses it, for what ply-rs gets wrong:
+///
+/// - it panics on a number that does not fit its integer type (found by fuzzing, in element
+///   counts and in the format version), so every digit run outside comments must fit a `u64`,
+///   and every `element NAME COUNT` line must have a count that fits a `usize`;
+/// - it keeps one entry per name, so a property named twice in an element would shift every
+///   later field of each record, and an element declared twice would merge into the first:
+///   both are errors that name the property or element;
+/// - a `property` line before any `element` line gets a debug dump from it.
+fn check_header_structure(path: &Path, header_text: &str) -> Result<()> {
+    let mut elements: Vec<(&str, usize)> = Vec::new();
+    let mut properties: Vec<(&str, usize)> = Vec::new();
     for (n, line) in header_text.lines().enumerate() {
         let mut tokens = line.split_ascii_whitespace();
         let keyword = tokens.next();
@@ -312,26 +500,80 @@ fn check_header_numbers(path: &Path, header_text: &str) -> Result<()> {
                 ),
             ));
         }
-        if keyword != Some("element") {
-            continue;
-        }
-        let (name, count) = (tokens.next(), tokens.next());
-        let valid = count.is_some_and(|c| c.parse::<usize>().is_ok()) && tokens.next().is_none();
-        if name.is_none() || !valid {
-            return Err(ply_err(
-                path,
-                format!(
-                    "malformed header: line {} '{line}' is not 'element NAME COUNT' with a count in 0..={}",
-                    n + 1,
-                    usize::MAX
-                ),
-            ));
+        match keyword {
+            Some("element") => {
+                let (name, count) = (tokens.next(), tokens.next());
+                let valid =
+                    count.is_some_and(|c| c.parse::<usize>().is_ok()) && tokens.next().is_none();
+                let Some(name) = name.filter(|_| valid) else {
+                    return Err(ply_err(
+                        path,
+                        format!(
+                            "malformed header: line {} '{line}' is not 'element NAME COUNT' with \
+                             a count in 0..={}",
+                            n + 1,
+                            usize::MAX
+                        ),
+                    ));
+                };
+                if let Some((_, first)) = elements.iter().find(|(e, _)| *e == name) {
+                    return Err(ply_err(
+                        path,
+                        format!(
+                            "malformed header: element '{name}' is declared twice (lines {} and \
+                             {}); a PLY file has one element of each name",
+                            first + 1,
+                            n + 1
+                        ),
+                    ));
+                }
+                elements.push((name, n));
+                properties.clear();
+            }
+            Some("property") => {
+                let Some((element, _)) = elements.last() else {
+                    return Err(ply_err(
+                        path,
+                        format!(
+                            "malformed header: line {} '{line}' declares a property before any \
+                             'element' line",
+                            n + 1
+                        ),
+                    ));
+                };
+                // The name is the last token: `property TYPE NAME` or
+                // `property list COUNT_TYPE ITEM_TYPE NAME`.
+                let Some(name) = line
+                    .split_ascii_whitespace()
+                    .last()
+                    .filter(|_| tokens.next().is_some())
+                else {
+                    continue; // ply-rs reports the malformed line
+                };
+                if let Some((_, first)) = properties.iter().find(|(p, _)| *p == name) {
+                    return Err(ply_err(
+                        path,
+                        format!(
+                            "malformed header: element '{element}' names the property '{name}' \
+                             twice (lines {} and {})",
+                            first + 1,
+                            n + 1
+                        ),
+                    ));
+                }
+                properties.push((name, n));
+            }
+            _ => {}
         }
     }
     Ok(())
 }
 
-fn vertex_layout(path: &Path, vertex: &ply_rs::ply::ElementDef) -> Result<Layout> {
+fn vertex_layout(
+    path: &Path,
+    vertex: &ply_rs::ply::ElementDef,
+    stored: &[Stored],
+) -> Result<Layout> {
     let index_of = |name: &str| vertex.properties.keys().position(|k| k == name);
     let mut wanted = Vec::with_capacity(14 + 45);
     let mut missing = Vec::new();
@@ -381,6 +623,17 @@ fn vertex_layout(path: &Path, vertex: &ply_rs::ply::ElementDef) -> Result<Layout
                     format!("element 'vertex' lacks the property '{name}'"),
                 ))
             }
+        }
+    }
+    // Lists the loader does not use are skipped (SPEC section 1: unknown properties are
+    // ignored); one it needs must be a number.
+    for &i in &wanted {
+        if matches!(stored[i], Stored::List { .. }) {
+            let name = vertex.properties.keys().nth(i).map_or("", String::as_str);
+            return Err(ply_err(
+                path,
+                format!("element 'vertex': property '{name}' is a list; 3DGS needs one number"),
+            ));
         }
     }
     Ok(Layout {
@@ -437,13 +690,50 @@ fn read_binary(
     path: &Path,
     reader: &mut impl Read,
     count: usize,
-    stride: usize,
     big_endian: bool,
-    types: &[ScalarType],
+    stored: &[Stored],
     layout: &Layout,
+    reserve_for: usize,
     scene: &mut Scene,
     report: &mut LoadReport,
 ) -> Result<()> {
+    reserve(scene, reserve_for);
+    let mut row = vec![0f32; stored.len()];
+    let mut sh = Vec::new();
+    let types: Option<Vec<ScalarType>> = stored
+        .iter()
+        .map(|p| match p {
+            Stored::Scalar(t) => Some(t.clone()),
+            Stored::List { .. } => None,
+        })
+        .collect();
+    let Some(types) = types else {
+        // A list among the vertex properties: records differ in length, so they are read one
+        // at a time (through the buffered reader), the lists read past.
+        let mut buf = [0u8; 8];
+        for i in 0..count {
+            let truncated =
+                |e: String| ply_err(path, format!("truncated payload at vertex {i}: {e}"));
+            for (p, slot) in stored.iter().zip(row.iter_mut()) {
+                match p {
+                    Stored::Scalar(t) => {
+                        let n = scalar_size(t);
+                        reader
+                            .read_exact(&mut buf[..n])
+                            .map_err(|e| truncated(e.to_string()))?;
+                        *slot = decode_scalar(t, &buf[..n], big_endian);
+                    }
+                    Stored::List { .. } => {
+                        skip_binary_row(path, reader, std::slice::from_ref(p), big_endian)
+                            .map_err(truncated)?;
+                    }
+                }
+            }
+            push_gaussian(&row, layout, scene, report, &mut sh);
+        }
+        return Ok(());
+    };
+    let stride: usize = types.iter().map(scalar_size).sum();
     let offsets: Vec<usize> = types
         .iter()
         .scan(0, |acc, t| {
@@ -459,13 +749,16 @@ fn read_binary(
         u.dedup();
         u
     };
-    reserve(scene, count);
-    let mut chunk = vec![0u8; stride * CHUNK_VERTICES.min(count.max(1))];
-    let mut row = vec![0f32; types.len()];
-    let mut sh = Vec::new();
+    // A stream's count was checked against no size (`reserve_for` is 0 then): it reads at
+    // most 1 MiB at a time, as it can trust no count for a larger buffer.
+    let mut chunk_vertices = CHUNK_VERTICES.min(count.max(1));
+    if reserve_for < count {
+        chunk_vertices = chunk_vertices.min(((1 << 20) / stride.max(1)).max(1));
+    }
+    let mut chunk = vec![0u8; stride * chunk_vertices];
     let mut done = 0;
     while done < count {
-        let n = (count - done).min(CHUNK_VERTICES);
+        let n = (count - done).min(chunk_vertices);
         let bytes = &mut chunk[..n * stride];
         reader
             .read_exact(bytes)
@@ -485,49 +778,85 @@ fn read_binary(
 fn read_ascii(
     path: &Path,
     reader: &mut impl BufRead,
-    skip_lines: usize,
+    before: &[(&str, usize)],
     count: usize,
-    types: &[ScalarType],
+    stored: &[Stored],
     layout: &Layout,
+    reserve_for: usize,
     scene: &mut Scene,
     report: &mut LoadReport,
 ) -> Result<()> {
     let mut line = String::new();
-    let mut next_line = |line: &mut String, what: &str| -> Result<()> {
+    // Lines are read through a cap, so a payload without line breaks cannot grow `line`
+    // without bound: a vertex of 59 properties is a few kB.
+    let mut next_line = |line: &mut String, what: &dyn Fn() -> String| -> Result<()> {
         line.clear();
         let n = reader
+            .by_ref()
+            .take(MAX_ASCII_LINE_BYTES as u64 + 1)
             .read_line(line)
-            .map_err(|e| ply_err(path, format!("reading {what}: {e}")))?;
+            .map_err(|e| ply_err(path, format!("reading {}: {e}", what())))?;
         if n == 0 {
             return Err(ply_err(
                 path,
-                format!("truncated payload: end of file while reading {what}"),
+                format!("truncated payload: end of file while reading {}", what()),
+            ));
+        }
+        if n > MAX_ASCII_LINE_BYTES {
+            return Err(ply_err(
+                path,
+                format!(
+                    "{}: a line longer than {MAX_ASCII_LINE_BYTES} bytes",
+                    what()
+                ),
             ));
         }
         Ok(())
     };
-    for _ in 0..skip_lines {
-        next_line(&mut line, "the elements before 'vertex'")?;
+    for (name, rows) in before {
+        for row in 0..*rows {
+            next_line(&mut line, &|| format!("element '{name}', row {row}"))?;
+        }
     }
-    reserve(scene, count);
-    let mut row = vec![0f32; types.len()];
+    reserve(scene, reserve_for);
+    let mut row = vec![0f32; stored.len()];
     let mut sh = Vec::new();
     for i in 0..count {
-        next_line(&mut line, &format!("vertex {i}"))?;
+        next_line(&mut line, &|| format!("vertex {i}"))?;
         let mut tokens = line.split_ascii_whitespace();
-        for (p, slot) in row.iter_mut().enumerate() {
-            let token = tokens.next().ok_or_else(|| {
+        let mut next = |p: usize| {
+            tokens.next().ok_or_else(|| {
                 ply_err(
                     path,
-                    format!("vertex {i}: expected {} values, found {p}", types.len()),
+                    format!(
+                        "vertex {i}: the line ends at property {p} of {}",
+                        stored.len()
+                    ),
                 )
-            })?;
-            *slot = parse_ascii_value(token).ok_or_else(|| {
+            })
+        };
+        for (p, (kind, slot)) in stored.iter().zip(row.iter_mut()).enumerate() {
+            let token = next(p)?;
+            let number = || {
                 ply_err(
                     path,
                     format!("vertex {i}, property {p}: '{token}' is not a number"),
                 )
-            })?;
+            };
+            match kind {
+                Stored::Scalar(_) => *slot = parse_ascii_value(token).ok_or_else(number)?,
+                Stored::List { .. } => {
+                    let items: usize = token.parse().map_err(|_| {
+                        ply_err(
+                            path,
+                            format!("vertex {i}, property {p}: '{token}' is not a list count"),
+                        )
+                    })?;
+                    for _ in 0..items {
+                        next(p)?;
+                    }
+                }
+            }
         }
         push_gaussian(&row, layout, scene, report, &mut sh);
     }
@@ -547,7 +876,7 @@ fn parse_ascii_value(token: &str) -> Option<f32> {
 }
 
 fn reserve(scene: &mut Scene, count: usize) {
-    // `count` was checked against the file size before this point.
+    // `count` was checked against the file size before this point (0 for a stream).
     scene.means.reserve(count);
     scene.opacities.reserve(count);
     scene.scales.reserve(count);

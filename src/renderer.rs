@@ -226,6 +226,10 @@ pub struct FrameStats {
     /// Tiles the weighted rasterize kernel walked, when the frame split the tiles by kernel
     /// (the strips rasterizer under rara clipping by planes with the mass weight; else 0).
     pub weighted_tiles: u32,
+    /// Gaussians not drawn because their footprint exceeds the bound
+    /// [`crate::constants::MAX_FOOTPRINT_SIGMA_PX`] (extreme scales, or a huge Gaussian right
+    /// in front of the camera).
+    pub oversized: u32,
     /// Longest tile list.
     pub max_tile_len: u32,
     /// Whether every tile pair and tile-list entry fitted the frame slot's buffers. `false`
@@ -409,7 +413,7 @@ impl Renderer {
         camera: &Camera,
         options: &RenderOptions,
     ) -> Result<(image::RgbaImage, FrameStats)> {
-        crate::camera::check_size(camera.width, camera.height)?;
+        camera.validate()?;
         let (w, h) = (camera.width, camera.height);
         let mut headless = match self.headless.take() {
             Some(h) => h,
@@ -569,7 +573,7 @@ impl Renderer {
         target: &Target,
         timings: Option<&mut PassTimer>,
     ) -> Result<()> {
-        crate::camera::check_size(camera.width, camera.height)?;
+        camera.validate()?;
         options.clip.validate()?;
         let (w, h) = (camera.width, camera.height);
         if target.size() != (w, h) {

@@ -277,7 +277,59 @@ fn hostile_cameras_fail_cleanly() {
     );
     assert_error(
         &rara(&render_args(scene, bad_values.to_str().unwrap(), out)),
-        &["bad_values.cameras.json", "positive fx/fy"],
+        &["bad_values.cameras.json", "must be positive"],
+    );
+    // A rotation must be one: orthonormal (within 1e-3) with determinant +1. Zero, rank
+    // deficient, scaled, sheared and mirrored matrices used to render black or distorted
+    // frames with exit 0.
+    let camera_with = |rotation: &str, extra: &str| {
+        format!(
+            "[{{\"width\": 64, \"height\": 48, \"position\": [0, 0, -3], \"rotation\": {rotation}, \"fx\": 50, \"fy\": 50{extra}}}]"
+        )
+    };
+    for (name, rotation, needle) in [
+        ("zero", "[[0,0,0],[0,0,0],[0,0,0]]", "not orthonormal"),
+        ("rank1", "[[1,0,0],[1,0,0],[0,0,1]]", "not orthonormal"),
+        ("scaled", "[[2,0,0],[0,2,0],[0,0,2]]", "not orthonormal"),
+        ("sheared", "[[1,0.1,0],[0,1,0],[0,0,1]]", "not orthonormal"),
+        ("mirrored", "[[-1,0,0],[0,1,0],[0,0,1]]", "reflection"),
+    ] {
+        let f = write(
+            &format!("{name}.cameras.json"),
+            camera_with(rotation, "").as_bytes(),
+        );
+        let o = rara(&render_args(scene, f.to_str().unwrap(), out));
+        assert_error(&o, &[&format!("{name}.cameras.json"), "camera 0", needle]);
+    }
+    // Four digits of a real rotation are still one.
+    let rounded = camera_with("[[0.7071,0,0.7071],[0,1,0],[-0.7071,0,0.7071]]", "");
+    let f = write("rounded.cameras.json", rounded.as_bytes());
+    let ok = dir().join("rounded.png");
+    assert_success(&rara(&render_args(
+        scene,
+        f.to_str().unwrap(),
+        ok.to_str().unwrap(),
+    )));
+    // NaN and infinity anywhere: JSON has neither, so they come as overflowing numbers.
+    let f = write(
+        "huge.cameras.json",
+        camera_with("[[1,0,0],[0,1,0],[0,0,1]]", "")
+            .replace("-3]", "1e39]")
+            .as_bytes(),
+    );
+    assert_error(
+        &rara(&render_args(scene, f.to_str().unwrap(), out)),
+        &["huge.cameras.json"],
+    );
+    let f = write(
+        "focal.cameras.json",
+        camera_with("[[1,0,0],[0,1,0],[0,0,1]]", "")
+            .replace("\"fx\": 50", "\"fx\": 1e30")
+            .as_bytes(),
+    );
+    assert_error(
+        &rara(&render_args(scene, f.to_str().unwrap(), out)),
+        &["focal.cameras.json", "at most 10000000 pixels"],
     );
 
     let o = rara(&[
@@ -641,4 +693,129 @@ fn bench_writes_table_json_and_trace() {
         "{text}"
     );
     assert!(text.contains("not segmented"), "{text}");
+}
+
+/// Issue 29: every input read is bounded by what is read (devices and pipes report no size),
+/// scenes stream from a pipe, outputs are checked before the render and never left empty,
+/// and exit codes are as documented (1 for errors, 2 for usage errors).
+#[test]
+fn bounded_reads_outputs_and_exit_codes() {
+    let (scene, cams) = good_scene();
+    let (scene, cams) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    let out = dir().join("bounded.png");
+    let out_s = out.to_str().unwrap();
+    for device in ["/dev/zero", "/dev/urandom"] {
+        let start = std::time::Instant::now();
+        let o = rara(&render_args(scene, device, out_s));
+        assert_error(&o, &[device, "more than 67108864 bytes", "cameras.json"]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(
+            start.elapsed().as_secs() < 30,
+            "{device} took {:?}",
+            start.elapsed()
+        );
+        let mut args = render_args(scene, cams, out_s);
+        args.extend(["--clip", device]);
+        assert_error(
+            &rara(&args),
+            &[device, "more than 1048576 bytes", "clip file"],
+        );
+        assert_error(&rara(&["info", device]), &[device, "not a PLY file"]);
+    }
+    // A cameras file larger than the cap through a pipe (stat says 0 bytes).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args(["render", scene, "--cameras", "/dev/stdin", "-o", out_s])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let feeder = std::thread::spawn(move || {
+        use std::io::Write;
+        let block = vec![b' '; 1 << 20];
+        for _ in 0..65 {
+            if stdin.write_all(&block).is_err() {
+                break; // rara stopped reading at the cap
+            }
+        }
+    });
+    let o = child.wait_with_output().unwrap();
+    feeder.join().unwrap();
+    assert_error(&o, &["/dev/stdin", "more than 67108864 bytes"]);
+
+    // A scene from a pipe loads, streamed.
+    let bytes = std::fs::read(scene).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args(["info", "/dev/stdin", "--json"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        use std::io::Write;
+        child.stdin.take().unwrap().write_all(&bytes).unwrap();
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_success(&o);
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(info["count"], 500);
+
+    // --background outside [0, 1] is a usage error (clap: exit 2).
+    let mut args = render_args(scene, cams, out_s);
+    args.extend(["--background", "1.5,0,0"]);
+    let o = rara(&args);
+    assert_error(&o, &["--background", "must lie in [0, 1]"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = rara(&["render", "--no-such-flag"]);
+    assert_eq!(o.status.code(), Some(2));
+
+    // The output is checked before the scene is even loaded ("loaded" never printed), and a
+    // failed render or write leaves nothing behind.
+    let missing_dir = dir().join("no/such/dir/out.png");
+    for (target, needle) in [
+        (dir(), "is a directory"),
+        (dir().join("out.jpg"), "unknown extension '.jpg'"),
+        (dir().join("out"), "no extension"),
+        (missing_dir.clone(), "does not exist"),
+    ] {
+        let o = rara(&render_args(scene, cams, target.to_str().unwrap()));
+        assert_error(&o, &[needle]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(!String::from_utf8_lossy(&o.stderr).contains("loaded"));
+    }
+    assert!(!missing_dir.parent().unwrap().exists());
+    if std::path::Path::new("/dev/full").exists() {
+        assert_error(
+            &rara(&render_args(scene, cams, "/dev/full")),
+            &["/dev/full", "No space left on device"],
+        );
+    }
+    let failed = dir().join("failed_render.png");
+    let missing_scene = dir().join("missing_scene.ply");
+    let o = rara(&render_args(
+        missing_scene.to_str().unwrap(),
+        cams,
+        failed.to_str().unwrap(),
+    ));
+    assert_error(&o, &["missing_scene.ply"]);
+    assert!(
+        !failed.exists(),
+        "a failed render left {}",
+        failed.display()
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(dir())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("failed_render"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+
+    // A zero quaternion in --clip-box names the rotation, not the half extents.
+    let mut args = render_args(scene, cams, out_s);
+    args.extend(["--clip-box", "0,0,0,1,1,1,0,0,0,0"]);
+    let o = rara(&args);
+    assert_error(&o, &["rotation", "not a rotation"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("half extents"));
 }

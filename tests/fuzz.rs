@@ -21,7 +21,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use rara::camera::Camera;
-use rara::ply::{read_ply, write_ply, PlyEncoding};
+use rara::clip::ClipFile;
+use rara::ply::{read_ply, read_ply_stream, write_ply, PlyEncoding};
 use rara::synth::Rng;
 
 /// Counts the largest single allocation made by threads that opted in.
@@ -416,7 +417,34 @@ fn mutate_bytes(rng: &mut Rng, input: &mut Vec<u8>) {
 }
 
 /// Replaces one JSON number or keyword with a hostile value, or breaks its structure.
-fn mutate_json(rng: &mut Rng, input: &mut Vec<u8>) {
+/// Fields of a cameras.json that `mutate_json` renames away.
+const CAMERA_FIELDS: &[&str] = &[
+    "\"width\"",
+    "\"height\"",
+    "\"fx\"",
+    "\"fy\"",
+    "\"position\"",
+    "\"rotation\"",
+];
+
+/// Fields of a clip file that `mutate_json` renames away.
+const CLIP_FIELDS: &[&str] = &[
+    "\"planes\"",
+    "\"box\"",
+    "\"center\"",
+    "\"half_extents\"",
+    "\"rotation\"",
+    "\"sphere\"",
+    "\"radius\"",
+    "\"invert\"",
+    "\"mode\"",
+    "\"weight\"",
+    "\"band\"",
+];
+
+/// Mutates a JSON text: a number replaced by an unusual value, a field renamed away (one of
+/// `fields`), deep nesting, or the top array's contents repeated.
+fn mutate_json(rng: &mut Rng, input: &mut Vec<u8>, fields: &[&str]) {
     let text = String::from_utf8_lossy(input).into_owned();
     // Token boundaries: runs of number characters.
     let numbers: Vec<(usize, usize)> = {
@@ -464,17 +492,7 @@ fn mutate_json(rng: &mut Rng, input: &mut Vec<u8>) {
         }
         3 => {
             // Drop a field.
-            let field = pick(
-                rng,
-                &[
-                    "\"width\"",
-                    "\"height\"",
-                    "\"fx\"",
-                    "\"fy\"",
-                    "\"position\"",
-                    "\"rotation\"",
-                ],
-            );
+            let field = pick(rng, fields);
             text.replacen(field, "\"unused\"", 1)
         }
         4 => {
@@ -537,6 +555,14 @@ fn check_cameras(cams: &[Camera]) -> Result<(), String> {
             && c.rotation.is_finite();
         if !valid {
             return Err(format!("camera {i} accepted with bad values"));
+        }
+        // An accepted rotation is one (the parser checks with a tolerance of 1e-3 per entry).
+        let gram = c.rotation.transpose() * c.rotation;
+        if !gram.abs_diff_eq(glam::Mat3::IDENTITY, 2e-3) || c.rotation.determinant() <= 0.0 {
+            return Err(format!(
+                "camera {i} accepted with rotation {:?}",
+                c.rotation
+            ));
         }
     }
     Ok(())
@@ -646,10 +672,25 @@ fn ply_loader_survives_mutated_headers_and_payloads() {
         },
         |input| {
             let len = input.len() as u64;
-            match read_ply(Cursor::new(input), len, Path::new("fuzz.ply")) {
-                Ok((scene, report)) => check_scene(&scene, report.vertices_in_file)
-                    .map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
-                Err(e) => Err(e.to_string()),
+            let sized = read_ply(Cursor::new(input), len, Path::new("fuzz.ply"));
+            // The same bytes as a stream of unknown length (a pipe) load the same scene, or
+            // fail too.
+            let streamed = read_ply_stream(Cursor::new(input), Path::new("fuzz.ply"));
+            match (sized, streamed) {
+                (Ok((scene, report)), Ok((twin, _))) => {
+                    if twin != scene {
+                        return Err("ACCEPTED BAD INPUT: the streamed scene differs".into());
+                    }
+                    check_scene(&scene, report.vertices_in_file)
+                        .map_err(|e| format!("ACCEPTED BAD INPUT: {e}"))
+                }
+                (Ok(_), Err(e)) => Err(format!("ACCEPTED BAD INPUT: only streamed fails: {e}")),
+                // A stream cannot check counts against a size, so it may fail differently (at
+                // the end of the input rather than before reading).
+                (Err(e), Ok(_)) if !e.to_string().contains("truncated payload") => Err(format!(
+                    "ACCEPTED BAD INPUT: only the sized read fails: {e}"
+                )),
+                (Err(e), _) => Err(e.to_string()),
             }
         },
     );
@@ -665,13 +706,83 @@ fn cameras_parser_survives_mutated_files() {
             if rng.next_u64() % 3 == 0 {
                 mutate_bytes(rng, input)
             } else {
-                mutate_json(rng, input)
+                mutate_json(rng, input, CAMERA_FIELDS)
             }
         },
         |input| {
             let text = String::from_utf8_lossy(input);
             match Camera::parse_all(&text, Path::new("fuzz.cameras.json")) {
                 Ok(cams) => check_cameras(&cams).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+                Err(e) => Err(e.to_string()),
+            }
+        },
+    );
+}
+
+fn clip_seeds() -> Vec<(String, Vec<u8>)> {
+    [
+        ("planes", r#"{"planes": [[1, 0, 0, 0.5], [0, -1, 0, 0.25]], "mode": "rara"}"#),
+        (
+            "box",
+            r#"{"box": {"center": [0, 0.5, 0], "half_extents": [1, 2, 0.5], "rotation": [0.9, 0.1, 0.3, 0.3]}, "invert": true, "weight": "length", "band": 2.5}"#,
+        ),
+        ("sphere", r#"{"sphere": {"center": [0, 0, 1], "radius": 0.75}, "mode": "hard"}"#),
+        ("box and plane", r#"{"planes": [[0, 0, 1, 0]], "box": {"center": [0, 0, 0], "half_extents": [1, 1, 1]}, "trace_all": true}"#),
+    ]
+    .into_iter()
+    .map(|(name, text)| (name.to_string(), text.as_bytes().to_vec()))
+    .collect()
+}
+
+fn check_clip(clip: &rara::Clip) -> Result<(), String> {
+    if !(clip.band.is_finite() && clip.band > 0.0) {
+        return Err(format!("band {}", clip.band));
+    }
+    match clip.region.as_ref().map(|r| &r.shape) {
+        Some(rara::clip::ClipShape::HalfSpaces(planes)) => {
+            if planes.is_empty() || planes.len() > rara::constants::MAX_CLIP_PLANES as usize {
+                return Err(format!("{} half-spaces", planes.len()));
+            }
+            for p in planes {
+                if !p.normal.is_finite()
+                    || (p.normal.length() - 1.0).abs() > 1e-4
+                    || !p.d.is_finite()
+                {
+                    return Err(format!("plane {p:?}"));
+                }
+            }
+        }
+        Some(rara::clip::ClipShape::Sphere { center, radius })
+            if !(center.is_finite() && radius.is_finite() && *radius > 0.0) =>
+        {
+            return Err(format!("sphere {center} {radius}"));
+        }
+        Some(rara::clip::ClipShape::Sphere { .. }) => {}
+        None => {}
+    }
+    Ok(())
+}
+
+/// Clip files (`--clip FILE.json`): mutated numbers, fields, nesting and bytes are parsed
+/// and built, and every accepted clip is one the kernels can take.
+#[test]
+fn clip_file_parser_survives_mutated_files() {
+    let seeds = clip_seeds();
+    fuzz(
+        "clip",
+        &seeds,
+        |rng, input| {
+            if rng.next_u64() % 3 == 0 {
+                mutate_bytes(rng, input)
+            } else {
+                mutate_json(rng, input, CLIP_FIELDS)
+            }
+        },
+        |input| {
+            let text = String::from_utf8_lossy(input);
+            let path = Path::new("fuzz.clip.json");
+            match ClipFile::parse(&text, path).and_then(ClipFile::into_clip) {
+                Ok(clip) => check_clip(&clip).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
                 Err(e) => Err(e.to_string()),
             }
         },

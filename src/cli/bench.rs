@@ -13,6 +13,7 @@ use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
 
 use super::clip_args::ClipArgs;
+use super::output::Output;
 use super::sweep::{default_range, with_moving_plane};
 use crate::{load_scene, median, resolve_camera, CameraArgs};
 
@@ -157,6 +158,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let path = args.scene.as_ref().expect("clap requires the scene");
     let camera = resolve_camera(&args.camera)?;
+    // The outputs are checked before the run, which can take minutes.
+    let json_out = args
+        .json
+        .as_deref()
+        .map(|p| Output::prepare(p, &["json"]))
+        .transpose()?;
+    let trace_out = args
+        .trace
+        .as_deref()
+        .map(|p| Output::prepare(p, &["json"]))
+        .transpose()?;
     let scene = load_scene(path)?;
     if scene.is_empty() {
         return Err(Error::InvalidInput(format!(
@@ -233,15 +245,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     print_table(&ctx, path, &camera, args, &results);
     let memory = renderer.headless_memory();
     println!("{}", super::describe_memory(&gpu_scene, &memory));
-    if let Some(out) = &args.json {
+    if let Some(out) = json_out {
         let mut report = json_report(&ctx, path, &camera, &results);
         report["memory"] = super::memory_json(&gpu_scene, &memory);
-        write_json(out, &report)?;
-        println!("wrote {}", out.display());
+        let shown = out.path().display().to_string();
+        out.write_json(&report)?;
+        println!("wrote {shown}");
     }
-    if let Some(out) = &args.trace {
-        write_json(out, &trace(&results))?;
-        println!("wrote {} (open in https://ui.perfetto.dev)", out.display());
+    if let Some(out) = trace_out {
+        let shown = out.path().display().to_string();
+        out.write_json(&trace(&results))?;
+        println!("wrote {shown} (open in https://ui.perfetto.dev)");
     }
     Ok(())
 }
@@ -452,13 +466,6 @@ fn trace(results: &[ModeResult]) -> serde_json::Value {
         }
     }
     serde_json::json!({"traceEvents": events, "displayTimeUnit": "ms"})
-}
-
-fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
-    std::fs::write(path, serde_json::to_string_pretty(value).unwrap()).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 /// The radix sort alone on `n` random pairs (full 32-bit keys, as the frame's depth sort uses),

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod clip_args;
+pub mod output;
 pub mod sweep;
 
 use rara::{FrameMemory, GpuScene};

@@ -101,6 +101,21 @@ pub fn eval_sh(sh: &[f32], degree: u32, dir: Vec3) -> Vec3 {
     (result + 0.5).max(Vec3::ZERO)
 }
 
+/// Why [`project_one`] draws nothing for a Gaussian.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Skipped {
+    /// Dropped by the clip test.
+    Clipped,
+    /// At or behind the near plane (`t.z <= 0.2`).
+    Culled,
+    /// Past the footprint bound ([`crate::constants::MAX_FOOTPRINT_SIGMA_PX`]).
+    Oversized,
+    /// A 2D covariance with `det <= 0`.
+    Degenerate,
+    /// Its visible footprint reaches no tile of the image.
+    NoTile,
+}
+
 /// Projects Gaussian `i`, or `None` when it is clipped away, culled or touches no tile.
 pub fn project_one(
     scene: &Scene,
@@ -108,9 +123,19 @@ pub fn project_one(
     clip: &Clip,
     i: usize,
 ) -> Option<ProjectedSplat> {
+    project_or_skip(scene, camera, clip, i).ok()
+}
+
+/// [`project_one`], saying why a Gaussian draws nothing.
+pub fn project_or_skip(
+    scene: &Scene,
+    camera: &Camera,
+    clip: &Clip,
+    i: usize,
+) -> Result<ProjectedSplat, Skipped> {
     let class = clip.classify(scene.means[i], scene.scales[i]);
     if class == Classification::Dropped {
-        return None;
+        return Err(Skipped::Clipped);
     }
     let w2c = camera.world_to_camera();
     // Rows of R_wc.
@@ -119,7 +144,7 @@ pub fn project_one(
     let rel = mu - camera.position;
     let t = Vec3::new(r_x.dot(rel), r_y.dot(rel), r_z.dot(rel));
     if t.z <= 0.2 {
-        return None;
+        return Err(Skipped::Culled);
     }
     let (fx, fy) = (camera.fx, camera.fy);
     let (w, h) = (camera.width as f32, camera.height as f32);
@@ -140,12 +165,21 @@ pub fn project_one(
     let s = scene.scales[i];
     let m0 = s * Vec3::new(cols[0].dot(j0), cols[1].dot(j0), cols[2].dot(j0));
     let m1 = s * Vec3::new(cols[0].dot(j1), cols[1].dot(j1), cols[2].dot(j1));
-    let a = m0.dot(m0) + 0.3;
+    // The footprint bound, before any square (see MAX_FOOTPRINT_SIGMA_PX); NaN fails it.
+    let m_max = m0.abs().max(m1.abs()).max_element();
+    let within = m_max <= crate::constants::MAX_FOOTPRINT_SIGMA_PX as f32;
+    if !within {
+        return Err(Skipped::Oversized);
+    }
+    let (aa, cc) = (m0.dot(m0), m1.dot(m1));
+    let a = aa + 0.3;
     let b = m0.dot(m1);
-    let c = m1.dot(m1) + 0.3;
-    let det = a * c - b * b;
+    let c = cc + 0.3;
+    // det = a c - b^2 by Lagrange's identity, without its cancellation (glsl/project_body.glsl).
+    let m_cross = m0.cross(m1);
+    let det = m_cross.dot(m_cross) + 0.3 * (aa + cc) + 0.09;
     if det <= 0.0 {
-        return None;
+        return Err(Skipped::Degenerate);
     }
     let conic = Vec3::new(c, -b, a) / det;
     let mid = 0.5 * (a + c);
@@ -155,12 +189,14 @@ pub fn project_one(
     let uv = Vec2::new(fx * t.x / t.z + cx, fy * t.y / t.z + cy);
     let tile = TILE_SIZE as f32;
     let (gx, gy) = tile_grid(camera);
-    let x0 = (((uv.x - radius) / tile) as i32).clamp(0, gx as i32);
-    let x1 = (((uv.x + radius + tile - 1.0) / tile) as i32).clamp(0, gx as i32);
-    let y0 = (((uv.y - radius) / tile) as i32).clamp(0, gy as i32);
-    let y1 = (((uv.y + radius + tile - 1.0) / tile) as i32).clamp(0, gy as i32);
+    // clamp(int(v), 0, g), clamped before the conversion as on the GPU (project_body.glsl).
+    let cell = |v: f32, g: u32| v.clamp(0.0, g as f32) as i32;
+    let x0 = cell((uv.x - radius) / tile, gx);
+    let x1 = cell((uv.x + radius + tile - 1.0) / tile, gx);
+    let y0 = cell((uv.y - radius) / tile, gy);
+    let y1 = cell((uv.y + radius + tile - 1.0) / tile, gy);
     if x1 <= x0 || y1 <= y0 {
-        return None;
+        return Err(Skipped::NoTile);
     }
     // Only tiles the visible footprint reaches (see footprint_touches_tile).
     let opacity = scene.opacities[i];
@@ -170,10 +206,10 @@ pub fn project_one(
             (x0..x1).any(|tx| footprint_touches_tile(uv, conic, q_max, tx as u32, ty as u32))
         });
     if !reaches_a_tile {
-        return None;
+        return Err(Skipped::NoTile);
     }
     let color = eval_sh(scene.sh_of(i), scene.sh_degree, rel.normalize());
-    Some(ProjectedSplat {
+    Ok(ProjectedSplat {
         index: i as u32,
         uv,
         depth: t.z,
@@ -184,6 +220,14 @@ pub fn project_one(
         cutoff: (class == Classification::Cutoff)
             .then(|| CutoffRay::new(mu, scene.scales[i], scene.rotations[i], camera.position)),
     })
+}
+
+/// How many Gaussians the footprint bound skips in this view (the GPU's
+/// `FrameStats::oversized`).
+pub fn count_oversized(scene: &Scene, camera: &Camera, clip: &Clip) -> usize {
+    (0..scene.len())
+        .filter(|&i| project_or_skip(scene, camera, clip, i) == Err(Skipped::Oversized))
+        .count()
 }
 
 /// Bound on `q = A dx^2 + 2B dx dy + C dy^2` where a splat of opacity `o` still reaches alpha
