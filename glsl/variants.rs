@@ -1,0 +1,516 @@
+// The kernel variants, read by build.rs (`include!`): each row is one SPIR-V module, a body of
+// this folder compiled with a set of defines. The `.comp` files here are the kernels that are
+// their own body; the `*_body.glsl` files are the bodies these rows compile.
+
+/// The kernel variants: one row per SPIR-V module that is a body of `glsl/` compiled with a set
+/// of defines. The source each row compiles is written out as a file would be (its description
+/// as `//` lines, `#version 460`, the defines, the include) and compiled under the name
+/// `glsl/NAME.comp`, so the words, debug strings included, are those a wrapper file gave.
+const VARIANTS: &[Variant] = &[
+    Variant {
+        name: "cutoff_tiles",
+        body: "cutoff_tiles_body.glsl",
+        defines: &[],
+        about: &[
+            "Stage 4b, cutoff tiles, reading through buffer loads (GPUs; see cutoff_tiles_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "cutoff_tiles_texels",
+        body: "cutoff_tiles_body.glsl",
+        defines: &["SPLAT_TEXELS"],
+        about: &[
+            "Stage 4b, cutoff tiles, reading the splats, the cutoff records, the tiles touched and the",
+            "emitted keys through the frame's texel views (CPU drivers; see cutoff_tiles_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "depth_counts",
+        body: "depth_counts_body.glsl",
+        defines: &[],
+        about: &[
+            "Stage 2, depth order, last step: the tiles touched in depth order (see depth_counts_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "depth_counts_texels",
+        body: "depth_counts_body.glsl",
+        defines: &["FRAME_TEXELS"],
+        about: &[
+            "Stage 2, depth order, last step: the tiles touched in depth order, reading through the",
+            "frame's texel views (CPU drivers); see depth_counts_body.glsl.",
+        ],
+    },
+    Variant {
+        name: "depth_keys",
+        body: "depth_keys_body.glsl",
+        defines: &[],
+        about: &[
+            "Stage 2, depth order, first step: the depth keys (see depth_keys_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "depth_keys_texels",
+        body: "depth_keys_body.glsl",
+        defines: &["FRAME_TEXELS"],
+        about: &[
+            "Stage 2, depth order, first step: the depth keys, reading through the frame's texel views",
+            "(CPU drivers); see depth_keys_body.glsl.",
+        ],
+    },
+    Variant {
+        name: "emit",
+        body: "emit_body.glsl",
+        defines: &[],
+        about: &[
+            "Stage 4, emit (see emit_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "emit_rara",
+        body: "emit_body.glsl",
+        defines: &["RECORD_CUTOFF_PAIRS"],
+        about: &[
+            "Stage 4, emit, for rara clipping by planes with the mass weight: cutoff splats' pairs are",
+            "classified per tile by the next stage (see emit_body.glsl, cutoff_tiles.comp).",
+        ],
+    },
+    Variant {
+        name: "emit_rara_texels",
+        body: "emit_body.glsl",
+        defines: &["RECORD_CUTOFF_PAIRS", "SPLAT_TEXELS"],
+        about: &[
+            "Stage 4, emit for rara clipping by planes with the mass weight, reading the depth order, the",
+            "first pairs and the projected splats through the frame's texel views (CPU drivers; see",
+            "emit_body.glsl, cutoff_tiles.comp).",
+        ],
+    },
+    Variant {
+        name: "emit_texels",
+        body: "emit_body.glsl",
+        defines: &["SPLAT_TEXELS"],
+        about: &[
+            "Stage 4, emit, reading the depth order, the first pairs and the projected splats through the",
+            "frame's texel views (CPU drivers; see emit_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg0",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 0"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 0 with the coefficients stored as 32-bit floats",
+            "(see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg0_sh16",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 0 with the coefficients stored as half floats,",
+            "two to a uint (ShPrecision::F16; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg0_sh16_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 0 with the coefficients stored as half floats, two to",
+            "a uint (ShPrecision::F16), reading the Gaussians and coefficients through the frame's texel",
+            "views (CPU drivers; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg0_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 0", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 0 with the coefficients stored as 32-bit floats,",
+            "reading the Gaussians and coefficients through the frame's texel views (CPU drivers; see",
+            "project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg1",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 1"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 1 with the coefficients stored as 32-bit floats",
+            "(see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg1_sh16",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 1 with the coefficients stored as half floats,",
+            "two to a uint (ShPrecision::F16; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg1_sh16_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 1 with the coefficients stored as half floats, two to",
+            "a uint (ShPrecision::F16), reading the Gaussians and coefficients through the frame's texel",
+            "views (CPU drivers; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg1_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 1", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 1 with the coefficients stored as 32-bit floats,",
+            "reading the Gaussians and coefficients through the frame's texel views (CPU drivers; see",
+            "project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg2",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 2"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 2 with the coefficients stored as 32-bit floats",
+            "(see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg2_sh16",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 2 with the coefficients stored as half floats,",
+            "two to a uint (ShPrecision::F16; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg2_sh16_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 2 with the coefficients stored as half floats, two to",
+            "a uint (ShPrecision::F16), reading the Gaussians and coefficients through the frame's texel",
+            "views (CPU drivers; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg2_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 2", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 2 with the coefficients stored as 32-bit floats,",
+            "reading the Gaussians and coefficients through the frame's texel views (CPU drivers; see",
+            "project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg3",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 3"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 3 with the coefficients stored as 32-bit floats",
+            "(see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg3_sh16",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 3 with the coefficients stored as half floats,",
+            "two to a uint (ShPrecision::F16; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg3_sh16_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 3 with the coefficients stored as half floats, two to",
+            "a uint (ShPrecision::F16), reading the Gaussians and coefficients through the frame's texel",
+            "views (CPU drivers; see project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "project_deg3_texels",
+        body: "project_body.glsl",
+        defines: &["SH_DEGREE 3", "SCENE_TEXELS"],
+        about: &[
+            "Stage 1, project, for scenes of SH degree 3 with the coefficients stored as 32-bit floats,",
+            "reading the Gaussians and coefficients through the frame's texel views (CPU drivers; see",
+            "project_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT 0"],
+        about: &[
+            "Stage 7, rasterize, GPU layout (one invocation per pixel), no rara clipping",
+            "(see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_length",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the length weight",
+            "(see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_mass",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the mass weight",
+            "(see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT 0", "SPLAT_TEXELS"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows, splats fetched from",
+            "texel buffers), no rara clipping (see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_length",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows, splats fetched from",
+            "texel buffers), rara clipping with the length weight (see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_mass",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows, splats fetched from",
+            "texel buffers), rara clipping with the mass weight (see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "sort_count_own_counts",
+        body: "sort_count_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 0"],
+        about: &[
+            "Radix sort count step, CPU-driver layout, over separate keys (the first pass of a sort of",
+            "separate keys and values).",
+        ],
+    },
+    Variant {
+        name: "sort_count_own_counts_pairs",
+        body: "sort_count_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 1"],
+        about: &[
+            "Radix sort count step, CPU-driver layout, over packed pairs (every pass but the first of a sort",
+            "of separate keys and values, and every pass of a sort of packed pairs).",
+        ],
+    },
+    Variant {
+        name: "sort_local_2",
+        body: "sort_local_body.glsl",
+        defines: &["LOCAL_PASSES 2"],
+        about: &[
+            "Radix sort, 2 passes after the first of a segmented sort of small buckets, one invocation",
+            "per bucket, by the 2 digits after the top one (see sort_local_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "sort_local_3",
+        body: "sort_local_body.glsl",
+        defines: &["LOCAL_PASSES 3"],
+        about: &[
+            "Radix sort, 3 passes after the first of a segmented sort of small buckets, one invocation",
+            "per bucket, by the 3 digits after the top one (see sort_local_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "sort_scatter_own_counts",
+        body: "sort_scatter_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 0", "SORT_PAIRS_OUT 0"],
+        about: &[
+            "Radix sort scatter step, CPU-driver layout: separate keys and values in and out (a sort of one",
+            "pass).",
+        ],
+    },
+    Variant {
+        name: "sort_scatter_own_counts_from_pairs",
+        body: "sort_scatter_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 1", "SORT_PAIRS_OUT 0"],
+        about: &[
+            "Radix sort scatter step, CPU-driver layout: packed pairs in, separate keys and values out (the",
+            "last of several passes).",
+        ],
+    },
+    Variant {
+        name: "sort_scatter_own_counts_pairs",
+        body: "sort_scatter_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 1", "SORT_PAIRS_OUT 1"],
+        about: &[
+            "Radix sort scatter step, CPU-driver layout: packed pairs in and out (the passes between the",
+            "first and the last, and every pass of a sort of packed pairs).",
+        ],
+    },
+    Variant {
+        name: "sort_scatter_own_counts_pairs_bound",
+        body: "sort_scatter_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 1", "SORT_PAIRS_OUT 1", "SORT_OUT_BOUND 1"],
+        about: &[
+            "Radix sort scatter step, CPU-driver layout: packed pairs in and out, written through the",
+            "pass's bound storage buffer (see SORT_OUT_BOUND in sort_scatter_own_counts_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "sort_scatter_own_counts_to_pairs",
+        body: "sort_scatter_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 0", "SORT_PAIRS_OUT 1"],
+        about: &[
+            "Radix sort scatter step, CPU-driver layout: separate keys and values in, packed pairs out (the",
+            "first of several passes).",
+        ],
+    },
+    Variant {
+        name: "sort_scatter_own_counts_to_pairs_bound",
+        body: "sort_scatter_own_counts_body.glsl",
+        defines: &["SORT_PAIRS_IN 0", "SORT_PAIRS_OUT 1", "SORT_OUT_BOUND 1"],
+        about: &[
+            "Radix sort scatter step, CPU-driver layout: separate keys and values in, packed pairs out,",
+            "written through the pass's bound storage buffer (see SORT_OUT_BOUND in",
+            "sort_scatter_own_counts_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "tile_ranges",
+        body: "tile_ranges_body.glsl",
+        defines: &[],
+        about: &[
+            "Stage 6, tile ranges (see tile_ranges_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "tile_ranges_texels",
+        body: "tile_ranges_body.glsl",
+        defines: &["FRAME_TEXELS"],
+        about: &[
+            "Stage 6, tile ranges, reading the sorted keys through the frame's texel views (CPU",
+            "drivers); see tile_ranges_body.glsl.",
+        ],
+    },
+    Variant {
+        name: "write_target_buffer_rgba16f",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_BUFFER_FORMAT BUFFER_RGBA16F"],
+        about: &[
+            "Stage 8, write target, into an rgba16f buffer reached by device address (see",
+            "write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_buffer_rgba16f_texels",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_BUFFER_FORMAT BUFFER_RGBA16F", "STATE_TEXELS"],
+        about: &[
+            "Stage 8, write target, into an rgba16f buffer reached by device address, reading the",
+            "state through the frame's texel view (CPU drivers; see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_buffer_rgba32f",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_BUFFER_FORMAT BUFFER_RGBA32F"],
+        about: &[
+            "Stage 8, write target, into an rgba32f buffer reached by device address (see",
+            "write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_buffer_rgba32f_texels",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_BUFFER_FORMAT BUFFER_RGBA32F", "STATE_TEXELS"],
+        about: &[
+            "Stage 8, write target, into an rgba32f buffer reached by device address, reading the",
+            "state through the frame's texel view (CPU drivers; see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_buffer_rgba8",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_BUFFER_FORMAT BUFFER_RGBA8"],
+        about: &[
+            "Stage 8, write target, into an rgba8 buffer reached by device address (see",
+            "write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_buffer_rgba8_texels",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_BUFFER_FORMAT BUFFER_RGBA8", "STATE_TEXELS"],
+        about: &[
+            "Stage 8, write target, into an rgba8 buffer reached by device address, reading the",
+            "state through the frame's texel view (CPU drivers; see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_image_rgba16f",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_IMAGE_FORMAT rgba16f"],
+        about: &[
+            "Stage 8, write target, into a storage image of format rgba16f (see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_image_rgba16f_texels",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_IMAGE_FORMAT rgba16f", "STATE_TEXELS"],
+        about: &[
+            "Stage 8, write target, into a storage image of format rgba16f, reading the state through the",
+            "frame's texel view (CPU drivers; see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_image_rgba32f",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_IMAGE_FORMAT rgba32f"],
+        about: &[
+            "Stage 8, write target, into a storage image of format rgba32f (see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_image_rgba32f_texels",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_IMAGE_FORMAT rgba32f", "STATE_TEXELS"],
+        about: &[
+            "Stage 8, write target, into a storage image of format rgba32f, reading the state through the",
+            "frame's texel view (CPU drivers; see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_image_rgba8",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_IMAGE_FORMAT rgba8"],
+        about: &[
+            "Stage 8, write target, into a storage image of format rgba8 (see write_target_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_target_image_rgba8_texels",
+        body: "write_target_body.glsl",
+        defines: &["TARGET_IMAGE_FORMAT rgba8", "STATE_TEXELS"],
+        about: &[
+            "Stage 8, write target, into a storage image of format rgba8, reading the state through the",
+            "frame's texel view (CPU drivers; see write_target_body.glsl).",
+        ],
+    },
+];
