@@ -277,7 +277,7 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
     return clamp(inside / (t2 - t1), 0.0, 1.0);
 }
 
-// Per-tile classes of a cutoff splat's pairs (cutoff_tiles.comp). Across one 16x16 tile a cutoff
+// Per-tile classes of a cutoff splat's pairs (cutoff_tiles). Across one 16x16 tile a cutoff
 // splat is often drawn with weight 1 at every pixel, or adds nothing at any (plant at 640x480:
 // 23-47 % and 24-41 % of its cutoff pairs), yet the rasterizer pays the per-pixel weight for
 // every pixel of every cutoff pair. This stage therefore bounds the weight over the tile's rays and

@@ -1,5 +1,5 @@
 // Stage 4b, cutoff tiles (rara clipping by planes with the mass weight): classifies the cutoff
-// splats' pairs, which emit_rara.comp wrote at cutoff_pairs, by tile (cutoff_tile_class in
+// splats' pairs, which emit_rara wrote at cutoff_pairs, by tile (cutoff_tile_class in
 // clip.glsl). A pair whose weight is 1 at every pixel of its tile loses the PAIR_WEIGHTED that
 // emit gave it, and the rasterizer draws it there as a plain splat; a pair that adds nothing
 // to any pixel of its tile gets the key `tile count`, which the sort puts after every tile and the
@@ -21,7 +21,7 @@
 // pairs it leaves stay unclassified, which draws them exactly at the partial pairs' cost, and
 // the workgroup's other invocations take the splats not yet begun.
 //
-// SPLAT_TEXELS (cutoff_tiles_texels.comp, CPU drivers): the splats, the cutoff records, the
+// SPLAT_TEXELS (cutoff_tiles_texels, CPU drivers): the splats, the cutoff records, the
 // tiles touched, the emitted keys and the clip planes are read through the frame's texel views,
 // which a CPU driver loads as gathers, where a buffer load is a scalar loop over the lanes per
 // 64-bit word.

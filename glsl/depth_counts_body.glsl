@@ -3,7 +3,7 @@
 // depth order lets the pair sort order by tile alone (a few bits) instead of by tile and depth
 // (32 more bits), since a stable sort keeps each tile's pairs in depth order.
 //
-// Included by depth_counts.comp and depth_counts_texels.comp (FRAME_TEXELS: CPU drivers, the reads
+// Included by depth_counts and depth_counts_texels (FRAME_TEXELS: CPU drivers, the reads
 // through the frame's texel views, src/stages/mod.rs).
 #include "common.glsl"
 

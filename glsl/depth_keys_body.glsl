@@ -4,7 +4,7 @@
 // the stable depth sort that follows keeps index order on equal depths (SPEC: ties by index).
 // Depths are > 0.2, so their float bits order like the floats.
 //
-// Included by depth_keys.comp and depth_keys_texels.comp (FRAME_TEXELS: CPU drivers, the reads
+// Included by depth_keys and depth_keys_texels (FRAME_TEXELS: CPU drivers, the reads
 // through the frame's texel views, src/stages/mod.rs).
 #include "common.glsl"
 

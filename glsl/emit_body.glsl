@@ -4,9 +4,9 @@
 // sort by tile id leaves every tile's list in that order. Pairs past the capacity are not
 // written: the host sees the total, grows the buffers and renders the frame again.
 //
-// RECORD_CUTOFF_PAIRS (emit_rara.comp, rara clipping by planes with the mass weight): each
+// RECORD_CUTOFF_PAIRS (emit_rara, rara clipping by planes with the mass weight): each
 // cutoff splat also records where its pairs start, and the first invocation writes the
-// dispatch of the cutoff-tiles stage (cutoff_tiles.comp), which classifies those pairs by tile.
+// dispatch of the cutoff-tiles stage (cutoff_tiles), which classifies those pairs by tile.
 // That work runs only for cutoff splats: done here, every invocation of a SIMD vector would
 // pay it, masked, for every tile of its own (plant at 640x480: emit 13 -> 63 ms).
 //
@@ -85,7 +85,7 @@ void main() {
     if (pc.round_index > 0u) {
         slot = pc.progress.v[j];
     }
-    // A cutoff splat's pairs take the clip weight in the rasterizer (until cutoff_tiles.comp
+    // A cutoff splat's pairs take the clip weight in the rasterizer (until cutoff_tiles
     // finds a tile where it is 1 throughout).
     uint value = p.cutoff != NO_CUTOFF ? i | PAIR_WEIGHTED : i;
     FootprintRows rows = footprint_rows(p.uv, p.conic, q_max);

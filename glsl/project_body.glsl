@@ -5,7 +5,7 @@
 // and a drawn flag that the depth-order stage scans into each drawn Gaussian's sort slot. Cutoff Gaussians also get a compact side record (CutoffRecord)
 // for the rasterizer's per-pixel weight; the others cost nothing extra.
 //
-// Included by project_deg<D>.comp (SH of degree D in 32-bit floats) and project_deg<D>_sh16.comp
+// Included by project_deg<D> (SH of degree D in 32-bit floats) and project_deg<D>_sh16
 // (SH_HALF: half floats, two to a uint).
 #include "common.glsl"
 #include "sh.glsl"

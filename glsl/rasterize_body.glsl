@@ -3,8 +3,8 @@
 //
 // PIXELS_PER_INVOCATION (P) and COLUMNS_PER_INVOCATION (C) set how pixels map to invocations:
 // invocation (x, y) owns the C x P pixels (x C + c, y P + r), c < C, r < P: C columns of a
-// strip of P rows. The kernels rasterize*.comp (P = C = 1, for GPUs: 256 threads per tile) and
-// rasterize_strips*.comp (P = 16, C = 2, for CPU drivers such as lavapipe) include this file.
+// strip of P rows. The kernels rasterize* (P = C = 1, for GPUs: 256 threads per tile) and
+// rasterize_strips* (P = 16, C = 2, for CPU drivers such as lavapipe) include this file.
 // On lavapipe every load of a splat is paid once per SIMD vector of 8 invocations, so sharing
 // it among more pixels pays: on plant 16 rows measured fastest of 1, 2, 4, 8, 16, and then 2
 // columns (8 invocations per tile, one SIMD vector) cut the unclipped rasterize time by a
@@ -34,7 +34,7 @@
 // most two intervals of t); a cutoff splat's opacity is then scaled by its weight along that
 // ray (clip.glsl), from its cutoff record (the splat carries the record's index). The pairs
 // that take this path carry PAIR_WEIGHTED in their value: emit sets it on every pair of a
-// cutoff splat, and cutoff_tiles.comp clears it where the weight is 1 at every pixel of the
+// cutoff splat, and cutoff_tiles clears it where the weight is 1 at every pixel of the
 // tile. The other pairs take the plain path.
 // CUTOFF_WEIGHT selects the variant: 0 (no rara clipping: none of that code), CLIP_WEIGHT_MASS
 // + 1 or CLIP_WEIGHT_LENGTH + 1.

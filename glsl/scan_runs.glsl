@@ -1,4 +1,4 @@
-// Prefix sum, CPU-driver layout (ScanLayout::Runs, scan_runs_*.comp): every invocation owns a
+// Prefix sum, CPU-driver layout (ScanLayout::Runs, scan_runs_*): every invocation owns a
 // run of SCAN_RUN consecutive elements. It sums them (scan_runs_reduce), one invocation scans
 // the runs' sums in order (scan_runs_top), and each invocation then scans its run again from
 // its run's offset (scan_runs_down). No shared memory, barriers or subgroup operations: a CPU

@@ -125,7 +125,7 @@ void load_sh(ShCoefficients sh, uint base, out float values[SH_VALUES]) {
 // Coefficient k (its three channels) of the loaded values.
 #define SH_COEF(k) vec3(values[3u * (k)], values[3u * (k) + 1u], values[3u * (k) + 2u])
 
-// SH_DEGREE, the scene's degree, is fixed per kernel (project_deg*.comp): a CPU driver would
+// SH_DEGREE, the scene's degree, is fixed per kernel (project_deg*): a CPU driver would
 // otherwise run every band's loads and sums under a mask whatever the scene's degree (plant,
 // degree 0: the project pass 30 -> 24 ms without the masked bands 1-3).
 vec3 eval_sh(ShCoefficients sh, uint base, vec3 dir) {

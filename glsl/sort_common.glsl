@@ -18,9 +18,9 @@ struct SortInfo {
     uint seg_runs;      // runs of the passes that sort the buckets in runs (SortRuns below)
     uvec2 seg_pad;
     uvec4 pass_args[3]; // indirect dispatch of passes 1, 2, 3: a workgroup per SORT_OWN_WORKGROUP
-                        // runs of a segmented sort, none for a pass that sort_local_*.comp
+                        // runs of a segmented sort, none for a pass that sort_local_*
                         // made, block_args where the sort is not segmented
-    uvec4 local_args;   // indirect dispatch of sort_local_*.comp: a workgroup per
+    uvec4 local_args;   // indirect dispatch of sort_local_*: a workgroup per
                         // SORT_OWN_WORKGROUP buckets where every bucket is small enough
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer SortInfoRef { SortInfo s; };

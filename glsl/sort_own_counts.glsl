@@ -1,4 +1,4 @@
-// Radix sort, CPU-driver layout (SortLayout::OwnCounts, sort_{count,scatter}_own_counts*.comp):
+// Radix sort, CPU-driver layout (SortLayout::OwnCounts, sort_{count,scatter}_own_counts*):
 // every invocation owns a run of consecutive keys (SORT_OWN_WORKGROUP runs make one block;
 // see own_run) and counts the SORT_OWN_RADIX digits of its run in a histogram of its own
 // (own_counts below). A CPU driver runs a workgroup on one thread, so a private counter costs

@@ -1,11 +1,11 @@
 // Radix sort, scatter step, CPU-driver layout (SortLayout::OwnCounts; see
 // sort_own_counts.glsl): each invocation takes its run's first output position per digit from
 // the scanned histogram and writes its keys in order. Stable, with no atomics, barriers or
-// subgroup operations. Included by sort_scatter_own_counts*.comp, which set SORT_PAIRS_IN and
+// subgroup operations. Included by sort_scatter_own_counts*, which set SORT_PAIRS_IN and
 // SORT_PAIRS_OUT.
 #include "sort_own_counts.glsl"
 
-// SORT_OUT_BOUND (the *_bound.comp kernels, packed pairs out): the pairs are written through
+// SORT_OUT_BOUND (the *_bound kernels, packed pairs out): the pairs are written through
 // the storage buffer at binding 3 of the pass's set (SortTexels), not through the buffer
 // reference keys_out. gallivm stores either one lane at a time, but a bound buffer's lane loop
 // takes a 32-bit index into one base pointer where a reference takes a 64-bit address per lane,

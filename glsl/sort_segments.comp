@@ -3,7 +3,7 @@
 // digit, and each of its buckets is now sorted on its own by the other digits, least
 // significant first, so that the work on a bucket stays in the cache instead of streaming the
 // whole output through it in every pass. This kernel lists the buckets and chooses how:
-// - where no bucket holds more than local_max_keys keys, sort_local_*.comp give every bucket
+// - where no bucket holds more than local_max_keys keys, sort_local_* give every bucket
 //   to one invocation, which sorts it by all the other digits in turn (local_args);
 // - otherwise the passes after the first run as before, count, scan and scatter, over runs
 //   that never straddle a bucket: each bucket is cut into runs of
@@ -30,7 +30,7 @@ layout(push_constant) uniform Push {
     U32s hist;          // the first pass's scanned histogram
     SortRuns table;     // out: the buckets, then the runs of the passes after the first
     uint passes;        // the sort's radix passes, 2 to 4
-    uint local_passes;  // of the passes after the first, how many sort_local_*.comp can make
+    uint local_passes;  // of the passes after the first, how many sort_local_* can make
     uint local_max_keys; // the largest bucket it takes (stages::sort::local_max_keys)
 } pc;
 
@@ -68,7 +68,7 @@ void main() {
             first_run = r;
         }
     }
-    // Passes 1 .. local_passes are sort_local_*.comp's where every bucket is small enough; the
+    // Passes 1 .. local_passes are sort_local_*'s where every bucket is small enough; the
     // others sort the buckets in runs.
     bool local = pc.local_passes > 0u && largest <= pc.local_max_keys;
     uint first_in_runs = local ? 1u + pc.local_passes : 1u;

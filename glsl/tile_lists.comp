@@ -1,6 +1,6 @@
 // Stage 4c, tile lists (CPU drivers, rara clipping by planes with the mass weight): one
 // invocation per tile puts the tile's id in one of two lists, the tiles that hold a weighted
-// pair (cutoff_tiles.comp flagged them) and the rest, and counts it into that list's indirect
+// pair (cutoff_tiles flagged them) and the rest, and counts it into that list's indirect
 // dispatch. The rasterizer then runs its weighted kernel over the first list and its plain
 // kernel over the second.
 //
@@ -11,7 +11,7 @@
 // (a plane far away): rasterize 159-164 ms for the weighted kernel against 146-153 ms for the
 // plain one, the same image.
 //
-// cutoff_tiles.comp sets flags[tile] for every tile where it leaves a pair weighted, and
+// cutoff_tiles sets flags[tile] for every tile where it leaves a pair weighted, and
 // flags[tile_count] when it left pairs unclassified (its loop budget ran out): every tile then
 // goes in the weighted list.
 #version 460

@@ -1,9 +1,9 @@
 // Stage 6, tile ranges: one invocation per sorted pair marks where each tile's list starts and
 // ends (ranges[tile] = [start, end), zero-filled beforehand for empty tiles). Keys of
-// tile_count and above (pairs cutoff_tiles.comp found to add nothing) sort after every tile and
+// tile_count and above (pairs cutoff_tiles found to add nothing) sort after every tile and
 // belong to none.
 //
-// Included by tile_ranges.comp and tile_ranges_texels.comp (FRAME_TEXELS: CPU drivers, the reads
+// Included by tile_ranges and tile_ranges_texels (FRAME_TEXELS: CPU drivers, the reads
 // through the frame's texel views, src/stages/mod.rs).
 #include "common.glsl"
 #include "sort_common.glsl"

@@ -3,13 +3,13 @@
 //   background: out = (C + T bg.rgb, (1 - T) + T bg.a)
 //   over:       out = (C + T dst.rgb, (1 - T) + T dst.a), dst = what the target holds
 // i.e. the splats composited front to back, then "over" the background or the target
-// (premultiplied alpha). The kernels write_target_image_<format>.comp (a storage image at
-// set 0, binding 0; GLSL needs its format to load it) and write_target_buffer_<format>.comp (a
+// (premultiplied alpha). The kernels write_target_image_<format> (a storage image at
+// set 0, binding 0; GLSL needs its format to load it) and write_target_buffer_<format> (a
 // buffer reached by device address, rows tightly packed) include this file. A buffer's format
 // is a kernel of its own rather than a branch: a CPU driver runs every branch's loads and
 // stores under a mask, each a scalar loop over the SIMD lanes (lavapipe, plant at 640x480:
 // write target 10.4 -> 6.0 ms for the rgba8 buffer, the same image). With STATE_TEXELS
-// (write_target_*_texels.comp, CPU drivers) the state is read through the frame's texel view
+// (write_target_*_texels, CPU drivers) the state is read through the frame's texel view
 // (binding 8 of frame_texels.glsl; set 1 of the image kernels, set 0 of the buffer kernels): a
 // gather, where a buffer load is a loop over the lanes per 64-bit word (lavapipe, plant at
 // 1280x960, builds in turn, four runs: 21.8-23.7 -> 9.9-13.1 ms; 5.3-5.8 -> 3.8-4.2 ms at

@@ -86,10 +86,10 @@ pub struct GpuSortInfo {
     /// Unused.
     pub seg_pad: [u32; 2],
     /// Indirect dispatch arguments of passes 1, 2 and 3: a workgroup per `SORT_OWN_WORKGROUP`
-    /// runs of a segmented sort, none for a pass that `sort_local_*.comp` made, `block_args`
+    /// runs of a segmented sort, none for a pass that `sort_local_*` made, `block_args`
     /// where the sort is not segmented.
     pub pass_args: [[u32; 4]; 3],
-    /// Indirect dispatch arguments of `sort_local_*.comp`: a workgroup per `SORT_OWN_WORKGROUP`
+    /// Indirect dispatch arguments of `sort_local_*`: a workgroup per `SORT_OWN_WORKGROUP`
     /// buckets of a segmented sort whose buckets are all small enough, else none.
     pub local_args: [u32; 4],
 }

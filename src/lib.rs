@@ -1,7 +1,8 @@
 //! rara: a 3D Gaussian Splatting renderer on raw Vulkan compute, with RaRa clipping.
 //!
 //! The frame is a pipeline of compute stages, each visible three times under one name: the
-//! kernel `glsl/<stage>.comp`, the host side that records it in [`stages`], and the CPU twin in
+//! kernel `glsl/<stage>_body.glsl` (or `glsl/<stage>.comp`; its variants are the rows of
+//! `glsl/variants.rs`), the host side that records it in [`stages`], and the CPU twin in
 //! [`reference`](mod@reference) that the tests use as the oracle:
 //!
 //! 1. `project`: clip classification, cull, 2D conic, radius, tiles touched, SH colour per

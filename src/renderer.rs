@@ -310,7 +310,7 @@ struct HeadlessFrame {
 }
 
 /// Sort key bits of the frame's pair sort: enough bits for the tile id and for the tile count,
-/// the key of pairs that add nothing (`glsl/cutoff_tiles.comp`). The pairs are emitted in depth
+/// the key of pairs that add nothing (`cutoff_tiles`). The pairs are emitted in depth
 /// order, which the stable sort keeps within each tile.
 pub fn key_bits(width: u32, height: u32) -> u32 {
     let (gx, gy) = tile_grid(width, height);

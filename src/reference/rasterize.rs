@@ -1,5 +1,5 @@
-//! CPU twin of the tile lists (emit + sort + tile ranges) and of `glsl/rasterize.comp`
-//! (SPEC section 4).
+//! CPU twin of the tile lists (emit + sort + tile ranges) and of the rasterizer
+//! (`glsl/rasterize_body.glsl`, SPEC section 4).
 
 use glam::{DVec3, Vec2, Vec3};
 

@@ -1,12 +1,12 @@
 //! Stage 4b, rara clipping by planes with the mass weight only: classifies each cutoff splat's
-//! pairs by tile (`glsl/cutoff_tiles.comp`). A pair whose clip weight is 1 at every pixel of
+//! pairs by tile (`glsl/cutoff_tiles_body.glsl`). A pair whose clip weight is 1 at every pixel of
 //! its tile loses the [`crate::constants::PAIR_WEIGHTED`] that emit gave it, so it is drawn as
 //! a plain splat there; a pair that adds nothing to its tile leaves every tile list, and only
 //! the rest pay the rasterizer's per-pixel weight.
 //!
 //! On CPU drivers (with the strips rasterizer) the kernel reads the splats, the cutoff records,
 //! the tiles touched, the emitted keys and the clip planes through the frame's texel views
-//! (`glsl/cutoff_tiles_texels.comp`): a CPU driver loads a texel as a gather, where a buffer
+//! (`cutoff_tiles_texels`): a CPU driver loads a texel as a gather, where a buffer
 //! load is a scalar loop over the lanes per 64-bit word.
 
 use ash::vk;

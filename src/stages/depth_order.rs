@@ -1,5 +1,5 @@
-//! Stage 2: the drawn Gaussians in depth order (`glsl/depth_keys.comp`, the radix sort,
-//! `glsl/depth_counts.comp`).
+//! Stage 2: the drawn Gaussians in depth order (`glsl/depth_keys_body.glsl`, the radix sort,
+//! `glsl/depth_counts_body.glsl`).
 //!
 //! The frame scans project's drawn flags into packed sort slots, writes one (depth bits,
 //! index) pair per drawn Gaussian ([`DepthOrder::record_keys`]), sorts them by depth with the
@@ -56,7 +56,7 @@ pub struct DepthOrder {
 impl DepthOrder {
     /// Builds the kernels; with `texels`, the layout of the frame's texel views (CPU drivers,
     /// along with the strips rasterizer), the variants that read through them
-    /// (`depth_{keys,counts}_texels.comp`).
+    /// (`depth_{keys,counts}_texels`).
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let (keys, counts) = match texels {
             Some(_) => (

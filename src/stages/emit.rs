@@ -54,7 +54,7 @@ pub struct Emit {
 impl Emit {
     /// Builds the kernels; with `texels`, the layout of the frame's texel views (CPU drivers,
     /// along with the strips rasterizer), the variants that read the depth order, the first
-    /// pairs and the projected splats through them (`emit*_texels.comp`): a CPU driver loads
+    /// pairs and the projected splats through them (`emit*_texels`): a CPU driver loads
     /// those as gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let build = |name: &'static CStr, spirv: &[u32]| {

@@ -1,6 +1,7 @@
 //! The GPU pipeline, one module per stage, in frame order. Each holds its kernel(s) and a
 //! `record` that only appends dispatches (and barriers) to a command buffer; the GLSL lives
-//! in `glsl/<stage>.comp` and the CPU twin in `reference`.
+//! in `glsl/<stage>_body.glsl` (or `glsl/<stage>.comp` for a kernel without variants), its
+//! variants in the table `glsl/variants.rs`, and the CPU twin in `reference`.
 
 use ash::vk;
 

@@ -113,7 +113,7 @@ const SH16_KERNELS: [Variant; 4] = [
 impl Project {
     /// Builds the kernels; with `texels`, the layout of the frame's texel views (CPU drivers,
     /// along with the strips rasterizer), the variants that read the Gaussians and SH
-    /// coefficients through them (`project_deg*_texels.comp`): a CPU driver loads those as
+    /// coefficients through them (`project_deg*_texels`): a CPU driver loads those as
     /// gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let build = |(name, loads, fetches): &Variant| {

@@ -1,4 +1,4 @@
-//! Stage 7: composite each tile's sorted splats per pixel (`glsl/rasterize.comp`; CPU twin
+//! Stage 7: composite each tile's sorted splats per pixel (`glsl/rasterize_body.glsl`; CPU twin
 //! `reference::rasterize`).
 
 use ash::vk;
@@ -69,9 +69,9 @@ fn strips_scene_fits(gaussians: u32, max_texels: u32) -> Result<()> {
 /// How the rasterizer maps pixels to invocations. Both give the same image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterLayout {
-    /// One invocation per pixel, 256 per tile (`rasterize.comp`): the layout for GPUs.
+    /// One invocation per pixel, 256 per tile (`rasterize`): the layout for GPUs.
     PixelPerInvocation,
-    /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*.comp`):
+    /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*`):
     /// for CPU drivers such as lavapipe, where each splat is then loaded once for 32 pixels
     /// and a tile is one 8-lane SIMD vector. The kernels fetch the splats from uniform texel
     /// buffers ([`super::frame_texels_set_layout`]), which caps a frame's pairs and a scene's

@@ -16,9 +16,9 @@
 //! keys stay in the cache ([`RadixSort::set_segment_min_keys`]).
 //!
 //! Kernels: `glsl/sort_prepare.comp`, `glsl/sort_{count,scatter}.comp` (GPU layout),
-//! `glsl/sort_{count,scatter}_own_counts*.comp` (CPU layout, a variant per way the pass
+//! `sort_{count,scatter}_own_counts*` (CPU layout, a variant per way the pass
 //! holds its input and output; shared code in `glsl/sort_own_counts.glsl` and the
-//! `*_body.glsl` files), `glsl/sort_segments.comp` and `glsl/sort_local_{2,3}.comp`
+//! `*_body.glsl` files), `glsl/sort_segments.comp` and `sort_local_{2,3}`
 //! (segmented sorts, CPU devices).
 
 use std::ffi::CStr;
@@ -131,7 +131,7 @@ pub enum SortLayout {
     /// [`SORT_OWN_MAX_BLOCK`] keys), counts it in a histogram of its own (a private
     /// array) and writes that to its own column of the global histogram, whose scan then
     /// gives each run its output positions: the scatter neither counts again nor waits on the
-    /// other invocations (`sort_*_own_counts.comp`). For CPU drivers such as lavapipe, where
+    /// other invocations (`sort_*_own_counts`). For CPU drivers such as lavapipe, where
     /// an indexed shared-memory, buffer or image store is a loop over the lanes, while a
     /// counter in registers costs a compare per digit value per key, which 8-bit digits make
     /// 256. Measured on llvmpipe (`bench --sort 2000000`, 32-bit keys): the 4-bit layout with
@@ -252,7 +252,7 @@ pub enum PairForm {
 
 /// The own-counts layout's kernels that read or write packed pairs ([`PairForm::Packed`]). A
 /// sort of several passes hands the pairs on packed between them, so that a pass's scatter
-/// writes a pair with one store (`sort_*_own_counts_*pairs.comp`).
+/// writes a pair with one store (`sort_*_own_counts_*pairs`).
 struct PackedPassKernels {
     /// Count kernel over packed pairs.
     count: ComputePipeline,
@@ -511,7 +511,7 @@ pub enum Segmentation {
     /// Not segmented: every pass sorted all the keys by one digit, least significant first.
     None,
     /// The first pass sorted by the top digit, then one invocation per bucket sorted it by the
-    /// other digits (`sort_local_*.comp`).
+    /// other digits (`sort_local_*`).
     LocalBuckets,
     /// The first pass sorted by the top digit, then the other passes sorted all the keys in runs
     /// that keep within their bucket (a bucket was too large for one invocation).

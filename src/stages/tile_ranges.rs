@@ -1,4 +1,5 @@
-//! Stage 6: where each tile's run of sorted pairs starts and ends (`glsl/tile_ranges.comp`).
+//! Stage 6: where each tile's run of sorted pairs starts and ends
+//! (`glsl/tile_ranges_body.glsl`).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -32,7 +33,7 @@ pub struct TileRanges {
 impl TileRanges {
     /// Builds the kernel; with `texels`, the layout of the frame's texel views (CPU drivers,
     /// along with the strips rasterizer), the variant that reads the sorted keys through them
-    /// (`tile_ranges_texels.comp`).
+    /// (`tile_ranges_texels`).
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let (name, spirv) = match texels {
             Some(_) => (c"tile_ranges_texels", shaders::TILE_RANGES_TEXELS),

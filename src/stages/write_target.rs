@@ -1,5 +1,5 @@
 //! Stage 8: write the rasterizer's per-pixel state into the caller's target, over a background
-//! or over what the target holds (`glsl/write_target_*.comp`).
+//! or over what the target holds (`glsl/write_target_body.glsl`).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -97,7 +97,7 @@ pub struct WriteTarget {
     image: FormatKernels,
     buffer: FormatKernels,
     /// With the frame's texel views: image kernels (set 0 the image, set 1 the views) and
-    /// buffer kernels (set 0 the views), `write_target_*_texels.comp`.
+    /// buffer kernels (set 0 the views), `write_target_*_texels`.
     texels: Option<(FormatKernels, FormatKernels)>,
     ctx: Context,
 }
