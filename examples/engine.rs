@@ -7,9 +7,10 @@
 //! that moves from frame to frame, a small compute pass of the engine's own (a vignette), and a
 //! copy for read-back. Each finished frame is written as `engine_frame_<i>.png`.
 //!
-//! Run: `cargo run --release --example engine [OUTPUT_DIR]` (default `engine-out`). Works
-//! headless on lavapipe. At the end it tears rara down, checks that rara's allocator reports no
-//! live allocation, destroys its own objects, and prints the validation messages (none).
+//! Run: `cargo run --release --example engine [OUTPUT_DIR]` (default `target/engine-out`, so
+//! that nothing lands in the checkout). Works headless on lavapipe. At the end it tears rara
+//! down, checks that rara's allocator reports no live allocation, destroys its own objects, and
+//! prints the validation messages (none).
 
 use std::error::Error;
 use std::ffi::{c_void, CStr};
@@ -788,7 +789,7 @@ unsafe fn image_barrier(
 fn main() -> Result<(), Box<dyn Error>> {
     let out_dir = std::env::args()
         .nth(1)
-        .map_or_else(|| PathBuf::from("engine-out"), PathBuf::from);
+        .map_or_else(|| PathBuf::from("target/engine-out"), PathBuf::from);
     let report = run(&out_dir, 6)?;
     println!(
         "rara allocator after teardown: {} live allocations; validation {}: {} messages",

@@ -70,7 +70,8 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Render the built-in demo scene from a few views and write PNGs.
+    /// The headline on a built-in scene: a box cutaway unclipped, hard and rara side by side
+    /// (PNG), and a plane sweeping through it, hard and rara (GIF, with the popping metric).
     Demo {
         /// Output directory.
         #[arg(short, long, default_value = "rara-demo")]
@@ -87,6 +88,8 @@ enum SynthKindArg {
     Hair,
     /// Nested closed surfaces (skin, muscle, bone).
     Layers,
+    /// A solid ellipsoid coloured in layers, for cuts through a volume.
+    Solid,
 }
 
 /// Where the camera comes from and the image size.
@@ -434,52 +437,6 @@ fn cmd_info(path: &Path, json: bool) -> Result<()> {
     Ok(())
 }
 
-fn cmd_demo(dir: &Path) -> Result<()> {
-    let scene = rara::synth::demo_scene();
-    let cameras = rara::synth::orbit_cameras(4, 3.2, 640, 480, 50.0)?;
-    let ctx = Context::from_env()?;
-    let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene = renderer.upload(&scene)?;
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
-    let bar = ProgressBar::new(cameras.len() as u64)
-        .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len}").unwrap())
-        .with_message("rendering demo");
-    let mut written = Vec::new();
-    for (k, cam) in cameras.iter().enumerate() {
-        let (img, stats) = renderer.render(
-            &gpu_scene,
-            cam,
-            &RenderOptions {
-                background: Vec3::splat(0.05),
-                ..RenderOptions::default()
-            },
-        )?;
-        let path = dir.join(format!("demo_view{k}.png"));
-        save_png(&img, &path)?;
-        written.push((path, stats));
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    println!(
-        "demo: {} Gaussians (built-in scene) rendered on {} ({})",
-        scene.len(),
-        ctx.info().name,
-        ctx.info().driver
-    );
-    for (path, stats) in written {
-        println!(
-            "  wrote {} ({} tile intersections, GPU {:.1} ms)",
-            path.display(),
-            stats.intersections,
-            stats.gpu_ms
-        );
-    }
-    Ok(())
-}
-
 fn load_png(path: &Path) -> Result<image::RgbaImage> {
     Ok(image::open(path)
         .map_err(|source| Error::Image {
@@ -541,6 +498,7 @@ fn cmd_synth(
         SynthKindArg::Shell => SynthKind::Shell,
         SynthKindArg::Hair => SynthKind::Hair,
         SynthKindArg::Layers => SynthKind::Layers,
+        SynthKindArg::Solid => SynthKind::Solid,
     };
     let scene = rara::synth::generate(kind, count, sh_degree, seed);
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -579,7 +537,7 @@ fn main() -> ExitCode {
             seed,
             output,
         } => cmd_synth(*kind, *count, *sh_degree, *seed, output),
-        Command::Demo { output } => cmd_demo(output),
+        Command::Demo { output } => cli::demo::run(output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -148,6 +148,8 @@ pub enum SynthKind {
     Hair,
     /// Nested closed surfaces ([`layers`]).
     Layers,
+    /// A solid ellipsoid filled with Gaussians, coloured in layers ([`solid`]).
+    Solid,
 }
 
 /// Makes a scene of `kind` with about `count` Gaussians.
@@ -156,6 +158,7 @@ pub fn generate(kind: SynthKind, count: usize, sh_degree: u32, seed: u64) -> Sce
         SynthKind::Shell => shell(count, sh_degree, seed),
         SynthKind::Hair => hair(count, sh_degree, seed),
         SynthKind::Layers => layers(count, sh_degree, seed),
+        SynthKind::Solid => solid(count, sh_degree, seed),
     }
 }
 
@@ -202,6 +205,47 @@ pub fn hair(count: usize, sh_degree: u32, seed: u64) -> Scene {
             p = next;
             dir = next_dir;
         }
+    }
+    scene
+}
+
+/// Solid: an ellipsoid (semi-axes 1, 1.25, 0.9) filled with isotropic Gaussians, coloured by
+/// their depth in it like [`layers`] (skin outside, muscle, a bone core), so that every cut
+/// shows a face of rings. Cutting a volume is where hard clipping pops most: each Gaussian that
+/// the cut crosses is all there or all gone, while RaRa shades the face smoothly (`rara demo`).
+pub fn solid(count: usize, sh_degree: u32, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed);
+    let mut scene = Scene {
+        sh_degree,
+        ..Default::default()
+    };
+    let axes = Vec3::new(1.0, 1.25, 0.9);
+    // Spacing of `count` points in the ellipsoid's volume; the Gaussians overlap their
+    // neighbours so that the solid looks closed.
+    let volume = 4.0 / 3.0 * std::f32::consts::PI * axes.x * axes.y * axes.z;
+    let spacing = (volume / count.max(1) as f32).cbrt();
+    for _ in 0..count {
+        let unit = loop {
+            let p = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            if p.length_squared() < 1.0 {
+                break p;
+            }
+        };
+        let depth = unit.length();
+        let rgb = if depth > 0.8 {
+            Vec3::new(0.93, 0.76, 0.65)
+        } else if depth > 0.45 {
+            Vec3::new(0.75, 0.15, 0.15)
+        } else {
+            Vec3::new(0.95, 0.93, 0.85)
+        };
+        let sh = sh_for(rgb * rng.range(0.9, 1.05), sh_degree, &mut rng, 0.05);
+        let s = 0.65 * spacing * rng.range(0.7, 1.2);
+        scene.push(unit * axes, 0.6, Vec3::splat(s), Quat::IDENTITY, &sh);
     }
     scene
 }

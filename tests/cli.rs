@@ -349,23 +349,33 @@ fn hostile_cameras_fail_cleanly() {
 }
 
 #[test]
-fn demo_writes_pngs() {
+fn demo_shows_the_cut_and_the_popping() {
     let d = dir().join("demo");
     let o = rara(&["demo", "-o", d.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(stdout.contains("wrote"), "{stdout}");
-    let pngs = std::fs::read_dir(&d)
-        .unwrap()
-        .filter(|e| {
-            e.as_ref()
-                .unwrap()
-                .path()
-                .extension()
-                .is_some_and(|x| x == "png")
-        })
-        .count();
-    assert!(pngs >= 4);
+    // Three panels side by side, each the demo camera's 400x300.
+    let cutaway = image::open(d.join("demo_cutaway.png")).unwrap().to_rgba8();
+    assert_eq!(cutaway.dimensions(), (1200, 300), "{stdout}");
+    let panel = |k: u32| image::imageops::crop_imm(&cutaway, 400 * k, 0, 400, 300).to_image();
+    let (none, hard, rara_img) = (panel(0), panel(1), panel(2));
+    // The cut shows: both clipped panels differ from the unclipped one, and from each other.
+    assert!(rara::metrics::compare(&none, &hard).l1 > 1.0);
+    assert!(rara::metrics::compare(&none, &rara_img).l1 > 1.0);
+    assert!(rara::metrics::compare(&hard, &rara_img).differing_pixels > 100);
+    let gif = std::fs::read(d.join("demo_sweep.gif")).unwrap();
+    assert!(gif.starts_with(b"GIF89a"));
+    // The popping metric, hard against rara: RaRa pops less on this scene.
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("popping (p99.9"))
+        .unwrap_or_else(|| panic!("no popping line: {stdout}"));
+    let numbers: Vec<f64> = line
+        .split(|c: char| !c.is_ascii_digit() && c != '.')
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    let (hard_p, rara_p) = (numbers[numbers.len() - 2], numbers[numbers.len() - 1]);
+    assert!(rara_p < hard_p, "{line}");
 }
 
 #[test]

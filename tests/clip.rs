@@ -140,10 +140,12 @@ fn gpu_matches_cpu_on_synthetic_scenes() {
 
 #[test]
 fn gpu_matches_cpu_on_real_scenes() {
+    let mut ran = 0;
     for stem in ["plant_capture_sh0", "biker_capture_sh0"] {
         let Some((ply, cams)) = common::real_scene(stem) else {
             continue;
         };
+        ran += 1;
         eprintln!("real-scene case '{stem}' RAN");
         let (scene, _) = rara::ply::load_ply(&ply).unwrap();
         let camera = match cams {
@@ -154,6 +156,9 @@ fn gpu_matches_cpu_on_real_scenes() {
             None => orbit_camera(&scene, 240),
         };
         gpu_matches_cpu(stem, &scene, &camera, RasterLayout::Strips);
+    }
+    if ran == 0 {
+        common::test_skipped("none of its real scenes is here");
     }
 }
 

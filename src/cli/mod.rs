@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod clip_args;
+pub mod demo;
 pub mod output;
 pub mod sweep;
 

@@ -50,8 +50,9 @@ pub struct SweepArgs {
 
 /// Frame-to-frame change and cutoff counts of one clip configuration over a sweep.
 #[derive(Default)]
-struct SeriesStats {
-    label: String,
+pub struct SeriesStats {
+    /// The configuration, as `describe` puts it.
+    pub label: String,
     /// Histogram of |a - b| over every RGB channel of every pixel of consecutive frame pairs
     /// (exact percentiles in constant memory, whatever the size and length of the sweep).
     changes: Vec<u64>,
@@ -78,7 +79,7 @@ impl SeriesStats {
     }
 
     /// Mean, 99.9th percentile and maximum of the frame-to-frame change, 8-bit units.
-    fn change_summary(&self) -> (f64, f64, f64) {
+    pub fn change_summary(&self) -> (f64, f64, f64) {
         let total: u64 = self.changes.iter().sum();
         if total == 0 {
             return (0.0, 0.0, 0.0);
@@ -153,67 +154,29 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let gpu_scene = renderer.upload(&scene)?;
-    let mut series: Vec<SeriesStats> = configs
-        .iter()
-        .map(|c| SeriesStats {
-            label: describe(c),
-            ..SeriesStats::default()
-        })
-        .collect();
     let gif_path = args.output.join("sweep.gif");
-    let gif_file = std::fs::File::create(&gif_path).map_err(|source| Error::Io {
-        path: gif_path.clone(),
-        source,
-    })?;
-    let mut gif =
-        image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(gif_file), 10);
-    let gif_error = |source| Error::Image {
-        path: gif_path.clone(),
-        source,
-    };
-    gif.set_repeat(image::codecs::gif::Repeat::Infinite)
-        .map_err(gif_error)?;
-
+    let mut gif = GifWriter::create(&gif_path, args.delay_ms)?;
+    let labels = configs.iter().map(describe).collect::<Vec<_>>();
     eprintln!(
         "sweeping {} frames, plane normal ({:.3}, {:.3}, {:.3}), d from {d0} to {d1}: {}",
         args.frames,
         normal.x,
         normal.y,
         normal.z,
-        series
-            .iter()
-            .map(|s| s.label.as_str())
-            .collect::<Vec<_>>()
-            .join(" | ")
+        labels.join(" | ")
     );
-    let bar = ProgressBar::new(args.frames as u64)
-        .with_style(
-            ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap(),
-        )
-        .with_message("sweep");
-    for k in 0..args.frames {
-        let d = d0 + (d1 - d0) * k as f32 / (args.frames - 1) as f32;
-        let moving = Plane::new(normal, d)?;
-        let mut panels = Vec::new();
-        for (config, stats) in configs.iter().zip(series.iter_mut()) {
-            let clip = with_moving_plane(config, moving);
-            let options = RenderOptions {
-                background: args.background,
-                clip,
-                ..RenderOptions::default()
-            };
-            let (img, frame) = renderer.render(&gpu_scene, &camera, &options)?;
-            stats.add(&img, frame.cutoff, frame.gpu_ms);
-            panels.push(img);
-        }
-        let frame_img = concat_horizontally(&panels);
-        save_png(&frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
-        let delay = image::Delay::from_numer_denom_ms(args.delay_ms, 1);
-        gif.encode_frame(image::Frame::from_parts(frame_img, 0, 0, delay))
-            .map_err(gif_error)?;
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
+    let plan = Sweep {
+        camera: &camera,
+        configs: &configs,
+        normal,
+        range: (d0, d1),
+        frames: args.frames,
+        background: args.background,
+    };
+    let mut series = plan.run(&mut renderer, &gpu_scene, |k, frame_img| {
+        save_png(frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
+        gif.add(frame_img.clone())
+    })?;
     drop(gif);
 
     println!(
@@ -267,6 +230,109 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// A plane moving across a scene, each frame rendered under every configuration.
+pub struct Sweep<'a> {
+    /// The fixed camera.
+    pub camera: &'a rara::Camera,
+    /// The clip configurations, side by side; the last half-space of each is the moving plane.
+    pub configs: &'a [Clip],
+    /// The moving plane's unit normal.
+    pub normal: Vec3,
+    /// Its offsets d in the first and the last frame.
+    pub range: (f32, f32),
+    /// Frames, at least 2.
+    pub frames: u32,
+    /// Background colour.
+    pub background: Vec3,
+}
+
+impl Sweep<'_> {
+    /// Renders the sweep, with a progress bar, handing each frame (the configurations' images
+    /// side by side) to `on_frame`; returns the statistics per configuration.
+    pub fn run(
+        &self,
+        renderer: &mut Renderer,
+        gpu_scene: &rara::GpuScene,
+        mut on_frame: impl FnMut(u32, &image::RgbaImage) -> Result<()>,
+    ) -> Result<Vec<SeriesStats>> {
+        let mut series: Vec<SeriesStats> = self
+            .configs
+            .iter()
+            .map(|c| SeriesStats {
+                label: describe(c),
+                ..SeriesStats::default()
+            })
+            .collect();
+        let bar = ProgressBar::new(self.frames as u64)
+            .with_style(
+                ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]")
+                    .unwrap(),
+            )
+            .with_message("sweep");
+        let (d0, d1) = self.range;
+        for k in 0..self.frames {
+            let d = d0 + (d1 - d0) * k as f32 / (self.frames - 1) as f32;
+            let moving = Plane::new(self.normal, d)?;
+            let mut panels = Vec::new();
+            for (config, stats) in self.configs.iter().zip(series.iter_mut()) {
+                let options = RenderOptions {
+                    background: self.background,
+                    clip: with_moving_plane(config, moving),
+                    ..RenderOptions::default()
+                };
+                let (img, frame) = renderer.render(gpu_scene, self.camera, &options)?;
+                stats.add(&img, frame.cutoff, frame.gpu_ms);
+                panels.push(img);
+            }
+            on_frame(k, &concat_horizontally(&panels))?;
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        Ok(series)
+    }
+}
+
+/// An animated GIF written frame by frame, looping.
+pub struct GifWriter {
+    path: PathBuf,
+    encoder: image::codecs::gif::GifEncoder<std::io::BufWriter<std::fs::File>>,
+    delay_ms: u32,
+}
+
+impl GifWriter {
+    /// Creates `path`, each frame shown for `delay_ms`.
+    pub fn create(path: &Path, delay_ms: u32) -> Result<GifWriter> {
+        let file = std::fs::File::create(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut encoder =
+            image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+        encoder
+            .set_repeat(image::codecs::gif::Repeat::Infinite)
+            .map_err(|source| Error::Image {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        Ok(GifWriter {
+            path: path.to_path_buf(),
+            encoder,
+            delay_ms,
+        })
+    }
+
+    /// Appends a frame.
+    pub fn add(&mut self, frame: image::RgbaImage) -> Result<()> {
+        let delay = image::Delay::from_numer_denom_ms(self.delay_ms, 1);
+        self.encoder
+            .encode_frame(image::Frame::from_parts(frame, 0, 0, delay))
+            .map_err(|source| Error::Image {
+                path: self.path.clone(),
+                source,
+            })
+    }
+}
+
 /// `config` with its last half-space (the moving plane) replaced by `moving`.
 pub fn with_moving_plane(config: &Clip, moving: Plane) -> Clip {
     let mut clip = config.clone();
@@ -282,7 +348,8 @@ pub fn with_moving_plane(config: &Clip, moving: Plane) -> Clip {
     clip
 }
 
-fn concat_horizontally(panels: &[image::RgbaImage]) -> image::RgbaImage {
+/// The images side by side, left to right.
+pub fn concat_horizontally(panels: &[image::RgbaImage]) -> image::RgbaImage {
     let width = panels.iter().map(|p| p.width()).sum();
     let height = panels.iter().map(|p| p.height()).max().unwrap_or(0);
     let mut out = image::RgbaImage::new(width, height);
