@@ -10,14 +10,14 @@ use crate::constants::{
     RASTER_CHUNK,
 };
 use crate::error::Result;
+use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
-use crate::renderer::FrameStats;
-use crate::renderer::GpuScene;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_lists::TileListsLayout;
 use crate::stages::write_target::image_target_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
+use crate::timing::PassTiming;
 use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{Buffer, Context, MemoryLocation};
 
@@ -527,5 +527,53 @@ impl Drop for FrameSlot {
                     .destroy_descriptor_set_layout(s.layout, None);
             }
         }
+    }
+}
+
+/// What a frame cost and produced.
+#[derive(Clone, Debug, Default)]
+pub struct FrameStats {
+    /// (tile, splat) pairs, i.e. tile intersections.
+    pub intersections: u32,
+    /// Gaussians that touched at least one tile.
+    pub visible: u32,
+    /// Gaussians drawn as cutoff (per-pixel clip weight), among `visible`.
+    pub cutoff: u32,
+    /// The cutoff splats' pairs, when the frame classified them by tile (rara clipping by
+    /// planes with the mass weight; else 0): all of them, ...
+    pub cutoff_pairs: u32,
+    /// ... those drawn as plain splats, their weight being 1 across the tile, ...
+    pub cutoff_pairs_weight_one: u32,
+    /// ... and those left out of the tile lists, adding nothing to the tile. The rest pay the
+    /// per-pixel weight.
+    pub cutoff_pairs_empty: u32,
+    /// Tiles the weighted rasterize kernel walked, when the frame split the tiles by kernel
+    /// (the strips rasterizer under rara clipping by planes with the mass weight; else 0).
+    pub weighted_tiles: u32,
+    /// Gaussians not drawn because their footprint exceeds the bound
+    /// [`crate::constants::MAX_FOOTPRINT_SIGMA_PX`] (extreme scales, or a huge Gaussian right
+    /// in front of the camera).
+    pub oversized: u32,
+    /// Longest tile list.
+    pub max_tile_len: u32,
+    /// Whether every tile pair and tile-list entry fitted the frame slot's buffers. `false`
+    /// means splats are missing from the image; the slot grows for its next frame (and
+    /// [`Renderer::render`] renders again).
+    pub complete: bool,
+    /// How often the frame was rendered again after growing a buffer.
+    pub rerenders: u32,
+    /// GPU time (and compute invocations) per pass, in pass order (empty without timestamps).
+    pub passes: Vec<PassTiming>,
+    /// Sum of `passes`.
+    pub gpu_ms: f64,
+    /// Wall-clock milliseconds of the last render: recording, submission and wait.
+    pub wall_ms: f64,
+}
+
+impl FrameStats {
+    /// The classified cutoff pairs that still pay the per-pixel weight: neither weight 1 nor
+    /// empty across their tile.
+    pub fn cutoff_pairs_partial(&self) -> u32 {
+        self.cutoff_pairs - self.cutoff_pairs_weight_one - self.cutoff_pairs_empty
     }
 }

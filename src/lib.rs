@@ -40,6 +40,7 @@ pub mod clip;
 pub mod constants;
 pub mod error;
 pub mod frame;
+pub mod gpu_scene;
 pub mod gpu_types;
 pub mod input;
 pub mod metrics;

@@ -523,6 +523,13 @@ fn cmd_synth(
 }
 
 fn main() -> ExitCode {
+    // Rust ignores SIGPIPE, so a closed stdout (`rara info x.ply | head`) would make every
+    // println! panic; a command-line tool should end quietly instead, as cat and grep do.
+    #[cfg(unix)]
+    // SAFETY: signal() with SIG_DFL installs no handler; it runs before any other thread.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(args) => cmd_render(args),

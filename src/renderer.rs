@@ -9,11 +9,12 @@ use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
-use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, COUNTER_VISIBLE, MAX_GAUSSIANS};
+use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, COUNTER_VISIBLE};
 use crate::error::{Error, Result};
+pub use crate::frame::FrameStats;
 use crate::frame::{FrameMemory, FrameSlot, CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
-use crate::gpu_types::{GpuFrameParams, GpuGaussian};
-use crate::precision::{f32_to_f16_bits, ShPrecision};
+pub use crate::gpu_scene::GpuScene;
+use crate::gpu_types::GpuFrameParams;
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::{CutoffTiles, CutoffTilesPush};
 use crate::stages::depth_order::{DepthCountsPush, DepthKeysPush, DepthOrder};
@@ -27,163 +28,12 @@ use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
 use crate::stages::write_target::{WriteTarget, WriteTargetPush};
 use crate::stages::FrameTexelsLayout;
 use crate::target::{Composite, Target, TargetFormat};
-use crate::timing::{PassTimer, PassTiming};
+use crate::timing::PassTimer;
 use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
 
 /// Byte offset of `scene.x` (the Gaussian count) in `FrameParams`: the scan of the drawn flags
 /// reads its length there.
 const PARAMS_COUNT_OFFSET: u64 = 112;
-
-/// The Gaussian `i` of `scene` as the kernels read it (activated values, SPEC section 1).
-fn gpu_gaussian(scene: &Scene, i: usize) -> GpuGaussian {
-    let m = scene.means[i];
-    let q = scene.rotations[i];
-    let s = scene.scales[i];
-    GpuGaussian {
-        pos_opacity: [m.x, m.y, m.z, scene.opacities[i]],
-        rot: [q.w, q.x, q.y, q.z],
-        scale: [s.x, s.y, s.z, 0.0],
-    }
-}
-
-/// Bytes of the two scene buffers: Gaussians and SH coefficients.
-fn scene_buffer_sizes(scene: &Scene, precision: ShPrecision) -> (u64, u64) {
-    let n = scene.len() as u64;
-    (
-        n * std::mem::size_of::<GpuGaussian>() as u64,
-        scene.sh.len() as u64 * precision.bytes() + GpuScene::SH_TAIL_BYTES,
-    )
-}
-
-/// A scene uploaded to the GPU: a resource of its own, which any number of renderers of the
-/// same device can draw. Dropping it frees its memory; frames that read it must have completed.
-///
-/// Buffers are reached by device address, never bound as descriptors, so their size is not
-/// limited by `maxStorageBufferRange` (128 MiB on lavapipe): a 6M-Gaussian SH degree 3 scene is
-/// one 1.15 GB SH buffer (576 MB with [`ShPrecision::F16`]).
-pub struct GpuScene {
-    gaussians: Buffer,
-    sh: Buffer,
-    count: u32,
-    sh_degree: u32,
-    sh_precision: ShPrecision,
-    /// Unique per upload into new buffers: frame slots key their texel views of the scene by
-    /// it (a freed buffer's handle may come back).
-    id: u64,
-}
-
-/// The next [`GpuScene`] id.
-static NEXT_SCENE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-
-impl GpuScene {
-    /// Bytes the SH buffer holds past the last coefficient, counted in
-    /// [`GpuScene::device_bytes`]: the project kernels read a Gaussian's coefficients as whole
-    /// aligned 64-bit words (`load_sh` in `glsl/sh.glsl`), up to 10 bytes past its last one
-    /// (half floats, 27 values starting on a word: 8 words of 4).
-    pub const SH_TAIL_BYTES: u64 = 16;
-
-    /// Uploads `scene` to the device of `ctx` with 32-bit SH coefficients (on the context's
-    /// queue, in chunks through one staging buffer; returns once the copies are done).
-    pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
-        GpuScene::with_sh_precision(ctx, scene, ShPrecision::F32)
-    }
-
-    /// [`GpuScene::new`] storing the SH coefficients at `precision`.
-    pub fn with_sh_precision(ctx: &Context, scene: &Scene, precision: ShPrecision) -> Result<Self> {
-        if scene.len() as u64 > MAX_GAUSSIANS {
-            return Err(Error::InvalidInput(format!(
-                "{} Gaussians exceed the {MAX_GAUSSIANS} one scene may have",
-                scene.len()
-            )));
-        }
-        let (gaussian_bytes, sh_bytes) = scene_buffer_sizes(scene, precision);
-        let gpu = MemoryLocation::GpuOnly;
-        let mut gpu_scene = GpuScene {
-            gaussians: Buffer::new(ctx, "scene gaussians", gaussian_bytes, gpu)?,
-            sh: Buffer::new(ctx, "scene SH", sh_bytes, gpu)?,
-            count: 0,
-            sh_degree: scene.sh_degree,
-            sh_precision: precision,
-            id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-        };
-        gpu_scene.upload(scene)?;
-        Ok(gpu_scene)
-    }
-
-    /// Bytes of device memory per Gaussian of a scene of `sh_degree` stored at `precision`.
-    pub fn bytes_per_gaussian(sh_degree: u32, precision: ShPrecision) -> u64 {
-        std::mem::size_of::<GpuGaussian>() as u64
-            + 3 * crate::scene::sh_coeffs(sh_degree) as u64 * precision.bytes()
-    }
-
-    /// Writes `scene` into the buffers (which are large enough), chunk by chunk.
-    fn upload(&mut self, scene: &Scene) -> Result<()> {
-        let (gaussian_bytes, _) = scene_buffer_sizes(scene, self.sh_precision);
-        let sh_bytes = scene.sh.len() as u64 * self.sh_precision.bytes();
-        let record = std::mem::size_of::<GpuGaussian>();
-        self.gaussians
-            .upload_with(gaussian_bytes, record as u64, |offset, chunk| {
-                let first = offset as usize / record;
-                for (k, out) in chunk.chunks_exact_mut(record).enumerate() {
-                    out.copy_from_slice(bytemuck::bytes_of(&gpu_gaussian(scene, first + k)));
-                }
-            })?;
-        match self.sh_precision {
-            ShPrecision::F32 => self.sh.upload(bytemuck::cast_slice(&scene.sh))?,
-            ShPrecision::F16 => self.sh.upload_with(sh_bytes, 2, |offset, chunk| {
-                let first = offset as usize / 2;
-                for (k, out) in chunk.chunks_exact_mut(2).enumerate() {
-                    out.copy_from_slice(&f32_to_f16_bits(scene.sh[first + k]).to_le_bytes());
-                }
-            })?,
-        }
-        self.count = scene.len() as u32;
-        self.sh_degree = scene.sh_degree;
-        Ok(())
-    }
-
-    /// Replaces the contents with `scene` (same SH precision), reusing the device buffers when
-    /// they are large enough. Frames recorded with the old contents must have completed.
-    pub fn replace(&mut self, scene: &Scene) -> Result<()> {
-        let (gaussian_bytes, sh_bytes) = scene_buffer_sizes(scene, self.sh_precision);
-        if gaussian_bytes > self.gaussians.size || sh_bytes > self.sh.size {
-            let ctx = self.gaussians.context().clone();
-            *self = GpuScene::with_sh_precision(&ctx, scene, self.sh_precision)?;
-            return Ok(());
-        }
-        self.upload(scene)
-    }
-
-    /// The Gaussians' and the SH coefficients' buffers, and the scene's id.
-    pub(crate) fn buffers(&self) -> (&Buffer, &Buffer, u64) {
-        (&self.gaussians, &self.sh, self.id)
-    }
-
-    /// How the SH coefficients are stored.
-    pub fn sh_precision(&self) -> ShPrecision {
-        self.sh_precision
-    }
-
-    /// Number of Gaussians.
-    pub fn len(&self) -> u32 {
-        self.count
-    }
-
-    /// Whether the scene is empty.
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
-    }
-
-    /// SH degree.
-    pub fn sh_degree(&self) -> u32 {
-        self.sh_degree
-    }
-
-    /// Device bytes held by the scene.
-    pub fn device_bytes(&self) -> u64 {
-        self.gaussians.size + self.sh.size
-    }
-}
 
 /// How to render a frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -203,54 +53,6 @@ impl Default for RenderOptions {
             composite: Composite::Background,
             clip: Clip::default(),
         }
-    }
-}
-
-/// What a frame cost and produced.
-#[derive(Clone, Debug, Default)]
-pub struct FrameStats {
-    /// (tile, splat) pairs, i.e. tile intersections.
-    pub intersections: u32,
-    /// Gaussians that touched at least one tile.
-    pub visible: u32,
-    /// Gaussians drawn as cutoff (per-pixel clip weight), among `visible`.
-    pub cutoff: u32,
-    /// The cutoff splats' pairs, when the frame classified them by tile (rara clipping by
-    /// planes with the mass weight; else 0): all of them, ...
-    pub cutoff_pairs: u32,
-    /// ... those drawn as plain splats, their weight being 1 across the tile, ...
-    pub cutoff_pairs_weight_one: u32,
-    /// ... and those left out of the tile lists, adding nothing to the tile. The rest pay the
-    /// per-pixel weight.
-    pub cutoff_pairs_empty: u32,
-    /// Tiles the weighted rasterize kernel walked, when the frame split the tiles by kernel
-    /// (the strips rasterizer under rara clipping by planes with the mass weight; else 0).
-    pub weighted_tiles: u32,
-    /// Gaussians not drawn because their footprint exceeds the bound
-    /// [`crate::constants::MAX_FOOTPRINT_SIGMA_PX`] (extreme scales, or a huge Gaussian right
-    /// in front of the camera).
-    pub oversized: u32,
-    /// Longest tile list.
-    pub max_tile_len: u32,
-    /// Whether every tile pair and tile-list entry fitted the frame slot's buffers. `false`
-    /// means splats are missing from the image; the slot grows for its next frame (and
-    /// [`Renderer::render`] renders again).
-    pub complete: bool,
-    /// How often the frame was rendered again after growing a buffer.
-    pub rerenders: u32,
-    /// GPU time (and compute invocations) per pass, in pass order (empty without timestamps).
-    pub passes: Vec<PassTiming>,
-    /// Sum of `passes`.
-    pub gpu_ms: f64,
-    /// Wall-clock milliseconds of the last render: recording, submission and wait.
-    pub wall_ms: f64,
-}
-
-impl FrameStats {
-    /// The classified cutoff pairs that still pay the per-pixel weight: neither weight 1 nor
-    /// empty across their tile.
-    pub fn cutoff_pairs_partial(&self) -> u32 {
-        self.cutoff_pairs - self.cutoff_pairs_weight_one - self.cutoff_pairs_empty
     }
 }
 

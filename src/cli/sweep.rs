@@ -36,7 +36,7 @@ pub struct SweepArgs {
     #[arg(long)]
     side_by_side: bool,
     /// Background colour R,G,B in [0, 1].
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_vec3, default_value = "0,0,0")]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_color, default_value = "0,0,0")]
     background: Vec3,
     /// GIF frame delay in milliseconds.
     #[arg(long, default_value_t = 100)]

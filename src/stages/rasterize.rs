@@ -11,7 +11,7 @@ use super::tile_lists::TileListsLayout;
 use crate::clip::ClipWeight;
 use crate::constants::MAX_INTERSECTIONS;
 use crate::error::{Error, Result};
-use crate::renderer::GpuScene;
+use crate::gpu_scene::GpuScene;
 use crate::shaders;
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context};
 
