@@ -12,6 +12,7 @@ use crate::constants::{
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
+use crate::stages::cutoff_tiles::CUTOFF_PAIRS_OFFSET;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_lists::TileListsLayout;
@@ -88,11 +89,6 @@ impl FrameMemory {
     }
 }
 
-/// Offset of the cutoff-tiles dispatch arguments in [`FrameResources::cutoff_pairs`].
-pub(crate) const CUTOFF_ARGS_OFFSET: u64 = 0;
-/// Offset of the (first pair, splat index) entries in [`FrameResources::cutoff_pairs`].
-pub(crate) const CUTOFF_PAIRS_OFFSET: u64 = 16;
-
 /// Buffers of one frame size, reused while the sizes fit.
 pub(crate) struct FrameResources {
     pub(crate) width: u32,
@@ -105,7 +101,7 @@ pub(crate) struct FrameResources {
     /// Cutoff side records, one slot per Gaussian; allocated on the first rara frame.
     pub(crate) cutoffs: Option<Buffer>,
     /// With the records: the cutoff-tiles stage's dispatch arguments (16 B at
-    /// [`CUTOFF_ARGS_OFFSET`]), then per record its splat's (first pair, splat index) at
+    /// [`crate::stages::cutoff_tiles::CUTOFF_ARGS_OFFSET`]), then per record its splat's (first pair, splat index) at
     /// [`CUTOFF_PAIRS_OFFSET`].
     pub(crate) cutoff_pairs: Option<Buffer>,
     pub(crate) splats: Buffer,
@@ -558,7 +554,7 @@ pub struct FrameStats {
     pub max_tile_len: u32,
     /// Whether every tile pair and tile-list entry fitted the frame slot's buffers. `false`
     /// means splats are missing from the image; the slot grows for its next frame (and
-    /// [`Renderer::render`] renders again).
+    /// [`crate::Renderer::render`] renders again).
     pub complete: bool,
     /// How often the frame was rendered again after growing a buffer.
     pub rerenders: u32,

@@ -63,7 +63,8 @@ fn scalar_size(t: &ScalarType) -> usize {
     }
 }
 
-fn decode_scalar(t: &ScalarType, b: &[u8], big_endian: bool) -> f32 {
+/// A scalar of type `t` from the start of `b`, exactly (every PLY type fits an `f64`).
+fn decode_f64(t: &ScalarType, b: &[u8], big_endian: bool) -> f64 {
     macro_rules! num {
         ($ty:ty, $n:expr) => {{
             let arr: [u8; $n] = b[..$n].try_into().unwrap();
@@ -71,12 +72,12 @@ fn decode_scalar(t: &ScalarType, b: &[u8], big_endian: bool) -> f32 {
                 <$ty>::from_be_bytes(arr)
             } else {
                 <$ty>::from_le_bytes(arr)
-            }) as f32
+            }) as f64
         }};
     }
     match t {
-        ScalarType::Char => b[0] as i8 as f32,
-        ScalarType::UChar => b[0] as f32,
+        ScalarType::Char => b[0] as i8 as f64,
+        ScalarType::UChar => b[0] as f64,
         ScalarType::Short => num!(i16, 2),
         ScalarType::UShort => num!(u16, 2),
         ScalarType::Int => num!(i32, 4),
@@ -84,6 +85,11 @@ fn decode_scalar(t: &ScalarType, b: &[u8], big_endian: bool) -> f32 {
         ScalarType::Float => num!(f32, 4),
         ScalarType::Double => num!(f64, 8),
     }
+}
+
+/// A property value as the scene holds it (rounded once, from the exact value).
+fn decode_scalar(t: &ScalarType, b: &[u8], big_endian: bool) -> f32 {
+    decode_f64(t, b, big_endian) as f32
 }
 
 /// Reads the header bytes (through `end_header\n`) so that ply-rs never reads an unbounded line.
@@ -363,7 +369,7 @@ fn read_ply_from<R: BufRead>(
             // Elements before 'vertex' are read past, not sought past, so a stream works too.
             for (name, rows, props) in &before {
                 for row in 0..*rows {
-                    skip_binary_row(path, &mut reader, props, big_endian).map_err(|e| {
+                    skip_binary_row(&mut reader, props, big_endian).map_err(|e| {
                         ply_err(
                             path,
                             format!("truncated payload in element '{name}', row {row}: {e}"),
@@ -401,7 +407,6 @@ fn read_ply_from<R: BufRead>(
 
 /// Reads past one row of an element whose properties may be lists.
 fn skip_binary_row(
-    path: &Path,
     reader: &mut impl Read,
     props: &[Stored],
     big_endian: bool,
@@ -416,7 +421,7 @@ fn skip_binary_row(
                     .map_err(|e| e.to_string())?;
             }
             Stored::List { count, item } => {
-                let items = read_list_count(path, reader, count, big_endian)?;
+                let items = read_list_count(reader, count, big_endian)?;
                 let bytes = items * scalar_size(item) as u64;
                 let got = std::io::copy(&mut reader.take(bytes), &mut std::io::sink())
                     .map_err(|e| e.to_string())?;
@@ -431,7 +436,6 @@ fn skip_binary_row(
 
 /// Reads a binary list's count (an integer type, never negative).
 fn read_list_count(
-    _path: &Path,
     reader: &mut impl Read,
     count: &ScalarType,
     big_endian: bool,
@@ -441,32 +445,12 @@ fn read_list_count(
     reader
         .read_exact(&mut buf[..n])
         .map_err(|e| e.to_string())?;
-    let v = decode_integer(count, &buf[..n], big_endian);
-    u64::try_from(v).map_err(|_| format!("a list's count is negative ({v})"))
-}
-
-/// An integer scalar exactly (list counts; [`decode_scalar`] rounds large ones to `f32`).
-fn decode_integer(t: &ScalarType, b: &[u8], big_endian: bool) -> i64 {
-    macro_rules! num {
-        ($ty:ty, $n:expr) => {{
-            let arr: [u8; $n] = b[..$n].try_into().unwrap();
-            (if big_endian {
-                <$ty>::from_be_bytes(arr)
-            } else {
-                <$ty>::from_le_bytes(arr)
-            }) as i64
-        }};
+    // Counts are of an integer type (`Stored::of`), which `decode_f64` holds exactly.
+    let v = decode_f64(count, &buf[..n], big_endian);
+    if v < 0.0 {
+        return Err(format!("a list's count is negative ({v})"));
     }
-    match t {
-        ScalarType::Char => b[0] as i8 as i64,
-        ScalarType::UChar => b[0] as i64,
-        ScalarType::Short => num!(i16, 2),
-        ScalarType::UShort => num!(u16, 2),
-        ScalarType::Int => num!(i32, 4),
-        ScalarType::UInt => num!(u32, 4),
-        // Refused by `Stored::of`.
-        ScalarType::Float | ScalarType::Double => unreachable!("float list counts are refused"),
-    }
+    Ok(v as u64)
 }
 
 /// Checks the header's structure before ply-rs parses it, for what ply-rs gets wrong:
@@ -724,7 +708,7 @@ fn read_binary(
                         *slot = decode_scalar(t, &buf[..n], big_endian);
                     }
                     Stored::List { .. } => {
-                        skip_binary_row(path, reader, std::slice::from_ref(p), big_endian)
+                        skip_binary_row(reader, std::slice::from_ref(p), big_endian)
                             .map_err(truncated)?;
                     }
                 }

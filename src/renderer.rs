@@ -9,31 +9,27 @@ use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
-use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS, COUNTER_VISIBLE};
+use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS};
 use crate::error::{Error, Result};
 pub use crate::frame::FrameStats;
-use crate::frame::{FrameMemory, FrameSlot, CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
+use crate::frame::{FrameMemory, FrameSlot};
 pub use crate::gpu_scene::GpuScene;
 use crate::gpu_types::GpuFrameParams;
 use crate::scene::Scene;
-use crate::stages::cutoff_tiles::{CutoffTiles, CutoffTilesPush};
-use crate::stages::depth_order::{DepthCountsPush, DepthKeysPush, DepthOrder};
-use crate::stages::emit::{Emit, EmitPush};
+use crate::stages::cutoff_tiles::CutoffTiles;
+use crate::stages::depth_order::{DepthOrder, DEPTH_KEY_BITS};
+use crate::stages::emit::Emit;
 use crate::stages::prefix_sum::PrefixSum;
-use crate::stages::project::{Project, ProjectPush};
-use crate::stages::rasterize::{RasterLayout, Rasterize, RasterizePush};
-use crate::stages::sort::{RadixSort, DEPTH_SORT_LABELS, TILE_SORT_LABELS};
-use crate::stages::tile_lists::{TileLists, TileListsLayout, TileListsPush};
-use crate::stages::tile_ranges::{TileRanges, TileRangesPush};
-use crate::stages::write_target::{WriteTarget, WriteTargetPush};
-use crate::stages::FrameTexelsLayout;
+use crate::stages::project::Project;
+use crate::stages::rasterize::{RasterLayout, Rasterize};
+use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
+use crate::stages::tile_lists::{TileLists, TileListsLayout};
+use crate::stages::tile_ranges::TileRanges;
+use crate::stages::write_target::WriteTarget;
+use crate::stages::{FrameAddresses, FrameRecording, FrameTexelsLayout};
 use crate::target::{Composite, Target, TargetFormat};
 use crate::timing::PassTimer;
 use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
-
-/// Byte offset of `scene.x` (the Gaussian count) in `FrameParams`: the scan of the drawn flags
-/// reads its length there.
-const PARAMS_COUNT_OFFSET: u64 = 112;
 
 /// How to render a frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -118,9 +114,6 @@ pub fn key_bits(width: u32, height: u32) -> u32 {
     let (gx, gy) = tile_grid(width, height);
     (gx * gy + 1).next_power_of_two().trailing_zeros()
 }
-
-/// Key bits of the depth sort: all 32 bits of the (positive) float depth.
-const DEPTH_KEY_BITS: u32 = 32;
 
 impl Renderer {
     /// Builds every kernel of the pipeline, with the rasterizer layout that suits the device
@@ -431,30 +424,7 @@ impl Renderer {
         let counters_readback = slot.counters_readback();
 
         let clip_params = options.clip.to_gpu();
-        let w2c = camera.world_to_camera();
-        let (cx, cy) = camera.principal_point();
-        let row = |r: usize| {
-            let v = w2c.row(r);
-            [v.x, v.y, v.z, 0.0]
-        };
-        let params = GpuFrameParams {
-            world_to_cam: [row(0), row(1), row(2)],
-            cam_pos: [camera.position.x, camera.position.y, camera.position.z, 0.0],
-            focal: [camera.fx, camera.fy, cx, cy],
-            background: [
-                options.background.x,
-                options.background.y,
-                options.background.z,
-                0.0,
-            ],
-            size: [w, h, gx, gy],
-            scene: [
-                scene.count,
-                scene.sh_degree,
-                3 * (scene.sh_degree + 1).pow(2),
-                f.capacity.min(u32::MAX as u64) as u32,
-            ],
-        };
+        let params = frame_params(camera, options, scene, f.capacity);
         // Only rara frames write or read side records; other frames pass a null address.
         let cutoffs_address = if rara {
             f.cutoffs.as_ref().map_or(0, |b| b.address)
@@ -480,8 +450,6 @@ impl Renderer {
                 },
             ));
         let ctx = &self.ctx;
-        let device = ctx.device();
-        let counters_at = |slot: u32| f.counters.address + 4 * slot as u64;
         let mut labels_only;
         let timer: &mut PassTimer = match timings {
             Some(t) => t,
@@ -491,6 +459,7 @@ impl Renderer {
             }
         };
         unsafe {
+            let device = ctx.device();
             timer.begin_frame(cmd);
             device.cmd_update_buffer(cmd, f.params.raw, 0, bytemuck::bytes_of(&params));
             device.cmd_update_buffer(cmd, f.clip_params.raw, 0, bytemuck::bytes_of(&clip_params));
@@ -502,218 +471,77 @@ impl Renderer {
         }
         compute_barrier(ctx, cmd);
 
-        timer.begin_pass(cmd, c"project");
-        let push = ProjectPush {
-            frame: f.params.address,
-            gaussians: scene.gaussians.address,
-            sh: scene.sh.address,
-            splats: f.splats.address,
-            tiles_touched: f.tiles_touched.address,
-            drawn: f.slots.address,
-            counters: f.counters.address,
-            clip: f.clip_params.address,
-            cutoffs: cutoffs_address,
-        };
-        self.project.record(
+        // The stages, in frame order; each records its passes, push constants and barriers.
+        let mut rec = FrameRecording {
             ctx,
             cmd,
-            &push,
-            scene.count,
-            gx * gy,
-            scene.sh_degree,
-            scene.sh_precision,
-            frame_texels,
-        );
-        timer.end_pass(cmd, c"project");
-
-        // The drawn Gaussians, packed in index order, then sorted by depth.
-        timer.begin_pass(cmd, c"depth keys");
-        self.prefix_sum.record(
-            ctx,
-            cmd,
-            f.slots.address,
-            f.params.address + PARAMS_COUNT_OFFSET,
-            Some(counters_at(COUNTER_VISIBLE)),
-            &f.slots_scan,
-        );
-        let push = DepthKeysPush {
-            frame: f.params.address,
-            splats: f.splats.address,
-            tiles_touched: f.tiles_touched.address,
-            slots: f.slots.address,
-            keys: f.depth_sort.keys[0].address,
-            values: f.depth_sort.values[0].address,
-        };
-        self.depth_order
-            .record_keys(cmd, &push, scene.count, frame_texels);
-        compute_barrier(ctx, cmd);
-        timer.end_pass(cmd, c"depth keys");
-        let depth_sorted = self.sort.record(
-            ctx,
-            cmd,
-            &f.depth_sort,
-            counters_at(COUNTER_VISIBLE),
-            DEPTH_KEY_BITS,
-            &DEPTH_SORT_LABELS,
-            Some(&mut *timer),
-        );
-        debug_assert_eq!(depth_sorted, depth_sorted_index);
-        let depth_order = f.depth_sort.values[depth_sorted].address;
-
-        // Each drawn Gaussian's first pair, in depth order.
-        timer.begin_pass(cmd, c"prefix sum");
-        let push = DepthCountsPush {
-            drawn: counters_at(COUNTER_VISIBLE),
-            order: depth_order,
-            tiles_touched: f.tiles_touched.address,
-            counts: f.slots.address,
-        };
-        self.depth_order
-            .record_counts(cmd, &push, scene.count, frame_texels);
-        compute_barrier(ctx, cmd);
-        self.prefix_sum.record(
-            ctx,
-            cmd,
-            f.slots.address,
-            counters_at(COUNTER_VISIBLE),
-            Some(counters_at(COUNTER_INTERSECTIONS)),
-            &f.slots_scan,
-        );
-        timer.end_pass(cmd, c"prefix sum");
-
-        timer.begin_pass(cmd, c"emit");
-        let push = EmitPush {
-            frame: f.params.address,
-            splats: f.splats.address,
-            drawn: counters_at(COUNTER_VISIBLE),
-            order: depth_order,
-            offsets: f.slots.address,
-            keys: f.sort.keys[0].address,
-            values: f.sort.values[0].address,
-            counters: f.counters.address,
-            cutoff_args: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_ARGS_OFFSET),
-            cutoff_pairs: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
-            // The depth sort's other key buffer is free once the sort is done.
-            progress: f.depth_sort.keys[1 - depth_sorted].address,
-            round_index: 0,
-            pad: 0,
-        };
-        self.emit.record(
-            ctx,
-            cmd,
-            &push,
-            scene.count,
-            gx * gy,
-            cutoff_pairs.is_some(),
-            frame_texels,
-        );
-        timer.end_pass(cmd, c"emit");
-
-        if let Some(pairs) = cutoff_pairs {
-            timer.begin_pass(cmd, c"cutoff tiles");
-            let push = CutoffTilesPush {
-                frame: f.params.address,
+            timer,
+            texels: frame_texels,
+            at: FrameAddresses {
+                params: f.params.address,
+                clip: f.clip_params.address,
+                counters: f.counters.address,
                 splats: f.splats.address,
                 tiles_touched: f.tiles_touched.address,
-                counters: f.counters.address,
-                cutoff_pairs: pairs.address + CUTOFF_PAIRS_OFFSET,
-                clip: f.clip_params.address,
+                slots: f.slots.address,
                 cutoffs: cutoffs_address,
-                keys: f.sort.keys[0].address,
-                values: f.sort.values[0].address,
-                tile_flags: tile_lists.map_or(0, |(b, _)| b.address + TileListsLayout::FLAGS),
-            };
-            self.cutoff_tiles
-                .record(cmd, &push, frame_texels, pairs.raw, CUTOFF_ARGS_OFFSET);
-            compute_barrier(ctx, cmd);
-            timer.end_pass(cmd, c"cutoff tiles");
+                ranges: f.ranges.address,
+                state: f.state.address,
+            },
+            size: (w, h),
+            grid: (gx, gy),
+        };
+        let scan = (&self.prefix_sum, &f.slots_scan);
+        self.project.record(&mut rec, scene);
+        let depth_sorted =
+            self.depth_order
+                .record_sorted(&mut rec, scene.count, scan, &self.sort, &f.depth_sort);
+        debug_assert_eq!(depth_sorted, depth_sorted_index);
+        let depth_order = f.depth_sort.values[depth_sorted].address;
+        self.depth_order
+            .record_first_pairs(&mut rec, scene.count, depth_order, scan);
+        // Emit's rounds keep their progress in the depth sort's other key buffer, free by now.
+        let progress = f.depth_sort.keys[1 - depth_sorted].address;
+        self.emit.record(
+            &mut rec,
+            scene.count,
+            depth_order,
+            &f.sort,
+            cutoff_pairs,
+            progress,
+        );
+        if let Some(pairs) = cutoff_pairs {
+            let flags = tile_lists.map_or(0, |(b, _)| b.address + TileListsLayout::FLAGS);
+            self.cutoff_tiles.record(&mut rec, pairs, &f.sort, flags);
         }
-
-        if let Some((buffer, layout)) = tile_lists {
-            timer.begin_pass(cmd, c"tile lists");
-            let push = TileListsPush {
-                flags: buffer.address + TileListsLayout::FLAGS,
-                weighted_args: buffer.address + TileListsLayout::WEIGHTED_ARGS,
-                plain_args: buffer.address + TileListsLayout::PLAIN_ARGS,
-                weighted: buffer.address + layout.weighted(),
-                plain: buffer.address + layout.plain(),
-                counters: f.counters.address,
-                tile_count: layout.tile_count,
-                pad: 0,
-            };
-            self.tile_lists.record(cmd, &push);
-            compute_barrier(ctx, cmd);
-            timer.end_pass(cmd, c"tile lists");
+        if let Some((buffer, layout)) = &tile_lists {
+            self.tile_lists.record(&mut rec, buffer, layout);
         }
-
         let sorted = self.sort.record(
             ctx,
             cmd,
             &f.sort,
-            counters_at(COUNTER_INTERSECTIONS),
+            rec.at.counter(COUNTER_INTERSECTIONS),
             key_bits(w, h),
             &TILE_SORT_LABELS,
-            Some(&mut *timer),
+            Some(&mut *rec.timer),
         );
         debug_assert_eq!(sorted, sorted_index);
-
-        timer.begin_pass(cmd, c"tile ranges");
-        let push = TileRangesPush {
-            keys: f.sort.keys[sorted].address,
-            info: f.sort.info.address,
-            ranges: f.ranges.address,
-            tile_count: gx * gy,
-            pad: 0,
-        };
-        self.tile_ranges
-            .record(cmd, &push, &f.sort.info, frame_texels);
-        compute_barrier(ctx, cmd);
-        timer.end_pass(cmd, c"tile ranges");
-
-        timer.begin_pass(cmd, c"rasterize");
-        let push = RasterizePush {
-            frame: f.params.address,
-            splats: f.splats.address,
-            values: f.sort.values[sorted].address,
-            ranges: f.ranges.address,
-            state: f.state.address,
-            counters: f.counters.address,
-            clip: f.clip_params.address,
-            cutoffs: cutoffs_address,
-            tiles: 0,
-            round_index: 0,
-            flags: 0,
-        };
+        self.tile_ranges.record(&mut rec, &f.sort, sorted);
         let cutoff_weight = rara.then_some(options.clip.weight);
         self.rasterize.record(
-            cmd,
-            &push,
-            (gx, gy),
+            &mut rec,
+            (&f.sort, sorted),
             rounds,
             cutoff_weight,
             tile_lists,
-            frame_texels,
         );
-        compute_barrier(ctx, cmd);
-        timer.end_pass(cmd, c"rasterize");
-
-        timer.begin_pass(cmd, c"write target");
-        let bg = options.background;
-        let push = WriteTargetPush {
-            state: f.state.address,
-            buffer_target,
-            background: [bg.x, bg.y, bg.z, 1.0],
-            size: [w, h],
-            flags: WriteTargetPush::flags_for(options.composite),
-            padding: 0,
-        };
-        // The state's texel view holds at most maxTexelBufferElements pixels; a larger image
-        // reads the state by address.
-        let max_texels = ctx.info().max_texel_buffer_elements as u64;
-        let state_texels = frame_texels.filter(|_| w as u64 * h as u64 <= max_texels);
-        self.write_target
-            .record(cmd, &push, target.format(), image_set, state_texels);
-        timer.end_pass(cmd, c"write target");
+        self.write_target.record(
+            &mut rec,
+            (target.format(), image_set, buffer_target),
+            options.background,
+            options.composite,
+        );
 
         // The counters, for FrameSlot::stats once the frame completed.
         copy_to_host(
@@ -724,6 +552,37 @@ impl Renderer {
             COUNTER_SLOTS as u64 * 4,
         );
         Ok(())
+    }
+}
+
+/// The frame's `FrameParams`: the camera, the image and its tiles, the scene's size and the
+/// pair capacity of the frame's buffers.
+fn frame_params(
+    camera: &Camera,
+    options: &RenderOptions,
+    scene: &GpuScene,
+    capacity: u64,
+) -> GpuFrameParams {
+    let w2c = camera.world_to_camera();
+    let (cx, cy) = camera.principal_point();
+    let (gx, gy) = tile_grid(camera.width, camera.height);
+    let row = |r: usize| {
+        let v = w2c.row(r);
+        [v.x, v.y, v.z, 0.0]
+    };
+    let bg = options.background;
+    GpuFrameParams {
+        world_to_cam: [row(0), row(1), row(2)],
+        cam_pos: [camera.position.x, camera.position.y, camera.position.z, 0.0],
+        focal: [camera.fx, camera.fy, cx, cy],
+        background: [bg.x, bg.y, bg.z, 0.0],
+        size: [camera.width, camera.height, gx, gy],
+        scene: [
+            scene.count,
+            scene.sh_degree,
+            3 * (scene.sh_degree + 1).pow(2),
+            capacity.min(u32::MAX as u64) as u32,
+        ],
     }
 }
 

@@ -11,6 +11,18 @@ fn rara(args: &[&str]) -> Output {
         .expect("run rara")
 }
 
+/// `rara` with its standard input, output and error piped, running.
+fn rara_piped(args: &[&str]) -> std::process::Child {
+    use std::process::Stdio;
+    Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
 fn dir() -> PathBuf {
     let d = std::env::temp_dir().join(format!("rara-cli-tests-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -733,13 +745,7 @@ fn bounded_reads_outputs_and_exit_codes() {
         assert_error(&rara(&["info", device]), &[device, "not a PLY file"]);
     }
     // A cameras file larger than the cap through a pipe (stat says 0 bytes).
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rara"))
-        .args(["render", scene, "--cameras", "/dev/stdin", "-o", out_s])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = rara_piped(&["render", scene, "--cameras", "/dev/stdin", "-o", out_s]);
     let mut stdin = child.stdin.take().unwrap();
     let feeder = std::thread::spawn(move || {
         use std::io::Write;
@@ -756,13 +762,7 @@ fn bounded_reads_outputs_and_exit_codes() {
 
     // A scene from a pipe loads, streamed.
     let bytes = std::fs::read(scene).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rara"))
-        .args(["info", "/dev/stdin", "--json"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = rara_piped(&["info", "/dev/stdin", "--json"]);
     {
         use std::io::Write;
         child.stdin.take().unwrap().write_all(&bytes).unwrap();

@@ -442,6 +442,17 @@ const CLIP_FIELDS: &[&str] = &[
     "\"band\"",
 ];
 
+/// The mutations of a JSON input: a byte-level one a third of the time, else `mutate_json`.
+fn json_mutations(fields: &'static [&'static str]) -> impl Fn(&mut Rng, &mut Vec<u8>) {
+    move |rng, input| {
+        if rng.next_u64() % 3 == 0 {
+            mutate_bytes(rng, input)
+        } else {
+            mutate_json(rng, input, fields)
+        }
+    }
+}
+
 /// Mutates a JSON text: a number replaced by an unusual value, a field renamed away (one of
 /// `fields`), deep nesting, or the top array's contents repeated.
 fn mutate_json(rng: &mut Rng, input: &mut Vec<u8>, fields: &[&str]) {
@@ -699,24 +710,13 @@ fn ply_loader_survives_mutated_headers_and_payloads() {
 #[test]
 fn cameras_parser_survives_mutated_files() {
     let seeds = camera_seeds();
-    fuzz(
-        "cameras",
-        &seeds,
-        |rng, input| {
-            if rng.next_u64() % 3 == 0 {
-                mutate_bytes(rng, input)
-            } else {
-                mutate_json(rng, input, CAMERA_FIELDS)
-            }
-        },
-        |input| {
-            let text = String::from_utf8_lossy(input);
-            match Camera::parse_all(&text, Path::new("fuzz.cameras.json")) {
-                Ok(cams) => check_cameras(&cams).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
-                Err(e) => Err(e.to_string()),
-            }
-        },
-    );
+    fuzz("cameras", &seeds, json_mutations(CAMERA_FIELDS), |input| {
+        let text = String::from_utf8_lossy(input);
+        match Camera::parse_all(&text, Path::new("fuzz.cameras.json")) {
+            Ok(cams) => check_cameras(&cams).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+            Err(e) => Err(e.to_string()),
+        }
+    });
 }
 
 fn clip_seeds() -> Vec<(String, Vec<u8>)> {
@@ -768,23 +768,12 @@ fn check_clip(clip: &rara::Clip) -> Result<(), String> {
 #[test]
 fn clip_file_parser_survives_mutated_files() {
     let seeds = clip_seeds();
-    fuzz(
-        "clip",
-        &seeds,
-        |rng, input| {
-            if rng.next_u64() % 3 == 0 {
-                mutate_bytes(rng, input)
-            } else {
-                mutate_json(rng, input, CLIP_FIELDS)
-            }
-        },
-        |input| {
-            let text = String::from_utf8_lossy(input);
-            let path = Path::new("fuzz.clip.json");
-            match ClipFile::parse(&text, path).and_then(ClipFile::into_clip) {
-                Ok(clip) => check_clip(&clip).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
-                Err(e) => Err(e.to_string()),
-            }
-        },
-    );
+    fuzz("clip", &seeds, json_mutations(CLIP_FIELDS), |input| {
+        let text = String::from_utf8_lossy(input);
+        let path = Path::new("fuzz.clip.json");
+        match ClipFile::parse(&text, path).and_then(ClipFile::into_clip) {
+            Ok(clip) => check_clip(&clip).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+            Err(e) => Err(e.to_string()),
+        }
+    });
 }

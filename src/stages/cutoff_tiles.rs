@@ -12,9 +12,18 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
+use super::sort::SortBuffers;
+use super::FrameRecording;
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{ComputePipeline, Context};
+use crate::vk::{Buffer, ComputePipeline, Context};
+
+/// Offset of the cutoff-tiles dispatch arguments in the frame's cutoff-pairs buffer (which emit
+/// fills under rara clipping by planes with the mass weight).
+pub const CUTOFF_ARGS_OFFSET: u64 = 0;
+/// Offset of the (first pair, splat index) entries in the cutoff-pairs buffer, one per cutoff
+/// record.
+pub const CUTOFF_PAIRS_OFFSET: u64 = 16;
 
 /// Device addresses the cutoff-tiles kernel reads and writes.
 #[repr(C)]
@@ -63,19 +72,40 @@ impl CutoffTiles {
         })
     }
 
-    /// Records the kernel, one workgroup per [`crate::constants::LINEAR_WORKGROUP`] cutoff
-    /// splats, which share their pairs out (`glsl/cutoff_tiles_body.glsl`), dispatched
-    /// indirectly from the arguments emit wrote at `args` + `args_offset`. The texel kernel
-    /// needs `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
+    /// Records the pass "cutoff tiles": one workgroup per
+    /// [`crate::constants::LINEAR_WORKGROUP`] cutoff splats, which share their pairs out
+    /// (`glsl/cutoff_tiles_body.glsl`), dispatched indirectly from the arguments emit wrote in
+    /// `pairs` (the frame's cutoff-pairs buffer), over the pairs emit wrote into the first
+    /// buffers of `sort`; flags the tiles that keep a weighted pair at `tile_flags` (0: none),
+    /// then a barrier.
     pub fn record(
         &self,
-        cmd: vk::CommandBuffer,
-        push: &CutoffTilesPush,
-        frame_texels: Option<vk::DescriptorSet>,
-        args: vk::Buffer,
-        args_offset: u64,
+        f: &mut FrameRecording,
+        pairs: &Buffer,
+        sort: &SortBuffers,
+        tile_flags: u64,
     ) {
-        self.pipeline
-            .dispatch_indirect_in(cmd, push, frame_texels, args, args_offset);
+        let push = CutoffTilesPush {
+            frame: f.at.params,
+            splats: f.at.splats,
+            tiles_touched: f.at.tiles_touched,
+            counters: f.at.counters,
+            cutoff_pairs: pairs.address + CUTOFF_PAIRS_OFFSET,
+            clip: f.at.clip,
+            cutoffs: f.at.cutoffs,
+            keys: sort.keys[0].address,
+            values: sort.values[0].address,
+            tile_flags,
+        };
+        f.pass(c"cutoff tiles", |f| {
+            self.pipeline.dispatch_indirect_in(
+                f.cmd,
+                &push,
+                f.texels,
+                pairs.raw,
+                CUTOFF_ARGS_OFFSET,
+            );
+            f.barrier();
+        });
     }
 }

@@ -2,18 +2,30 @@
 //! `glsl/depth_counts_body.glsl`).
 //!
 //! The frame scans project's drawn flags into packed sort slots, writes one (depth bits,
-//! index) pair per drawn Gaussian ([`DepthOrder::record_keys`]), sorts them by depth with the
+//! index) pair per drawn Gaussian ([`DepthOrder::record_sorted`]), sorts them by depth with the
 //! stable [`super::sort::RadixSort`] (ties keep index order), and lists the tiles touched in
-//! that order ([`DepthOrder::record_counts`]) for the prefix sum that places each Gaussian's
+//! that order ([`DepthOrder::record_first_pairs`]) for the prefix sum that places each Gaussian's
 //! pairs. Emit then writes the pairs in depth order and the pair sort only needs the tile bits:
 //! 32 depth bits are sorted once per Gaussian instead of once per (tile, splat) pair.
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
+use super::prefix_sum::{PrefixSum, PrefixSumScratch};
+use super::sort::{RadixSort, SortBuffers, DEPTH_SORT_LABELS};
+use super::FrameRecording;
+use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_VISIBLE};
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{ComputePipeline, Context};
+
+/// Bits of the depth sort's keys: a drawn Gaussian's whole `f32` depth (positive, so its bits
+/// order as the depths do).
+pub const DEPTH_KEY_BITS: u32 = 32;
+
+/// Byte offset of `scene.x` (the Gaussian count) in `FrameParams`: the scan of the drawn flags
+/// reads its length there.
+const PARAMS_COUNT_OFFSET: u64 = 112;
 
 /// Device addresses the depth-keys kernel reads and writes.
 #[repr(C)]
@@ -76,29 +88,80 @@ impl DepthOrder {
         })
     }
 
-    /// Records the depth keys of a scene of `count` Gaussians (the texel kernels need
-    /// `frame_texels`, the frame's set of [`super::frame_texels_set_layout`]).
-    pub fn record_keys(
+    /// Records the pass "depth keys" (project's drawn flags scanned into packed sort slots,
+    /// the count into `COUNTER_VISIBLE`, then one (depth bits, index) pair per drawn
+    /// Gaussian) and then the depth sort's passes over `depth_sort`; returns which of its
+    /// buffers holds the sorted pairs. The texel kernels read the frame's texel views.
+    pub fn record_sorted(
         &self,
-        cmd: vk::CommandBuffer,
-        push: &DepthKeysPush,
+        f: &mut FrameRecording,
         count: u32,
-        frame_texels: Option<vk::DescriptorSet>,
-    ) {
-        self.keys
-            .dispatch_in(cmd, push, frame_texels, super::linear_grid(count));
+        scan: (&PrefixSum, &PrefixSumScratch),
+        sort: &RadixSort,
+        depth_sort: &SortBuffers,
+    ) -> usize {
+        let (prefix_sum, scratch) = scan;
+        let push = DepthKeysPush {
+            frame: f.at.params,
+            splats: f.at.splats,
+            tiles_touched: f.at.tiles_touched,
+            slots: f.at.slots,
+            keys: depth_sort.keys[0].address,
+            values: depth_sort.values[0].address,
+        };
+        f.pass(c"depth keys", |f| {
+            prefix_sum.record(
+                f.ctx,
+                f.cmd,
+                f.at.slots,
+                f.at.params + PARAMS_COUNT_OFFSET,
+                Some(f.at.counter(COUNTER_VISIBLE)),
+                scratch,
+            );
+            self.keys
+                .dispatch_in(f.cmd, &push, f.texels, super::linear_grid(count));
+            f.barrier();
+        });
+        sort.record(
+            f.ctx,
+            f.cmd,
+            depth_sort,
+            f.at.counter(COUNTER_VISIBLE),
+            DEPTH_KEY_BITS,
+            &DEPTH_SORT_LABELS,
+            Some(&mut *f.timer),
+        )
     }
 
-    /// Records the tiles touched in depth order for a scene of `count` Gaussians (the drawn
-    /// ones are read on the GPU; `frame_texels` as for [`DepthOrder::record_keys`]).
-    pub fn record_counts(
+    /// Records the pass "prefix sum": the tiles touched listed in depth `order` (the depth
+    /// sort's values), then scanned into each drawn Gaussian's first pair, with the frame's
+    /// pair count into `COUNTER_INTERSECTIONS`.
+    pub fn record_first_pairs(
         &self,
-        cmd: vk::CommandBuffer,
-        push: &DepthCountsPush,
+        f: &mut FrameRecording,
         count: u32,
-        frame_texels: Option<vk::DescriptorSet>,
+        order: u64,
+        scan: (&PrefixSum, &PrefixSumScratch),
     ) {
-        self.counts
-            .dispatch_in(cmd, push, frame_texels, super::linear_grid(count));
+        let (prefix_sum, scratch) = scan;
+        let push = DepthCountsPush {
+            drawn: f.at.counter(COUNTER_VISIBLE),
+            order,
+            tiles_touched: f.at.tiles_touched,
+            counts: f.at.slots,
+        };
+        f.pass(c"prefix sum", |f| {
+            self.counts
+                .dispatch_in(f.cmd, &push, f.texels, super::linear_grid(count));
+            f.barrier();
+            prefix_sum.record(
+                f.ctx,
+                f.cmd,
+                f.at.slots,
+                f.at.counter(COUNTER_VISIBLE),
+                Some(f.at.counter(COUNTER_INTERSECTIONS)),
+                scratch,
+            );
+        });
     }
 }

@@ -8,9 +8,13 @@ use bytemuck::{Pod, Zeroable};
 
 use std::ffi::CStr;
 
+use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
+use super::sort::SortBuffers;
+use super::FrameRecording;
+use crate::constants::COUNTER_VISIBLE;
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{compute_barrier, ComputePipeline, Context};
+use crate::vk::{Buffer, ComputePipeline, Context};
 
 /// Device addresses the emit kernel reads and writes.
 #[repr(C)]
@@ -72,34 +76,52 @@ impl Emit {
         })
     }
 
-    /// Records the emission for a scene of `count` Gaussians (the drawn ones are read on the
-    /// GPU) on an image of `tiles` tiles, in [`super::tile_rect_rounds`] rounds with a barrier
-    /// after each. With `cutoff_pairs`, the kernel also fills `push.cutoff_args` and
-    /// `push.cutoff_pairs` for [`super::cutoff_tiles::CutoffTiles::record`]. The texel
-    /// kernels need `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
-    #[allow(clippy::too_many_arguments)]
+    /// Records the pass "emit" for a scene of `count` Gaussians (the drawn ones are read on
+    /// the GPU, in depth `order`): the pairs into the first buffers of `sort`, in
+    /// [`super::tile_rect_rounds`] rounds with a barrier after each. With `cutoff_pairs` (the
+    /// cutoff-tiles stage's buffer), the kernel also lists where each cutoff splat's pairs
+    /// start and the dispatch arguments of [`super::cutoff_tiles::CutoffTiles::record`].
+    /// `progress` is scratch of a `u32` per Gaussian for the rounds (the depth sort's other key
+    /// buffer, free by then).
     pub fn record(
         &self,
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        push: &EmitPush,
+        f: &mut FrameRecording,
         count: u32,
-        tiles: u32,
-        cutoff_pairs: bool,
-        frame_texels: Option<vk::DescriptorSet>,
+        order: u64,
+        sort: &SortBuffers,
+        cutoff_pairs: Option<&Buffer>,
+        progress: u64,
     ) {
-        let pipeline = if cutoff_pairs {
+        let push = EmitPush {
+            frame: f.at.params,
+            splats: f.at.splats,
+            drawn: f.at.counter(COUNTER_VISIBLE),
+            order,
+            offsets: f.at.slots,
+            keys: sort.keys[0].address,
+            values: sort.values[0].address,
+            counters: f.at.counters,
+            cutoff_args: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_ARGS_OFFSET),
+            cutoff_pairs: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
+            progress,
+            round_index: 0,
+            pad: 0,
+        };
+        let pipeline = if cutoff_pairs.is_some() {
             &self.cutoff_pairs
         } else {
             &self.plain
         };
-        for round_index in 0..super::tile_rect_rounds(tiles) {
-            let push = EmitPush {
-                round_index,
-                ..*push
-            };
-            pipeline.dispatch_in(cmd, &push, frame_texels, super::linear_grid(count));
-            compute_barrier(ctx, cmd);
-        }
+        let rounds = super::tile_rect_rounds(f.tile_count());
+        f.pass(c"emit", |f| {
+            for round_index in 0..rounds {
+                let push = EmitPush {
+                    round_index,
+                    ..push
+                };
+                pipeline.dispatch_in(f.cmd, &push, f.texels, super::linear_grid(count));
+                f.barrier();
+            }
+        });
     }
 }

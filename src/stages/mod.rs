@@ -1,14 +1,84 @@
 //! The GPU pipeline, one module per stage, in frame order. Each holds its kernel(s) and a
-//! `record` that only appends dispatches (and barriers) to a command buffer; the GLSL lives
-//! in `glsl/<stage>_body.glsl` (or `glsl/<stage>.comp` for a kernel without variants), its
-//! variants in the table `glsl/variants.rs`, and the CPU twin in `reference`.
+//! `record` that appends the stage of a frame to a [`FrameRecording`]: its push constants,
+//! dispatches, barriers and timed pass; [`crate::Renderer::record`] is the list of them. The
+//! GLSL lives in `glsl/<stage>_body.glsl` (or `glsl/<stage>.comp` for a kernel without
+//! variants), its variants in the table `glsl/variants.rs`, and the CPU twin in `reference`.
 
 use ash::vk;
 
 use crate::constants::{LINEAR_GRID_X, LINEAR_WORKGROUP};
 use crate::error::{Result, VkContext};
 use crate::precision::ShPrecision;
-use crate::vk::Context;
+use crate::timing::PassTimer;
+use crate::vk::{compute_barrier, Context};
+
+/// Device addresses of one frame's buffers, the ones most stages read or write.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameAddresses {
+    /// `FrameParams`: camera, image and scene sizes.
+    pub params: u64,
+    /// `ClipParams`: the clip region and mode.
+    pub clip: u64,
+    /// The frame's counters (`COUNTER_*` slots).
+    pub counters: u64,
+    /// One `ProjectedSplat` per Gaussian.
+    pub splats: u64,
+    /// Tiles touched per Gaussian.
+    pub tiles_touched: u64,
+    /// The drawn flags, then each drawn Gaussian's sort slot, then its first pair.
+    pub slots: u64,
+    /// Cutoff side records, or 0 on frames that are not rara-clipped.
+    pub cutoffs: u64,
+    /// Each tile's run of sorted pairs.
+    pub ranges: u64,
+    /// The rasterizer's per-pixel state.
+    pub state: u64,
+}
+
+impl FrameAddresses {
+    /// The address of counter `slot` (`COUNTER_*`).
+    pub fn counter(&self, slot: u32) -> u64 {
+        self.counters + 4 * slot as u64
+    }
+}
+
+/// One frame being recorded into a command buffer: what every stage's `record` needs besides
+/// its own inputs.
+pub struct FrameRecording<'a> {
+    /// The device.
+    pub ctx: &'a Context,
+    /// The caller's command buffer, recording.
+    pub cmd: vk::CommandBuffer,
+    /// Timestamps and debug labels of the passes.
+    pub timer: &'a mut PassTimer,
+    /// The frame's texel views (CPU drivers; [`frame_texels_set_layout`]), else `None`.
+    pub texels: Option<vk::DescriptorSet>,
+    /// The frame's buffers.
+    pub at: FrameAddresses,
+    /// Image size in pixels.
+    pub size: (u32, u32),
+    /// Tiles across and down.
+    pub grid: (u32, u32),
+}
+
+impl FrameRecording<'_> {
+    /// Tiles of the image.
+    pub fn tile_count(&self) -> u32 {
+        self.grid.0 * self.grid.1
+    }
+
+    /// Records `body` as the timed, labelled pass `name`.
+    pub fn pass(&mut self, name: &'static std::ffi::CStr, body: impl FnOnce(&mut Self)) {
+        self.timer.begin_pass(self.cmd, name);
+        body(self);
+        self.timer.end_pass(self.cmd, name);
+    }
+
+    /// A barrier from compute and transfer writes to what later passes read.
+    pub fn barrier(&self) {
+        compute_barrier(self.ctx, self.cmd);
+    }
+}
 
 pub mod cutoff_tiles;
 pub mod depth_order;

@@ -5,10 +5,12 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
+use super::FrameRecording;
 use crate::error::Result;
+use crate::gpu_scene::GpuScene;
 use crate::precision::ShPrecision;
 use crate::shaders;
-use crate::vk::{compute_barrier, ComputePipeline, Context};
+use crate::vk::{ComputePipeline, Context};
 
 /// Device addresses the project kernel reads and writes.
 #[repr(C)]
@@ -139,41 +141,44 @@ impl Project {
         })
     }
 
-    /// Records the projection of `count` Gaussians with SH of `degree` (0 to 3) stored at
-    /// `precision`, on an image of `tiles` tiles, with a barrier after it: project, then (on
-    /// images of more than [`TILE_RECT_CHUNK`](crate::constants::TILE_RECT_CHUNK) tiles) the
-    /// later rounds of the count of tiles touched ([`super::tile_rect_rounds`]). The texel
-    /// kernels need `frame_texels`, the frame's set of [`super::frame_texels_set_layout`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        push: &ProjectPush,
-        count: u32,
-        tiles: u32,
-        degree: u32,
-        precision: ShPrecision,
-        frame_texels: Option<vk::DescriptorSet>,
-    ) {
-        let kernels = match precision {
+    /// Records stage 1 of a frame, the pass "project": every Gaussian of `scene` classified,
+    /// culled and projected, with a barrier after it; on images of more than
+    /// [`TILE_RECT_CHUNK`](crate::constants::TILE_RECT_CHUNK) tiles, then the later rounds of
+    /// the count of tiles touched ([`super::tile_rect_rounds`]). The texel kernels read the
+    /// frame's texel views.
+    pub fn record(&self, f: &mut FrameRecording, scene: &GpuScene) {
+        let push = ProjectPush {
+            frame: f.at.params,
+            gaussians: scene.gaussians.address,
+            sh: scene.sh.address,
+            splats: f.at.splats,
+            tiles_touched: f.at.tiles_touched,
+            drawn: f.at.slots,
+            counters: f.at.counters,
+            clip: f.at.clip,
+            cutoffs: f.at.cutoffs,
+        };
+        let kernels = match scene.sh_precision {
             ShPrecision::F32 => &self.sh32,
             ShPrecision::F16 => &self.sh16,
         };
-        let grid = super::linear_grid(count);
-        kernels[degree.min(3) as usize].dispatch_in(cmd, push, frame_texels, grid);
-        compute_barrier(ctx, cmd);
-        for round_index in 1..super::tile_rect_rounds(tiles) {
-            let touched = TouchedPush {
-                frame: push.frame,
-                splats: push.splats,
-                tiles_touched: push.tiles_touched,
-                drawn: push.drawn,
-                round_index,
-                pad: 0,
-            };
-            self.touched.dispatch(cmd, &touched, grid);
-            compute_barrier(ctx, cmd);
-        }
+        let grid = super::linear_grid(scene.count);
+        let rounds = super::tile_rect_rounds(f.tile_count());
+        f.pass(c"project", |f| {
+            kernels[scene.sh_degree.min(3) as usize].dispatch_in(f.cmd, &push, f.texels, grid);
+            f.barrier();
+            for round_index in 1..rounds {
+                let touched = TouchedPush {
+                    frame: push.frame,
+                    splats: push.splats,
+                    tiles_touched: push.tiles_touched,
+                    drawn: push.drawn,
+                    round_index,
+                    pad: 0,
+                };
+                self.touched.dispatch(f.cmd, &touched, grid);
+                f.barrier();
+            }
+        });
     }
 }

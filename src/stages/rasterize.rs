@@ -7,13 +7,15 @@ use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
 use super::sh_texel;
+use super::sort::SortBuffers;
 use super::tile_lists::TileListsLayout;
+use super::FrameRecording;
 use crate::clip::ClipWeight;
 use crate::constants::MAX_INTERSECTIONS;
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::shaders;
-use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, ComputePipeline, Context};
 
 /// Device addresses and round of the rasterizer.
 #[repr(C)]
@@ -105,7 +107,6 @@ pub struct Rasterize {
     mass: ComputePipeline,
     length: ComputePipeline,
     layout: RasterLayout,
-    ctx: Context,
 }
 
 impl Rasterize {
@@ -143,7 +144,6 @@ impl Rasterize {
             mass,
             length,
             layout,
-            ctx: ctx.clone(),
         })
     }
 
@@ -190,56 +190,70 @@ impl Rasterize {
         Ok(())
     }
 
-    /// Records `rounds` rounds over the `tiles` grid; each walks the next RASTER_CHUNK
-    /// entries of every tile list. `cutoff_weight` is the weight of the frame's rara clipping,
+    /// Records the pass "rasterize": `rounds` rounds over the grid, each walking the next
+    /// RASTER_CHUNK entries of every tile list (the pairs sorted into buffer `sorted` of
+    /// `sort`), then a barrier. `cutoff_weight` is the weight of the frame's rara clipping,
     /// `None` when no splat is cutoff. With `lists` (the frame's tile-lists buffer and its
     /// layout, [`super::tile_lists`]; mass weight only) each round runs the plain kernel over
     /// the plain list and the weighted kernel over the weighted list, as indirect dispatches;
-    /// else one kernel over the whole grid. The strips kernels need `frame_texels`, the frame's
-    /// set of [`super::frame_texels_set_layout`].
-    #[allow(clippy::too_many_arguments)]
+    /// else one kernel over the whole grid. The strips kernels read the frame's texel views.
     pub fn record(
         &self,
-        cmd: vk::CommandBuffer,
-        push: &RasterizePush,
-        tiles: (u32, u32),
+        f: &mut FrameRecording,
+        (sort, sorted): (&SortBuffers, usize),
         rounds: u32,
         cutoff_weight: Option<ClipWeight>,
         lists: Option<(&Buffer, TileListsLayout)>,
-        frame_texels: Option<vk::DescriptorSet>,
     ) {
+        let push = RasterizePush {
+            frame: f.at.params,
+            splats: f.at.splats,
+            values: sort.values[sorted].address,
+            ranges: f.at.ranges,
+            state: f.at.state,
+            counters: f.at.counters,
+            clip: f.at.clip,
+            cutoffs: f.at.cutoffs,
+            tiles: 0,
+            round_index: 0,
+            flags: 0,
+        };
         let pipeline = match cutoff_weight {
             None => &self.plain,
             Some(ClipWeight::Mass) => &self.mass,
             Some(ClipWeight::Length) => &self.length,
         };
         debug_assert!(lists.is_none() || cutoff_weight == Some(ClipWeight::Mass));
-        for round in 0..rounds {
-            let mut p = *push;
-            p.round_index = round;
-            p.flags = if round == 0 { ROUND_FIRST } else { 0 };
-            match lists {
-                Some((buffer, layout)) => {
-                    p.flags |= ROUND_TILE_LIST;
-                    // The two lists hold disjoint tiles: no barrier between them.
-                    for (kernel, list, args) in [
-                        (&self.plain, layout.plain(), TileListsLayout::PLAIN_ARGS),
-                        (
-                            &self.mass,
-                            layout.weighted(),
-                            TileListsLayout::WEIGHTED_ARGS,
-                        ),
-                    ] {
-                        p.tiles = buffer.address + list;
-                        kernel.dispatch_indirect_in(cmd, &p, frame_texels, buffer.raw, args);
+        let (gx, gy) = f.grid;
+        f.pass(c"rasterize", |f| {
+            for round in 0..rounds {
+                let mut p = push;
+                p.round_index = round;
+                p.flags = if round == 0 { ROUND_FIRST } else { 0 };
+                match lists {
+                    Some((buffer, layout)) => {
+                        p.flags |= ROUND_TILE_LIST;
+                        // The two lists hold disjoint tiles: no barrier between them.
+                        for (kernel, list, args) in [
+                            (&self.plain, layout.plain(), TileListsLayout::PLAIN_ARGS),
+                            (
+                                &self.mass,
+                                layout.weighted(),
+                                TileListsLayout::WEIGHTED_ARGS,
+                            ),
+                        ] {
+                            p.tiles = buffer.address + list;
+                            kernel.dispatch_indirect_in(f.cmd, &p, f.texels, buffer.raw, args);
+                        }
                     }
+                    None => pipeline.dispatch_in(f.cmd, &p, f.texels, [gx, gy, 1]),
                 }
-                None => pipeline.dispatch_in(cmd, &p, frame_texels, [tiles.0, tiles.1, 1]),
+                if round + 1 < rounds {
+                    f.barrier();
+                }
             }
-            if round + 1 < rounds {
-                compute_barrier(&self.ctx, cmd);
-            }
-        }
+            f.barrier();
+        });
     }
 }
 

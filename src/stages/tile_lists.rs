@@ -11,7 +11,7 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::linear_grid;
+use super::{linear_grid, FrameRecording};
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{Buffer, ComputePipeline, Context};
@@ -118,10 +118,24 @@ impl TileLists {
         }
     }
 
-    /// Records the kernel over the grid's tiles.
-    pub fn record(&self, cmd: vk::CommandBuffer, push: &TileListsPush) {
-        self.pipeline
-            .dispatch(cmd, push, linear_grid(push.tile_count));
+    /// Records the pass "tile lists" over the grid's tiles into `buffer` (laid out as
+    /// `layout`), then a barrier.
+    pub fn record(&self, f: &mut FrameRecording, buffer: &Buffer, layout: &TileListsLayout) {
+        let push = TileListsPush {
+            flags: buffer.address + TileListsLayout::FLAGS,
+            weighted_args: buffer.address + TileListsLayout::WEIGHTED_ARGS,
+            plain_args: buffer.address + TileListsLayout::PLAIN_ARGS,
+            weighted: buffer.address + layout.weighted(),
+            plain: buffer.address + layout.plain(),
+            counters: f.at.counters,
+            tile_count: layout.tile_count,
+            pad: 0,
+        };
+        f.pass(c"tile lists", |f| {
+            self.pipeline
+                .dispatch(f.cmd, &push, linear_grid(push.tile_count));
+            f.barrier();
+        });
     }
 }
 

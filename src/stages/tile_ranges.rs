@@ -4,10 +4,11 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::sort::LINEAR_ARGS_OFFSET;
+use super::sort::{SortBuffers, LINEAR_ARGS_OFFSET};
+use super::FrameRecording;
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{ComputePipeline, Context};
 
 /// Device addresses the tile-ranges kernel reads and writes.
 #[repr(C)]
@@ -44,21 +45,25 @@ impl TileRanges {
         })
     }
 
-    /// Records the kernel over the sorted pairs, as many as `sort_info` says (the texel kernel
-    /// needs `frame_texels`, the frame's set of [`super::frame_texels_set_layout`]).
-    pub fn record(
-        &self,
-        cmd: vk::CommandBuffer,
-        push: &TileRangesPush,
-        sort_info: &Buffer,
-        frame_texels: Option<vk::DescriptorSet>,
-    ) {
-        self.pipeline.dispatch_indirect_in(
-            cmd,
-            push,
-            frame_texels,
-            sort_info.raw,
-            LINEAR_ARGS_OFFSET,
-        );
+    /// Records the pass "tile ranges" over the pairs sorted into buffer `sorted` of `sort`, as
+    /// many as its info says, then a barrier.
+    pub fn record(&self, f: &mut FrameRecording, sort: &SortBuffers, sorted: usize) {
+        let push = TileRangesPush {
+            keys: sort.keys[sorted].address,
+            info: sort.info.address,
+            ranges: f.at.ranges,
+            tile_count: f.tile_count(),
+            pad: 0,
+        };
+        f.pass(c"tile ranges", |f| {
+            self.pipeline.dispatch_indirect_in(
+                f.cmd,
+                &push,
+                f.texels,
+                sort.info.raw,
+                LINEAR_ARGS_OFFSET,
+            );
+            f.barrier();
+        });
     }
 }

@@ -5,6 +5,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
+use super::FrameRecording;
 use crate::constants::TILE_SIZE;
 use crate::error::{Result, VkContext};
 use crate::shaders;
@@ -204,11 +205,36 @@ impl WriteTarget {
         }
     }
 
-    /// Records the kernel for a target of `format`: the storage image whose view `image_set`
-    /// holds or, with `image_set == None`, the buffer at `push.buffer_target`. With
-    /// `frame_texels` (the frame's texel views, whose state view must hold every pixel) and
-    /// kernels built for them, the state is read through its view, else at `push.state`.
+    /// Records the pass "write target": the rasterizer's per-pixel state over `background`
+    /// (or over what the target holds, by `composite`) into a target of `format`: the storage
+    /// image whose view `image_set` holds or, with `image_set == None`, the buffer at
+    /// `buffer_target`. Where the kernels were built for the frame's texel views and its state
+    /// view holds every pixel (at most `maxTexelBufferElements`), the state is read through
+    /// it, else by address. No barrier follows: the target is the caller's from here.
     pub fn record(
+        &self,
+        f: &mut FrameRecording,
+        (format, image_set, buffer_target): (TargetFormat, Option<vk::DescriptorSet>, u64),
+        background: glam::Vec3,
+        composite: Composite,
+    ) {
+        let (w, h) = f.size;
+        let push = WriteTargetPush {
+            state: f.at.state,
+            buffer_target,
+            background: [background.x, background.y, background.z, 1.0],
+            size: [w, h],
+            flags: WriteTargetPush::flags_for(composite),
+            padding: 0,
+        };
+        let max_texels = f.ctx.info().max_texel_buffer_elements as u64;
+        let frame_texels = f.texels.filter(|_| w as u64 * h as u64 <= max_texels);
+        f.pass(c"write target", |f| {
+            self.dispatch(f.cmd, &push, format, image_set, frame_texels)
+        });
+    }
+
+    fn dispatch(
         &self,
         cmd: vk::CommandBuffer,
         push: &WriteTargetPush,
