@@ -156,7 +156,7 @@ pub const COUNTER_OVERSIZED: u32 = 9;
 /// Number of counter slots.
 pub const COUNTER_SLOTS: u32 = 10;
 
-/// The footprint bound (README, "Formats and conventions"): a Gaussian is not drawn when
+/// The footprint bound (docs/ARCHITECTURE.md, "Extreme scales"): a Gaussian is not drawn when
 /// one of its three scaled axes, projected by the Jacobian onto the image's x or y axis, spans
 /// more than this many pixels (`|m_k| > B` for a component of `m0 = S R^T J_0^T` or
 /// `m1 = S R^T J_1^T`). That is 4x the largest image side: such a splat is a line or a wash

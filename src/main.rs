@@ -134,7 +134,7 @@ struct RenderArgs {
     #[arg(short, long)]
     output: PathBuf,
     /// Store the SH coefficients on the GPU in half precision (half the memory of the
-    /// largest scene buffer; see the README for the image error).
+    /// largest scene buffer; docs/ARCHITECTURE.md gives the image error).
     #[arg(long)]
     sh_half: bool,
     /// Render with the CPU reference renderer instead of the GPU.

@@ -6,7 +6,7 @@ use crate::scene::Scene;
 /// Storage of the SH coefficients on the device ([`crate::GpuScene::with_sh_precision`]).
 /// The kernels evaluate the SH in 32-bit floats either way; `F16` only rounds the stored
 /// coefficients (to 11 significant bits, which is below 8-bit colour quantisation for
-/// coefficients of the usual range; the README states the measured image error).
+/// coefficients of the usual range; docs/ARCHITECTURE.md states the measured image error).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ShPrecision {
     /// IEEE binary32, the coefficients as loaded.
