@@ -118,7 +118,7 @@ fn read_header_bytes(path: &Path, reader: &mut impl BufRead) -> Result<Vec<u8>> 
             .rposition(|&c| c == b'\n')
             .map_or(0, |p| p + 1);
         let line = String::from_utf8_lossy(&header[line_start..]);
-        if line.trim_end() == "end_header" && header.ends_with(b"\n") {
+        if line.trim_end() == "end_header" {
             return Ok(header);
         }
         if header.len() >= MAX_HEADER_BYTES {
