@@ -297,9 +297,9 @@ fn read_ply_from<R: BufRead>(
         ..Default::default()
     };
     let payload = len.map(|l| l.saturating_sub(header_bytes.len() as u64));
-    // With the size known, nothing is reserved for vertices the file cannot hold; a stream
-    // reserves nothing and grows as vertices arrive.
-    let reserve_for = if payload.is_some() { count } else { 0 };
+    // With the size known, the counts were checked against it before anything is reserved; a
+    // stream trusts no count, reserves nothing and grows as vertices arrive.
+    let sized = payload.is_some();
 
     match header.encoding {
         Encoding::Ascii => {
@@ -326,68 +326,56 @@ fn read_ply_from<R: BufRead>(
                 count,
                 &stored,
                 &layout,
-                reserve_for,
+                sized,
                 &mut scene,
                 &mut report,
             )?;
         }
         _ => {
-            // Elements before 'vertex': rows of fixed size are skipped whole, rows with a list
-            // are walked one by one (each has at least one count, so the walk ends with the
-            // input).
-            let mut before = Vec::new();
-            let mut fixed_skip = 0u64;
-            for e in &element_defs[..vertex_pos] {
-                let props = stored_of(e)?;
-                if props.iter().any(|p| matches!(p, Stored::List { .. })) {
-                    before.push((e.name.as_str(), e.count, props));
-                } else {
-                    let row: u64 = props.iter().map(|p| p.min_size() as u64).sum();
-                    fixed_skip = fixed_skip.saturating_add(row.saturating_mul(e.count as u64));
-                }
-            }
+            // Elements before 'vertex', in file order: rows of fixed size are skipped whole,
+            // rows with a list walked one by one (each has at least one count, so the walk
+            // ends with the input). Read past, not sought past, so a stream works too.
+            let before = element_defs[..vertex_pos]
+                .iter()
+                .map(|e| Ok((e.name.as_str(), e.count, stored_of(e)?)))
+                .collect::<Result<Vec<_>>>()?;
             if let Some(payload) = payload {
-                let least_before: u128 = before
-                    .iter()
-                    .map(|(_, n, props)| {
-                        *n as u128 * props.iter().map(|p| p.min_size() as u128).sum::<u128>()
-                    })
-                    .sum();
-                let needed = (count as u128) * (min_row as u128) + fixed_skip as u128;
-                if needed + least_before > payload as u128 {
+                let least = |n: usize, props: &[Stored]| {
+                    n as u128 * props.iter().map(|p| p.min_size() as u128).sum::<u128>()
+                };
+                let needed = least(count, &stored)
+                    + before
+                        .iter()
+                        .map(|(_, n, props)| least(*n, props))
+                        .sum::<u128>();
+                if needed > payload as u128 {
                     return Err(ply_err(
                         path,
                         format!(
                             "truncated payload: the header declares {count} vertices of {min_row} \
-                             bytes ({} bytes with the elements before 'vertex') but only \
-                             {payload} bytes follow the header",
-                            needed + least_before
+                             bytes ({needed} bytes with the elements before 'vertex') but only \
+                             {payload} bytes follow the header"
                         ),
                     ));
                 }
             }
-            // Elements before 'vertex' are read past, not sought past, so a stream works too.
             for (name, rows, props) in &before {
-                for row in 0..*rows {
-                    skip_binary_row(&mut reader, props, big_endian).map_err(|e| {
-                        ply_err(
-                            path,
-                            format!("truncated payload in element '{name}', row {row}: {e}"),
-                        )
-                    })?;
+                let truncated = |row: String, e: String| {
+                    ply_err(
+                        path,
+                        format!("truncated payload in element '{name}'{row}: {e}"),
+                    )
+                };
+                if props.iter().any(|p| matches!(p, Stored::List { .. })) {
+                    for row in 0..*rows {
+                        skip_binary_row(&mut reader, props, big_endian)
+                            .map_err(|e| truncated(format!(", row {row}"), e))?;
+                    }
+                } else {
+                    let row: u64 = props.iter().map(|p| p.min_size() as u64).sum();
+                    let bytes = row.saturating_mul(*rows as u64);
+                    skip_bytes(&mut reader, bytes).map_err(|e| truncated(String::new(), e))?;
                 }
-            }
-            let skipped =
-                std::io::copy(&mut reader.by_ref().take(fixed_skip), &mut std::io::sink())
-                    .map_err(|source| Error::Io {
-                        path: path.to_path_buf(),
-                        source,
-                    })?;
-            if skipped < fixed_skip {
-                return Err(ply_err(
-                    path,
-                    "truncated payload: the file ends in the elements before 'vertex'",
-                ));
             }
             read_binary(
                 path,
@@ -396,7 +384,7 @@ fn read_ply_from<R: BufRead>(
                 big_endian,
                 &stored,
                 &layout,
-                reserve_for,
+                sized,
                 &mut scene,
                 &mut report,
             )?;
@@ -405,52 +393,61 @@ fn read_ply_from<R: BufRead>(
     Ok((scene, report))
 }
 
+/// Reads one binary scalar of type `t`, exactly.
+fn read_scalar(
+    reader: &mut impl Read,
+    t: &ScalarType,
+    big_endian: bool,
+) -> std::result::Result<f64, String> {
+    let mut buf = [0u8; 8];
+    let n = scalar_size(t);
+    reader
+        .read_exact(&mut buf[..n])
+        .map_err(|e| e.to_string())?;
+    Ok(decode_f64(t, &buf[..n], big_endian))
+}
+
+/// Reads past `bytes` bytes; fewer left in the input is an error.
+fn skip_bytes(reader: &mut impl Read, bytes: u64) -> std::result::Result<(), String> {
+    let got =
+        std::io::copy(&mut reader.take(bytes), &mut std::io::sink()).map_err(|e| e.to_string())?;
+    if got < bytes {
+        return Err(format!("the file ends {} bytes early", bytes - got));
+    }
+    Ok(())
+}
+
+/// Reads past one binary property: a scalar, or a list (its count, then its items).
+fn skip_property(
+    reader: &mut impl Read,
+    p: &Stored,
+    big_endian: bool,
+) -> std::result::Result<(), String> {
+    match p {
+        Stored::Scalar(t) => skip_bytes(reader, scalar_size(t) as u64),
+        Stored::List { count, item } => {
+            // Counts are of an integer type (`Stored::of`), which `read_scalar` holds exactly.
+            let items = read_scalar(reader, count, big_endian)?;
+            if items < 0.0 {
+                return Err(format!("a list's count is negative ({items})"));
+            }
+            skip_bytes(
+                reader,
+                (items as u64).saturating_mul(scalar_size(item) as u64),
+            )
+        }
+    }
+}
+
 /// Reads past one row of an element whose properties may be lists.
 fn skip_binary_row(
     reader: &mut impl Read,
     props: &[Stored],
     big_endian: bool,
 ) -> std::result::Result<(), String> {
-    let mut buf = [0u8; 8];
-    for p in props {
-        match p {
-            Stored::Scalar(t) => {
-                let n = scalar_size(t);
-                reader
-                    .read_exact(&mut buf[..n])
-                    .map_err(|e| e.to_string())?;
-            }
-            Stored::List { count, item } => {
-                let items = read_list_count(reader, count, big_endian)?;
-                let bytes = items * scalar_size(item) as u64;
-                let got = std::io::copy(&mut reader.take(bytes), &mut std::io::sink())
-                    .map_err(|e| e.to_string())?;
-                if got < bytes {
-                    return Err("the file ends inside a list".into());
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Reads a binary list's count (an integer type, never negative).
-fn read_list_count(
-    reader: &mut impl Read,
-    count: &ScalarType,
-    big_endian: bool,
-) -> std::result::Result<u64, String> {
-    let mut buf = [0u8; 8];
-    let n = scalar_size(count);
-    reader
-        .read_exact(&mut buf[..n])
-        .map_err(|e| e.to_string())?;
-    // Counts are of an integer type (`Stored::of`), which `decode_f64` holds exactly.
-    let v = decode_f64(count, &buf[..n], big_endian);
-    if v < 0.0 {
-        return Err(format!("a list's count is negative ({v})"));
-    }
-    Ok(v as u64)
+    props
+        .iter()
+        .try_for_each(|p| skip_property(reader, p, big_endian))
 }
 
 /// Checks the header's structure before ply-rs parses it, for what ply-rs gets wrong:
@@ -677,11 +674,13 @@ fn read_binary(
     big_endian: bool,
     stored: &[Stored],
     layout: &Layout,
-    reserve_for: usize,
+    sized: bool,
     scene: &mut Scene,
     report: &mut LoadReport,
 ) -> Result<()> {
-    reserve(scene, reserve_for);
+    if sized {
+        reserve(scene, count);
+    }
     let mut row = vec![0f32; stored.len()];
     let mut sh = Vec::new();
     let types: Option<Vec<ScalarType>> = stored
@@ -694,22 +693,16 @@ fn read_binary(
     let Some(types) = types else {
         // A list among the vertex properties: records differ in length, so they are read one
         // at a time (through the buffered reader), the lists read past.
-        let mut buf = [0u8; 8];
         for i in 0..count {
             let truncated =
                 |e: String| ply_err(path, format!("truncated payload at vertex {i}: {e}"));
             for (p, slot) in stored.iter().zip(row.iter_mut()) {
                 match p {
                     Stored::Scalar(t) => {
-                        let n = scalar_size(t);
-                        reader
-                            .read_exact(&mut buf[..n])
-                            .map_err(|e| truncated(e.to_string()))?;
-                        *slot = decode_scalar(t, &buf[..n], big_endian);
+                        *slot = read_scalar(reader, t, big_endian).map_err(truncated)? as f32
                     }
                     Stored::List { .. } => {
-                        skip_binary_row(reader, std::slice::from_ref(p), big_endian)
-                            .map_err(truncated)?;
+                        skip_property(reader, p, big_endian).map_err(truncated)?
                     }
                 }
             }
@@ -733,10 +726,10 @@ fn read_binary(
         u.dedup();
         u
     };
-    // A stream's count was checked against no size (`reserve_for` is 0 then): it reads at
-    // most 1 MiB at a time, as it can trust no count for a larger buffer.
+    // A stream's count was checked against no size: it reads at most 1 MiB at a time, as it
+    // can trust no count for a larger buffer.
     let mut chunk_vertices = CHUNK_VERTICES.min(count.max(1));
-    if reserve_for < count {
+    if !sized {
         chunk_vertices = chunk_vertices.min(((1 << 20) / stride.max(1)).max(1));
     }
     let mut chunk = vec![0u8; stride * chunk_vertices];
@@ -766,7 +759,7 @@ fn read_ascii(
     count: usize,
     stored: &[Stored],
     layout: &Layout,
-    reserve_for: usize,
+    sized: bool,
     scene: &mut Scene,
     report: &mut LoadReport,
 ) -> Result<()> {
@@ -802,7 +795,9 @@ fn read_ascii(
             next_line(&mut line, &|| format!("element '{name}', row {row}"))?;
         }
     }
-    reserve(scene, reserve_for);
+    if sized {
+        reserve(scene, count);
+    }
     let mut row = vec![0f32; stored.len()];
     let mut sh = Vec::new();
     for i in 0..count {
@@ -860,7 +855,7 @@ fn parse_ascii_value(token: &str) -> Option<f32> {
 }
 
 fn reserve(scene: &mut Scene, count: usize) {
-    // `count` was checked against the file size before this point (0 for a stream).
+    // `count` was checked against the file size before this point (never called for a stream).
     scene.means.reserve(count);
     scene.opacities.reserve(count);
     scene.scales.reserve(count);

@@ -285,17 +285,24 @@ fn lists_and_elements_before_vertex_are_read_past() {
         let face = "element face 2\nproperty list uchar int vertex_indices\nproperty float w\n";
         let empty_face = "element face 0\nproperty list uchar int vertex_indices\n";
         let extra = "property list uchar float extra\nproperty float tail\n";
+        // A fixed-size element first, then one with lists: read in file order.
+        let camera = "element camera 1\nproperty float fov\n";
+        let camera_face = format!("{camera}{face}");
         for (name, before, inside) in [
             ("empty_face", empty_face, ""),
             ("face", face, ""),
             ("vertex_list", "", extra),
             ("both", face, extra),
+            ("camera_face", camera_face.as_str(), extra),
         ] {
             let (header, payload) = spliced(&scene, encoding, before, inside);
             let mut bytes = header.into_bytes();
             let stride = payload.len() / scene.len();
             if encoding == PlyEncoding::Ascii {
-                if before == face {
+                if before.starts_with(camera) {
+                    bytes.extend_from_slice(b"1.5\n");
+                }
+                if before.ends_with(face) {
                     bytes.extend_from_slice(b"3 1 2 3 0.5\n0 2.5\n");
                 }
                 for (k, line) in String::from_utf8(payload.clone())
@@ -315,7 +322,10 @@ fn lists_and_elements_before_vertex_are_read_past() {
                     bytes.push(b'\n');
                 }
             } else {
-                if before == face {
+                if before.starts_with(camera) {
+                    bytes.extend_from_slice(&float(1.5));
+                }
+                if before.ends_with(face) {
                     bytes.push(3);
                     for v in [1, 2, 3] {
                         bytes.extend_from_slice(&int(v));
