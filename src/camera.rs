@@ -205,7 +205,8 @@ impl Camera {
             .fold(0f32, f32::max);
         if off > ROTATION_TOLERANCE {
             return Err(Error::InvalidInput(format!(
-                "rotation is not a rotation: its columns are not orthonormal (R^T R differs from                  the identity by {off:.3e}, more than {ROTATION_TOLERANCE:.0e})"
+                "rotation is not a rotation: its columns are not orthonormal (R^T R differs from \
+                 the identity by {off:.3e}, more than {ROTATION_TOLERANCE:.0e})"
             )));
         }
         if r.determinant() <= 0.0 {

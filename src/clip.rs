@@ -230,18 +230,13 @@ fn box_planes(center: Vec3, half_extents: Vec3, rotation: Quat) -> Result<Vec<Pl
             half_extents.x, half_extents.y, half_extents.z
         )));
     }
-    // In f64: the squared length of a tiny (but finite) quaternion underflows in f32.
-    let q64 = [rotation.w, rotation.x, rotation.y, rotation.z].map(f64::from);
-    let q_len = q64.iter().map(|c| c * c).sum::<f64>().sqrt();
-    if !(q_len.is_finite() && q_len > 0.0) {
+    let Some(rotation) = crate::scene::normalized_rotation(rotation) else {
         return Err(Error::InvalidInput(format!(
             "clip box rotation (w, x, y, z) = ({}, {}, {}, {}) is not a rotation: a quaternion \
              needs a finite, non-zero length",
             rotation.w, rotation.x, rotation.y, rotation.z
         )));
-    }
-    let [w, x, y, z] = q64.map(|c| (c / q_len) as f32);
-    let rotation = Quat::from_xyzw(x, y, z, w);
+    };
     let mut planes = Vec::with_capacity(6);
     for (axis, h) in [Vec3::X, Vec3::Y, Vec3::Z]
         .into_iter()

@@ -12,7 +12,7 @@ use glam::{Quat, Vec3};
 use ply_rs::ply::{Encoding, PropertyType, ScalarType};
 
 use crate::error::{Error, Result};
-use crate::scene::{sh_coeffs, Scene};
+use crate::scene::{normalized_rotation, sh_coeffs, Scene};
 
 /// Longest header accepted; real headers are a few kB.
 const MAX_HEADER_BYTES: usize = 1 << 20;
@@ -634,16 +634,12 @@ fn push_gaussian(
 ) {
     let v = |k: usize| row[layout.wanted[k]];
     let all_finite = layout.wanted.iter().all(|&i| row[i].is_finite());
-    // Normalised in f64: in f32 the squared length of a tiny or huge (but finite) quaternion
-    // underflows or overflows, which fuzzing turned up as "normalised" rotations of length 1.003.
-    let q64 = [v(11), v(12), v(13), v(10)].map(f64::from);
-    let length = q64.iter().map(|c| c * c).sum::<f64>().sqrt();
-    if !all_finite || length == 0.0 || !length.is_finite() {
+    // rot_0..3 are (w, x, y, z).
+    let rotation = normalized_rotation(Quat::from_xyzw(v(11), v(12), v(13), v(10)));
+    let Some(q) = rotation.filter(|_| all_finite) else {
         report.dropped_non_finite += 1;
         return;
-    }
-    let [qx, qy, qz, qw] = q64.map(|c| (c / length) as f32);
-    let q = Quat::from_xyzw(qx, qy, qz, qw);
+    };
     let scale = Vec3::new(v(7).exp(), v(8).exp(), v(9).exp());
     let opacity = 1.0 / (1.0 + (-v(6)).exp());
     if !scale.is_finite() {

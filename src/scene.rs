@@ -69,6 +69,19 @@ impl Scene {
     }
 }
 
+/// `q` scaled to unit length, or `None` when its length is zero or not finite. Normalised in
+/// f64: in f32 the squared length of a tiny or huge (but finite) quaternion underflows or
+/// overflows, which fuzzing turned up as "normalised" rotations of length 1.003.
+pub fn normalized_rotation(q: Quat) -> Option<Quat> {
+    let q64 = [q.x, q.y, q.z, q.w].map(f64::from);
+    let length = q64.iter().map(|c| c * c).sum::<f64>().sqrt();
+    if !(length.is_finite() && length > 0.0) {
+        return None;
+    }
+    let [x, y, z, w] = q64.map(|c| (c / length) as f32);
+    Some(Quat::from_xyzw(x, y, z, w))
+}
+
 /// SH coefficients per channel for a degree: `(degree + 1)^2`.
 pub fn sh_coeffs(degree: u32) -> usize {
     ((degree + 1) * (degree + 1)) as usize

@@ -174,8 +174,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         background: args.background,
     };
     let mut series = plan.run(&mut renderer, &gpu_scene, |k, frame_img| {
-        save_png(frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
-        gif.add(frame_img.clone())
+        save_png(&frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
+        gif.add(frame_img)
     })?;
     drop(gif);
 
@@ -253,7 +253,7 @@ impl Sweep<'_> {
         &self,
         renderer: &mut Renderer,
         gpu_scene: &rara::GpuScene,
-        mut on_frame: impl FnMut(u32, &image::RgbaImage) -> Result<()>,
+        mut on_frame: impl FnMut(u32, image::RgbaImage) -> Result<()>,
     ) -> Result<Vec<SeriesStats>> {
         let mut series: Vec<SeriesStats> = self
             .configs
@@ -284,7 +284,7 @@ impl Sweep<'_> {
                 stats.add(&img, frame.cutoff, frame.gpu_ms);
                 panels.push(img);
             }
-            on_frame(k, &concat_horizontally(&panels))?;
+            on_frame(k, concat_horizontally(&panels))?;
             bar.inc(1);
         }
         bar.finish_and_clear();
