@@ -17,7 +17,9 @@ struct ClipParams {
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer ClipParamsRef { ClipParams p; };
 
 // What a cutoff Gaussian carries (GpuCutoffRecord): rows of M = S^-1 R^T in xyz and
-// o' = M (eye - mu) in the three w.
+// o' = M (eye - mu) in the three w. A flat Gaussian (one scale 0, SPEC section 6), for which
+// M does not exist, carries (n, n.(eye - mu)), (eye - mu, 0) and a zero m2, which marks it
+// (M's rows are never zero).
 struct CutoffRecord {
     vec4 m0;
     vec4 m1;
@@ -42,6 +44,20 @@ void store_cutoff_record(CutoffRecords records, uint i, CutoffRecord rec) {
     store_vec4(a + 16ul, rec.m1);
     store_vec4(a + 32ul, rec.m2);
 }
+
+// Whether rec is a flat Gaussian's record.
+bool cutoff_record_is_flat(CutoffRecord rec) {
+    return rec.m2.xyz == vec3(0.0);
+}
+
+// The record of a flat Gaussian with unit normal n, at rel = mu - eye.
+CutoffRecord flat_cutoff_record(vec3 n, vec3 rel) {
+    return CutoffRecord(vec4(n, -dot(n, rel)), vec4(-rel, 0.0), vec4(0.0));
+}
+
+// Below this |n.d| / |d| a ray counts as parallel to a flat Gaussian's plane (SPEC section 6;
+// FLAT_PARALLEL_EPSILON in src/clip.rs).
+#define FLAT_PARALLEL_EPSILON 1e-7
 
 #define CLASS_DROPPED 0u
 #define CLASS_DRAWN 1u
@@ -172,14 +188,27 @@ float normal_cdf(float x) {
 // are polynomials in r. The rasterizer works them out once per splat for its strip of pixels
 // instead of a 3x3 product per pixel; a single ray is the strip's r = 0. src/clip.rs
 // (CutoffRay::weight) computes the same per ray: t* = -(o'.d')/a.
+//
+// A flat Gaussian's strip (is_flat = true) holds instead what its plane crossing needs:
+// n.d(r) = a.x + r a.y, n.(eye - mu) = od.x, d(r).(eye - mu) = c0.x + r c0.y and
+// |d(r)|^2 = c1.x + r (c1.y + r c1.z) (flat_hit_t).
 struct WhitenedStrip {
     vec3 a;     // a(r) = a.x + r (a.y + r a.z)
     vec2 od;    // o'.d'(r) = od.x + r od.y
     vec3 c0;    // o' x d'(r) = c0 + r c1 (the length weight only)
     vec3 c1;
+    bool is_flat;
 };
 
 WhitenedStrip whitened_strip(CutoffRecord rec, vec3 dir0, vec3 step) {
+    if (cutoff_record_is_flat(rec)) {
+        vec3 n = rec.m0.xyz;
+        vec3 eo = rec.m1.xyz;
+        return WhitenedStrip(vec3(dot(n, dir0), dot(n, step), 0.0), vec2(rec.m0.w, 0.0),
+                             vec3(dot(dir0, eo), dot(step, eo), 0.0),
+                             vec3(dot(dir0, dir0), 2.0 * dot(dir0, step), dot(step, step)),
+                             true);
+    }
     vec3 d0 = vec3(dot(rec.m0.xyz, dir0), dot(rec.m1.xyz, dir0), dot(rec.m2.xyz, dir0));
     vec3 ds = vec3(dot(rec.m0.xyz, step), dot(rec.m1.xyz, step), dot(rec.m2.xyz, step));
     vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
@@ -188,7 +217,17 @@ WhitenedStrip whitened_strip(CutoffRecord rec, vec3 dir0, vec3 step) {
     s.od = vec2(dot(o, d0), dot(o, ds));
     s.c0 = cross(o, d0);
     s.c1 = cross(o, ds);
+    s.is_flat = false;
     return s;
+}
+
+// Where ray r of a flat Gaussian's strip s meets its plane, t_hit = n.(mu - eye) / n.d, or
+// for a ray parallel to it the closest approach to mu, d.(mu - eye) / |d|^2 (SPEC section 6).
+float flat_hit_t(WhitenedStrip s, float r) {
+    float nd = s.a.x + r * s.a.y;
+    float dd = s.c1.x + r * (s.c1.y + r * s.c1.z);
+    return abs(nd) >= FLAT_PARALLEL_EPSILON * sqrt(dd) ? -s.od.x / nd
+                                                       : -(s.c0.x + r * s.c0.y) / dd;
 }
 
 // a(r) = |d'(r)|^2 on ray r of the strip s.
@@ -251,7 +290,12 @@ MassEnds clip_mass_ends(vec4 spans) {
 }
 
 // Phi(sign u(t)) of end = (t, sign) on ray r of the strip s (see MassEnds).
+// A flat Gaussian is a point mass at flat_hit_t: its Phi is a step, so the sum over the ends
+// is 1 where that point is visible and 0 elsewhere.
 float end_mass(WhitenedStrip s, float r, vec2 end) {
+    if (s.is_flat) {
+        return end.y * (end.x - flat_hit_t(s, r)) >= 0.0 ? 1.0 : 0.0;
+    }
     float a = strip_a(s, r);
     float od = strip_od(s, r);
     return normal_cdf(end.y * (end.x * a + od) * inversesqrt(a));
@@ -259,16 +303,24 @@ float end_mass(WhitenedStrip s, float r, vec2 end) {
 
 // Weight `length` on ray r of the strip s: the visible fraction of the chord through the band
 // ellipsoid (q <= band2); for a ray that misses it, whether the ray's closest point is visible.
+// A flat Gaussian's weight is whether its point on the ray (flat_hit_t) is visible.
 float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
+    float t_star;
+    bool on_chord = false;
     float a = strip_a(s, r);
-    float t_star = -strip_od(s, r) / a;
     vec3 c = s.c0 + r * s.c1;
-    float q_min = dot(c, c) / a;
-    if (q_min >= band2) {
+    if (s.is_flat) {
+        t_star = flat_hit_t(s, r);
+    } else {
+        t_star = -strip_od(s, r) / a;
+        on_chord = dot(c, c) / a < band2;
+    }
+    if (!on_chord) {
         bool seen = (spans.x <= t_star && t_star <= spans.y && spans.x < spans.y)
                  || (spans.z <= t_star && t_star <= spans.w && spans.z < spans.w);
         return seen ? 1.0 : 0.0;
     }
+    float q_min = dot(c, c) / a;
     float half_chord = sqrt((band2 - q_min) / a);
     float t1 = t_star - half_chord;
     float t2 = t_star + half_chord;

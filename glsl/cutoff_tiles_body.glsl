@@ -126,12 +126,18 @@ void main() {
                                    pixel_ray(f, box.zw), pixel_ray(f, box.xw));
             float q_min = footprint_q_min_in_tile(p.uv, p.conic, xy.x, xy.y);
             float peak_alpha = p.opacity * exp(-0.5 * q_min);
+            // A flat splat's weight is a step along its plane (SPEC section 6), which these
+            // bounds (worked out in the whitened frame it does not have) do not cover: its
+            // pairs take the per-pixel weight.
+            bool flat_splat = cutoff_record_is_flat(rec);
             TileMassBounds bounds = tile_mass_bounds_none();
-            for (uint plane = 0u; plane < config.w; ++plane) {
+            uint bounded_planes = flat_splat ? 0u : config.w;
+            for (uint plane = 0u; plane < bounded_planes; ++plane) {
                 tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(plane),
                                                                 f.cam_pos.xyz, dirs));
             }
-            uint tile_class = cutoff_tile_class(config.z, bounds, peak_alpha);
+            uint tile_class = flat_splat ? TILE_CLASS_PARTIAL
+                                   : cutoff_tile_class(config.z, bounds, peak_alpha);
             // No pixel centre of the tile in the footprint's bounding box: nothing to draw.
             tile_class = box.x > box.z || box.y > box.w ? TILE_CLASS_EMPTY : tile_class;
             if (tile_class == TILE_CLASS_EMPTY) {

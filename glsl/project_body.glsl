@@ -170,6 +170,13 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     if (kind != CLASS_CUTOFF) {
         return false;
     }
+    if (min(s.x, min(s.y, s.z)) == 0.0) {
+        // Flat (SPEC section 6): the normal is the first axis of R whose scale is 0.
+        vec3 n = s.x == 0.0 ? vec3(r0.x, r1.x, r2.x)
+               : (s.y == 0.0 ? vec3(r0.y, r1.y, r2.y) : vec3(r0.z, r1.z, r2.z));
+        rec = flat_cutoff_record(n, rel);
+        return true;
+    }
     // M = S^-1 R^T: row k is column k of R over s_k. o' = M (eye - mu) = -M rel.
     vec3 w0 = vec3(r0.x, r1.x, r2.x) / s.x;
     vec3 w1 = vec3(r0.y, r1.y, r2.y) / s.y;

@@ -619,35 +619,77 @@ pub fn normal_cdf(x: f64) -> f64 {
     }
 }
 
-/// What the per-pixel weight of one cutoff Gaussian needs: the whitening `M = S^-1 R^T` (rows)
-/// and the eye in the whitened frame, `o' = M (e - mu)`. The GPU's side record holds the same.
+/// What the per-pixel weight of one cutoff Gaussian needs. The GPU's side record holds the
+/// same (CutoffRecord in `glsl/clip.glsl`; a flat one is marked by a zero third row).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CutoffRay {
-    /// Rows of `M`.
-    pub m: [DVec3; 3],
-    /// `M (e - mu)`.
-    pub origin: DVec3,
+pub enum CutoffRay {
+    /// A Gaussian with three nonzero scales: the whitening `M = S^-1 R^T` (rows) and the eye
+    /// in the whitened frame, `o' = M (e - mu)`.
+    Volume {
+        /// Rows of `M`.
+        m: [DVec3; 3],
+        /// `M (e - mu)`.
+        origin: DVec3,
+    },
+    /// A flat Gaussian (SPEC section 6): along a ray it is a point mass where the ray crosses
+    /// its plane, so no `S^-1` is ever formed.
+    Flat {
+        /// The plane's unit normal `n` (the axis of R whose scale is 0).
+        normal: DVec3,
+        /// `e - mu`.
+        eye_offset: DVec3,
+    },
 }
+
+/// Below this `|n.d|` (unit `d`) a ray counts as parallel to a flat Gaussian's plane
+/// (SPEC section 6).
+pub const FLAT_PARALLEL_EPSILON: f64 = 1e-7;
 
 impl CutoffRay {
     /// The record of a Gaussian (centre, standard deviations, rotation) seen from `eye`.
     pub fn new(mean: Vec3, scale: Vec3, rotation: Quat, eye: Vec3) -> CutoffRay {
         let r = glam::DMat3::from_quat(rotation.as_dquat().normalize());
         let s = scale.as_dvec3();
+        let rel = (eye - mean).as_dvec3();
+        if let Some(axis) = crate::scene::flat_axis(scale) {
+            return CutoffRay::Flat {
+                normal: r.col(axis),
+                eye_offset: rel,
+            };
+        }
         // Row k of S^-1 R^T is column k of R over s_k.
         let m = [r.x_axis / s.x, r.y_axis / s.y, r.z_axis / s.z];
-        let rel = (eye - mean).as_dvec3();
-        CutoffRay {
+        CutoffRay::Volume {
             m,
             origin: DVec3::new(m[0].dot(rel), m[1].dot(rel), m[2].dot(rel)),
         }
     }
 
+    /// Where the ray `e + t dir` (unit `dir`) meets a flat Gaussian: the plane crossing
+    /// `t_hit = n.(mu - e) / n.d`, or for a ray parallel to the plane its closest approach to
+    /// `mu`, `t = d.(mu - e)`.
+    pub fn flat_hit(normal: DVec3, eye_offset: DVec3, dir: DVec3) -> f64 {
+        let nd = normal.dot(dir);
+        if nd.abs() < FLAT_PARALLEL_EPSILON {
+            -dir.dot(eye_offset)
+        } else {
+            -normal.dot(eye_offset) / nd
+        }
+    }
+
     /// The weight along the unit ray direction `dir` whose visible part is `visible`.
     pub fn weight(&self, dir: DVec3, visible: &Spans, kind: ClipWeight, band: f64) -> f64 {
-        let d = DVec3::new(self.m[0].dot(dir), self.m[1].dot(dir), self.m[2].dot(dir));
+        let (m, origin) = match *self {
+            CutoffRay::Volume { m, origin } => (m, origin),
+            // Both weights: 1 where the ray's point on the plane is visible, else 0.
+            CutoffRay::Flat { normal, eye_offset } => {
+                let t = CutoffRay::flat_hit(normal, eye_offset, dir);
+                return if visible.contains(t) { 1.0 } else { 0.0 };
+            }
+        };
+        let d = DVec3::new(m[0].dot(dir), m[1].dot(dir), m[2].dot(dir));
         let a = d.length_squared();
-        let t_star = -self.origin.dot(d) / a;
+        let t_star = -origin.dot(d) / a;
         match kind {
             ClipWeight::Mass => {
                 let sqrt_a = a.sqrt();
@@ -675,7 +717,7 @@ impl CutoffRay {
                 w.clamp(0.0, 1.0)
             }
             ClipWeight::Length => {
-                let q_min = self.origin.cross(d).length_squared() / a;
+                let q_min = origin.cross(d).length_squared() / a;
                 let band2 = band * band;
                 if q_min >= band2 {
                     return if visible.contains(t_star) { 1.0 } else { 0.0 };

@@ -109,7 +109,8 @@ pub struct GpuClipParams {
 }
 
 /// `CutoffRecord` in common.glsl: what a cutoff Gaussian carries for the per-pixel weight.
-/// Rows of `M = S^-1 R^T` in xyz, and `o' = M (eye - mu)` spread over the three w.
+/// Rows of `M = S^-1 R^T` in xyz, and `o' = M (eye - mu)` spread over the three w; for a flat
+/// Gaussian `(n, n.(eye - mu))`, `(eye - mu, 0)` and zeros (see `glsl/clip.glsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuCutoffRecord {

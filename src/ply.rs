@@ -12,7 +12,9 @@ use glam::{Quat, Vec3};
 use ply_rs::ply::{Encoding, PropertyType, ScalarType};
 
 use crate::error::{Error, Result};
-use crate::scene::{normalized_rotation, sh_coeffs, Scene};
+use crate::scene::{
+    in_plane_axes, normalized_rotation, sh_coeffs, smallest_axis, Scene, FLAT_SCALE_RATIO,
+};
 
 /// Longest header accepted; real headers are a few kB.
 const MAX_HEADER_BYTES: usize = 1 << 20;
@@ -40,6 +42,9 @@ struct Layout {
     wanted: Vec<usize>,
     sh_degree: u32,
     f_rest: usize,
+    /// The GaMeS / REdiSplats layout: `scale_0, scale_1` only, the normal along local x
+    /// (SPEC section 6); slot 9 of `wanted` then repeats slot 8 and is not read.
+    two_scales: bool,
 }
 
 const BASE_NAMES: [&str; 14] = [
@@ -558,7 +563,16 @@ fn vertex_layout(
     let index_of = |name: &str| vertex.properties.keys().position(|k| k == name);
     let mut wanted = Vec::with_capacity(14 + 45);
     let mut missing = Vec::new();
+    // No scale_2 beside scale_0 and scale_1: flat Gaussians in the GaMeS layout.
+    let two_scales = index_of("scale_2").is_none()
+        && index_of("scale_0").is_some()
+        && index_of("scale_1").is_some();
     for name in BASE_NAMES {
+        let name = if two_scales && name == "scale_2" {
+            "scale_1"
+        } else {
+            name
+        };
         match index_of(name) {
             Some(i) => wanted.push(i),
             None => missing.push(name),
@@ -621,6 +635,7 @@ fn vertex_layout(
         wanted,
         sh_degree,
         f_rest,
+        two_scales,
     })
 }
 
@@ -640,7 +655,11 @@ fn push_gaussian(
         report.dropped_non_finite += 1;
         return;
     };
-    let scale = Vec3::new(v(7).exp(), v(8).exp(), v(9).exp());
+    let scale = if layout.two_scales {
+        Vec3::new(0.0, v(7).exp(), v(8).exp())
+    } else {
+        flat_if_degenerate(Vec3::new(v(7).exp(), v(8).exp(), v(9).exp()))
+    };
     let opacity = 1.0 / (1.0 + (-v(6)).exp());
     if !scale.is_finite() {
         report.dropped_non_finite += 1;
@@ -660,6 +679,16 @@ fn push_gaussian(
         }
     }
     scene.push(Vec3::new(v(0), v(1), v(2)), opacity, scale, q, sh);
+}
+
+/// A 3-scale Gaussian whose smallest scale is at most [`FLAT_SCALE_RATIO`] of its largest,
+/// made flat along that axis (SPEC section 6).
+fn flat_if_degenerate(mut scale: Vec3) -> Vec3 {
+    let k = smallest_axis(scale);
+    if scale[k] <= FLAT_SCALE_RATIO * scale.max_element() {
+        scale[k] = 0.0;
+    }
+    scale
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -870,10 +899,60 @@ pub enum PlyEncoding {
     Ascii,
 }
 
+/// How [`write_ply_layout`] stores the scales.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PlyLayout {
+    /// `scale_0..2`; a flat Gaussian's zero scale is written as [`FLAT_SCALE_WRITTEN`] times
+    /// its largest, which reads back as 0 (SPEC section 6) and means the same to other tools.
+    #[default]
+    Inria,
+    /// GaMeS / REdiSplats: `scale_0, scale_1` only, every Gaussian flat with its normal along
+    /// local x (the rotation's axes are permuted cyclically to put it there).
+    Games,
+}
+
+/// The ratio to its largest scale at which [`PlyLayout::Inria`] writes a flat Gaussian's zero
+/// scale (below [`FLAT_SCALE_RATIO`], so it loads back flat).
+pub const FLAT_SCALE_WRITTEN: f32 = 1e-6;
+
 /// Writes `scene` in the INRIA layout (`x y z nx ny nz f_dc f_rest opacity scale rot`, floats),
 /// inverting the activations, so that [`load_ply`] reads back the same scene.
 pub fn write_ply(scene: &Scene, path: impl AsRef<Path>, encoding: PlyEncoding) -> Result<()> {
+    write_ply_layout(scene, path, encoding, PlyLayout::Inria)
+}
+
+/// The rotation and the two in-plane scales of flat Gaussian `i` with its normal moved to local
+/// x: `R' = R P` for the cyclic permutation `P` that takes x to the normal's axis.
+pub fn games_frame(scale: Vec3, rotation: Quat) -> Option<(Quat, f32, f32)> {
+    let k = crate::scene::flat_axis(scale)?;
+    let (a, b) = in_plane_axes(k);
+    let p = glam::Mat3::from_cols(Vec3::AXES[k], Vec3::AXES[a], Vec3::AXES[b]);
+    let q = (rotation * Quat::from_mat3(&p)).normalize();
+    Some((q, scale[a], scale[b]))
+}
+
+/// Writes `scene` as [`write_ply`] does, with the scales in `layout`. [`PlyLayout::Games`]
+/// needs every Gaussian flat (`rara flatten` makes them so).
+pub fn write_ply_layout(
+    scene: &Scene,
+    path: impl AsRef<Path>,
+    encoding: PlyEncoding,
+    layout: PlyLayout,
+) -> Result<()> {
     let path = path.as_ref();
+    if layout == PlyLayout::Games {
+        if let Some(i) =
+            (0..scene.len()).find(|&i| crate::scene::flat_axis(scene.scales[i]).is_none())
+        {
+            return Err(ply_err(
+                path,
+                format!(
+                    "the GaMeS layout holds flat Gaussians only, and Gaussian {i} has three \
+                     nonzero scales (flatten the scene first)"
+                ),
+            ));
+        }
+    }
     let io = |source| Error::Io {
         path: PathBuf::from(path),
         source,
@@ -887,12 +966,10 @@ pub fn write_ply(scene: &Scene, path: impl AsRef<Path>, encoding: PlyEncoding) -
     .map(String::from)
     .to_vec();
     names.extend((0..rest).map(|j| format!("f_rest_{j}")));
-    names.extend(
-        [
-            "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3",
-        ]
-        .map(String::from),
-    );
+    names.push("opacity".into());
+    let scale_count = if layout == PlyLayout::Games { 2 } else { 3 };
+    names.extend((0..scale_count).map(|k| format!("scale_{k}")));
+    names.extend(["rot_0", "rot_1", "rot_2", "rot_3"].map(String::from));
     let format = match encoding {
         PlyEncoding::BinaryLittleEndian => "binary_little_endian",
         PlyEncoding::BinaryBigEndian => "binary_big_endian",
@@ -919,8 +996,21 @@ pub fn write_ply(scene: &Scene, path: impl AsRef<Path>, encoding: PlyEncoding) -
         let o = scene.opacities[i];
         row.push((o / (1.0 - o)).ln());
         let s = scene.scales[i];
-        row.extend([s.x.ln(), s.y.ln(), s.z.ln()]);
-        let q = scene.rotations[i];
+        let q = match layout {
+            PlyLayout::Inria => {
+                let written = s.max_element() * FLAT_SCALE_WRITTEN;
+                row.extend(
+                    s.to_array()
+                        .map(|v| if v == 0.0 { written } else { v }.ln()),
+                );
+                scene.rotations[i]
+            }
+            PlyLayout::Games => {
+                let (q, sa, sb) = games_frame(s, scene.rotations[i]).expect("checked flat above");
+                row.extend([sa.ln(), sb.ln()]);
+                q
+            }
+        };
         row.extend([q.w, q.x, q.y, q.z]);
         match encoding {
             PlyEncoding::BinaryLittleEndian => {

@@ -58,6 +58,25 @@ impl Scene {
         )
     }
 
+    /// How many Gaussians are flat (one scale exactly 0; SPEC section 6).
+    pub fn flat_count(&self) -> usize {
+        self.scales
+            .iter()
+            .filter(|s| flat_axis(**s).is_some())
+            .count()
+    }
+
+    /// The scene flattened (SPEC section 6): each Gaussian's smallest scale set to 0, the rest
+    /// kept. Already-flat Gaussians are unchanged.
+    pub fn flattened(&self) -> Scene {
+        let mut flat = self.clone();
+        for s in &mut flat.scales {
+            let k = smallest_axis(*s);
+            s[k] = 0.0;
+        }
+        flat
+    }
+
     /// Appends one Gaussian (`sh` holds [`Scene::sh_stride`] floats).
     pub fn push(&mut self, mean: Vec3, opacity: f32, scale: Vec3, rotation: Quat, sh: &[f32]) {
         debug_assert_eq!(sh.len(), self.sh_stride());
@@ -80,6 +99,33 @@ pub fn normalized_rotation(q: Quat) -> Option<Quat> {
     }
     let [x, y, z, w] = q64.map(|c| (c / length) as f32);
     Some(Quat::from_xyzw(x, y, z, w))
+}
+
+/// Below this ratio of its smallest to its largest scale, a Gaussian read from a 3-scale PLY
+/// is flat along its smallest axis (SPEC section 6; REdiSplats writes `scale_0 = ln 1e-5`).
+pub const FLAT_SCALE_RATIO: f32 = 1e-4;
+
+/// The axis of a flat Gaussian's normal: the first whose scale is exactly 0, or `None` for a
+/// Gaussian with three nonzero scales.
+pub fn flat_axis(scale: Vec3) -> Option<usize> {
+    (0..3).find(|&k| scale[k] == 0.0)
+}
+
+/// The axis of the smallest scale (the first of equal ones).
+pub fn smallest_axis(scale: Vec3) -> usize {
+    let mut k = 0;
+    for j in 1..3 {
+        if scale[j] < scale[k] {
+            k = j;
+        }
+    }
+    k
+}
+
+/// The two in-plane axes of a Gaussian flat along `axis`: the ones after it in the cyclic
+/// order x, y, z, so that `r_a x r_b = n` (SPEC section 6).
+pub fn in_plane_axes(axis: usize) -> (usize, usize) {
+    ((axis + 1) % 3, (axis + 2) % 3)
 }
 
 /// SH coefficients per channel for a degree: `(degree + 1)^2`.

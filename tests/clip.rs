@@ -130,6 +130,8 @@ fn gpu_matches_cpu_on_synthetic_scenes() {
         ("shell", rara::synth::shell(6000, 1, 3)),
         ("hair", rara::synth::hair(8000, 0, 4)),
         ("layers", rara::synth::layers(12000, 2, 5)),
+        // Flat Gaussians (SPEC section 6): the same clips, the plane-crossing weight.
+        ("layers_flat", rara::synth::layers(12000, 2, 5).flattened()),
     ] {
         let camera = orbit_camera(&scene, 240);
         for layout in [RasterLayout::Strips, RasterLayout::PixelPerInvocation] {

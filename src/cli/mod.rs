@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod clip_args;
 pub mod demo;
+pub mod flatten;
 pub mod output;
 pub mod sweep;
 

@@ -113,6 +113,23 @@ impl Output {
         }
     }
 
+    /// Writes the file with `write`, which is handed the path to create (the temporary file,
+    /// or the target itself when it is written in place) and may stream into it; the result
+    /// replaces the target only when `write` succeeds.
+    pub fn write_with(mut self, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+        match self.temp.take() {
+            None => write(&self.path),
+            Some(temp) => {
+                let written = write(&temp)
+                    .and_then(|()| std::fs::rename(&temp, &self.path).map_err(io(&self.path)));
+                if written.is_err() {
+                    std::fs::remove_file(&temp).ok();
+                }
+                written
+            }
+        }
+    }
+
     /// Writes `img` as a PNG.
     pub fn write_png(self, img: &image::RgbaImage) -> Result<()> {
         let mut bytes = Vec::new();
