@@ -43,6 +43,7 @@ pub mod frame;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod input;
+pub mod mesh;
 pub mod metrics;
 pub mod ply;
 pub mod precision;

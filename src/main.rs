@@ -73,6 +73,10 @@ enum Command {
     /// Flatten a scene (SPEC section 6): each Gaussian's smallest scale set to 0. Prints the
     /// PSNR of the flat scene against the original over the scene's cameras.
     Flatten(cli::flatten::FlattenArgs),
+    /// Octagon meshes of flat Gaussians (SPEC section 6): export for mesh tools, import edits.
+    Mesh(cli::mesh::MeshArgs),
+    /// Render a folder of scenes (e.g. imported simulation frames) to PNGs and a GIF.
+    RenderSequence(cli::mesh::RenderSequenceArgs),
     /// The headline on a built-in scene: a box cutaway unclipped, hard and rara side by side
     /// (PNG), and a plane sweeping through it, hard and rara (GIF, with the popping metric).
     Demo {
@@ -557,6 +561,8 @@ fn main() -> ExitCode {
         } => cmd_synth(*kind, *count, *sh_degree, *seed, output),
         Command::Demo { output } => cli::demo::run(output),
         Command::Flatten(args) => cli::flatten::run(args),
+        Command::Mesh(args) => cli::mesh::run(args),
+        Command::RenderSequence(args) => cli::mesh::run_render_sequence(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -35,6 +35,69 @@ pub struct LoadReport {
     pub encoding: &'static str,
 }
 
+/// Where a chunk of [`for_each_chunk`] sits in the scene.
+#[derive(Clone, Copy, Debug)]
+pub struct ChunkInfo {
+    /// Index (in the loaded scene, after any dropped Gaussian) of the chunk's first Gaussian.
+    pub first: usize,
+    /// Vertices the file declares (an upper bound on the Gaussians, for progress).
+    pub vertices_in_file: usize,
+}
+
+/// The callback of [`for_each_chunk`].
+type ChunkSink<'a> = &'a mut dyn FnMut(&Scene, ChunkInfo) -> Result<()>;
+
+/// Where the loader puts Gaussians: one scene, or chunks handed to a callback and dropped.
+struct Collect<'a> {
+    scene: Scene,
+    delivered: usize,
+    vertices_in_file: usize,
+    chunks: Option<(usize, ChunkSink<'a>)>,
+}
+
+impl Collect<'_> {
+    /// Hands a full chunk to the callback.
+    fn after_push(&mut self) -> Result<()> {
+        match &self.chunks {
+            Some((size, _)) if self.scene.len() >= *size => self.flush(),
+            _ => Ok(()),
+        }
+    }
+
+    /// Hands what is held to the callback (at the end, the last partial chunk).
+    fn flush(&mut self) -> Result<()> {
+        let Some((_, sink)) = &mut self.chunks else {
+            return Ok(());
+        };
+        if self.scene.is_empty() {
+            return Ok(());
+        }
+        let info = ChunkInfo {
+            first: self.delivered,
+            vertices_in_file: self.vertices_in_file,
+        };
+        sink(&self.scene, info)?;
+        self.delivered += self.scene.len();
+        let degree = self.scene.sh_degree;
+        self.scene.means.clear();
+        self.scene.opacities.clear();
+        self.scene.scales.clear();
+        self.scene.rotations.clear();
+        self.scene.sh.clear();
+        self.scene.sh_degree = degree;
+        Ok(())
+    }
+
+    /// Reserves room for `count` Gaussians (a checked count), or for one chunk.
+    fn reserve(&mut self, count: usize) {
+        let n = match &self.chunks {
+            Some((size, _)) => count.min(*size),
+            None => count,
+        };
+        reserve(&mut self.scene, n);
+    }
+}
+
 /// Where each value the loader needs sits among the vertex's properties.
 struct Layout {
     /// Index into the decoded property row for: x y z, f_dc 0..3, opacity, scale 0..3,
@@ -232,9 +295,62 @@ pub fn read_ply_stream<R: BufRead>(reader: R, path: &Path) -> Result<(Scene, Loa
 /// The loader: `len` is the input's size when it is known (then every count is checked
 /// against it), `None` for a stream.
 fn read_ply_from<R: BufRead>(
+    reader: R,
+    len: Option<u64>,
+    path: &Path,
+) -> Result<(Scene, LoadReport)> {
+    read_ply_into(reader, len, path, None)
+}
+
+/// The vertex count the header of the PLY file at `path` declares (only the header is read).
+pub fn vertex_count(path: impl AsRef<Path>) -> Result<usize> {
+    let path = path.as_ref();
+    let file = File::open(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let header_bytes = read_header_bytes(path, &mut BufReader::new(file))?;
+    let header_text = String::from_utf8_lossy(&header_bytes).replace('\r', "");
+    check_header_structure(path, &header_text)?;
+    let header = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new()
+        .read_header(&mut header_text.as_bytes())
+        .map_err(|e| ply_err(path, format!("malformed header: {e}")))?;
+    header
+        .elements
+        .get("vertex")
+        .map(|v| v.count)
+        .ok_or_else(|| ply_err(path, "no 'vertex' element in the header"))
+}
+
+/// Reads the scene at `path` in chunks of at most `chunk` Gaussians, each handed to `sink`
+/// and then dropped, so that memory holds one chunk, never the scene (the export of a
+/// multi-million-Gaussian scene). Gaussians are numbered as [`load_ply`] numbers them.
+pub fn for_each_chunk(
+    path: impl AsRef<Path>,
+    chunk: usize,
+    sink: &mut dyn FnMut(&Scene, ChunkInfo) -> Result<()>,
+) -> Result<LoadReport> {
+    let path = path.as_ref();
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if meta.is_dir() {
+        return Err(ply_err(path, "is a directory, not a PLY file"));
+    }
+    let len = meta.is_file().then_some(meta.len());
+    let reader = BufReader::with_capacity(1 << 20, file);
+    read_ply_into(reader, len, path, Some((chunk.max(1), sink))).map(|(_, report)| report)
+}
+
+/// The loader behind [`read_ply_from`] and [`for_each_chunk`].
+fn read_ply_into<R: BufRead>(
     mut reader: R,
     len: Option<u64>,
     path: &Path,
+    chunks: Option<(usize, ChunkSink<'_>)>,
 ) -> Result<(Scene, LoadReport)> {
     let header_bytes = read_header_bytes(path, &mut reader)?;
     // ply-rs expects '\n' line ends; accept '\r\n' too.
@@ -292,9 +408,14 @@ fn read_ply_from<R: BufRead>(
     let layout = vertex_layout(path, vertex, &stored)?;
     let min_row: usize = stored.iter().map(Stored::min_size).sum();
 
-    let mut scene = Scene {
-        sh_degree: layout.sh_degree,
-        ..Default::default()
+    let mut out = Collect {
+        scene: Scene {
+            sh_degree: layout.sh_degree,
+            ..Default::default()
+        },
+        delivered: 0,
+        vertices_in_file: count,
+        chunks,
     };
     let mut report = LoadReport {
         vertices_in_file: count,
@@ -332,7 +453,7 @@ fn read_ply_from<R: BufRead>(
                 &stored,
                 &layout,
                 sized,
-                &mut scene,
+                &mut out,
                 &mut report,
             )?;
         }
@@ -390,12 +511,13 @@ fn read_ply_from<R: BufRead>(
                 &stored,
                 &layout,
                 sized,
-                &mut scene,
+                &mut out,
                 &mut report,
             )?;
         }
     }
-    Ok((scene, report))
+    out.flush()?;
+    Ok((out.scene, report))
 }
 
 /// Reads one binary scalar of type `t`, exactly.
@@ -700,11 +822,11 @@ fn read_binary(
     stored: &[Stored],
     layout: &Layout,
     sized: bool,
-    scene: &mut Scene,
+    out: &mut Collect,
     report: &mut LoadReport,
 ) -> Result<()> {
     if sized {
-        reserve(scene, count);
+        out.reserve(count);
     }
     let mut row = vec![0f32; stored.len()];
     let mut sh = Vec::new();
@@ -731,7 +853,8 @@ fn read_binary(
                     }
                 }
             }
-            push_gaussian(&row, layout, scene, report, &mut sh);
+            push_gaussian(&row, layout, &mut out.scene, report, &mut sh);
+            out.after_push()?;
         }
         return Ok(());
     };
@@ -769,7 +892,8 @@ fn read_binary(
             for &p in &used {
                 row[p] = decode_scalar(&types[p], &v[offsets[p]..], big_endian);
             }
-            push_gaussian(&row, layout, scene, report, &mut sh);
+            push_gaussian(&row, layout, &mut out.scene, report, &mut sh);
+            out.after_push()?;
         }
         done += n;
     }
@@ -785,7 +909,7 @@ fn read_ascii(
     stored: &[Stored],
     layout: &Layout,
     sized: bool,
-    scene: &mut Scene,
+    out: &mut Collect,
     report: &mut LoadReport,
 ) -> Result<()> {
     let mut line = String::new();
@@ -821,7 +945,7 @@ fn read_ascii(
         }
     }
     if sized {
-        reserve(scene, count);
+        out.reserve(count);
     }
     let mut row = vec![0f32; stored.len()];
     let mut sh = Vec::new();
@@ -862,7 +986,8 @@ fn read_ascii(
                 }
             }
         }
-        push_gaussian(&row, layout, scene, report, &mut sh);
+        push_gaussian(&row, layout, &mut out.scene, report, &mut sh);
+        out.after_push()?;
     }
     Ok(())
 }

@@ -4,6 +4,7 @@ pub mod bench;
 pub mod clip_args;
 pub mod demo;
 pub mod flatten;
+pub mod mesh;
 pub mod output;
 pub mod sweep;
 

@@ -9,15 +9,18 @@ use crate::scene::Scene;
 
 /// SH constant of degree 0.
 pub const SH_C0: f32 = 0.282_094_8;
-const SH_C1: f32 = 0.488_602_5;
-const SH_C2: [f32; 5] = [
+/// SH constant of degree 1.
+pub const SH_C1: f32 = 0.488_602_5;
+/// SH constants of degree 2.
+pub const SH_C2: [f32; 5] = [
     1.092_548_4,
     -1.092_548_4,
     0.315_391_57,
     -1.092_548_4,
     0.546_274_2,
 ];
-const SH_C3: [f32; 7] = [
+/// SH constants of degree 3.
+pub const SH_C3: [f32; 7] = [
     -0.590_043_6,
     2.890_611_4,
     -0.457_045_8,

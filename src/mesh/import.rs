@@ -1,0 +1,588 @@
+//! `rara mesh import`: edited octagons back into Gaussians (SPEC section 6).
+//!
+//! A mesh is read with the format's maintained crate (`ply-rs`, `tobj`, `gltf`), its vertices
+//! matched to the original scene's Gaussians, and every octagon fitted back ([`Fit`]). The
+//! match is by `primitive_id` / `corner_id` where the file has them (rara's PLY and glb),
+//! else by order (OBJ, and meshes other tools re-exported): the octagons follow the Gaussians
+//! [`super::export::has_octagon`] selects, 8 vertices each (9 with a centre, first). Anything
+//! that does not add up is an error that says what, never a silent mismatch.
+
+use std::io::{BufReader, Read};
+use std::path::{Path, PathBuf};
+
+use glam::{DMat3, DVec3};
+
+use super::export::{has_octagon, Falloff};
+use super::{fit_lsq, fit_redisplats, octagon_radius, FlatFrame, CORNERS};
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+
+/// How corners become a Gaussian.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Fit {
+    /// SPEC section 6's three-point rule (corners 0, 2 and 6), exactly as REdiSplats.
+    #[default]
+    Redisplats,
+    /// The least-squares fit over all eight corners.
+    Lsq,
+}
+
+/// What `rara mesh import` does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImportOptions {
+    /// `Q` the mesh was exported with (the octagon radius).
+    pub q: f64,
+    /// `--min-opacity` it was exported with (which Gaussians have an octagon).
+    pub min_opacity: f32,
+    /// The fit.
+    pub fit: Fit,
+    /// Turn each Gaussian's SH (degrees 1-3) by the rotation its face underwent.
+    pub rotate_sh: bool,
+}
+
+impl Default for ImportOptions {
+    fn default() -> Self {
+        ImportOptions {
+            q: super::DEFAULT_Q,
+            min_opacity: 0.0,
+            fit: Fit::Redisplats,
+            rotate_sh: false,
+        }
+    }
+}
+
+/// A mesh as read: positions, faces, and the ids where the file has them.
+#[derive(Clone, Debug, Default)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub positions: Vec<DVec3>,
+    /// Per vertex, the Gaussian's index (`primitive_id`).
+    pub primitive_ids: Option<Vec<u32>>,
+    /// Per vertex, the corner (`corner_id`; 8 for a centre).
+    pub corner_ids: Option<Vec<u32>>,
+    /// Faces as vertex indices.
+    pub faces: Vec<Vec<u32>>,
+}
+
+fn mesh_err(path: &Path, message: impl std::fmt::Display) -> Error {
+    Error::InvalidInput(format!("mesh {}: {message}", path.display()))
+}
+
+/// Reads a mesh (.ply, .obj or .glb).
+pub fn read_mesh(path: &Path) -> Result<MeshData> {
+    match super::export::MeshFormat::from_path(path)? {
+        super::export::MeshFormat::Ply => read_ply_mesh(path),
+        super::export::MeshFormat::Obj => read_obj_mesh(path),
+        super::export::MeshFormat::Glb => read_glb_mesh(path),
+    }
+}
+
+fn open(path: &Path) -> Result<std::fs::File> {
+    std::fs::File::open(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// A PLY vertex as ply-rs hands it over: only what the import needs.
+#[derive(Default)]
+struct PlyVertex {
+    xyz: [f64; 3],
+    primitive_id: Option<u32>,
+    corner_id: Option<u32>,
+}
+
+fn property_f64(p: &ply_rs::ply::Property) -> Option<f64> {
+    use ply_rs::ply::Property as P;
+    Some(match *p {
+        P::Char(v) => v as f64,
+        P::UChar(v) => v as f64,
+        P::Short(v) => v as f64,
+        P::UShort(v) => v as f64,
+        P::Int(v) => v as f64,
+        P::UInt(v) => v as f64,
+        P::Float(v) => v as f64,
+        P::Double(v) => v,
+        _ => return None,
+    })
+}
+
+/// An id property as a u32, or `u32::MAX` for a value that is not one (negative, fractional,
+/// non-finite), which the matching then reports.
+fn property_id(p: &ply_rs::ply::Property) -> u32 {
+    match property_f64(p) {
+        Some(v) if v >= 0.0 && v.fract() == 0.0 && v < u32::MAX as f64 => v as u32,
+        _ => u32::MAX,
+    }
+}
+
+impl ply_rs::ply::PropertyAccess for PlyVertex {
+    fn new() -> Self {
+        PlyVertex {
+            xyz: [f64::NAN; 3],
+            ..Default::default()
+        }
+    }
+    fn set_property(&mut self, name: String, p: ply_rs::ply::Property) {
+        match name.as_str() {
+            "x" => self.xyz[0] = property_f64(&p).unwrap_or(f64::NAN),
+            "y" => self.xyz[1] = property_f64(&p).unwrap_or(f64::NAN),
+            "z" => self.xyz[2] = property_f64(&p).unwrap_or(f64::NAN),
+            "primitive_id" => self.primitive_id = Some(property_id(&p)),
+            "corner_id" => self.corner_id = Some(property_id(&p)),
+            _ => {}
+        }
+    }
+}
+
+/// A PLY face: its vertex list.
+#[derive(Default)]
+struct PlyFace(Vec<u32>);
+
+impl ply_rs::ply::PropertyAccess for PlyFace {
+    fn new() -> Self {
+        PlyFace::default()
+    }
+    fn set_property(&mut self, name: String, p: ply_rs::ply::Property) {
+        use ply_rs::ply::Property as P;
+        if name != "vertex_indices" && name != "vertex_index" {
+            return;
+        }
+        self.0 = match p {
+            P::ListUInt(v) => v,
+            P::ListInt(v) => v.into_iter().map(|i| i.max(-1) as u32).collect(),
+            P::ListUShort(v) => v.into_iter().map(u32::from).collect(),
+            P::ListShort(v) => v.into_iter().map(|i| i.max(-1) as u32).collect(),
+            P::ListUChar(v) => v.into_iter().map(u32::from).collect(),
+            P::ListChar(v) => v.into_iter().map(|i| i.max(-1) as u32).collect(),
+            _ => vec![u32::MAX],
+        };
+    }
+}
+
+fn read_ply_mesh(path: &Path) -> Result<MeshData> {
+    let file = open(path)?;
+    let size = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let mut reader = BufReader::with_capacity(1 << 20, file);
+    let vertex_parser = ply_rs::parser::Parser::<PlyVertex>::new();
+    let header = vertex_parser
+        .read_header(&mut reader)
+        .map_err(|e| mesh_err(path, format!("malformed PLY header: {}", first_line(&e))))?;
+    let mut mesh = MeshData::default();
+    let face_parser = ply_rs::parser::Parser::<PlyFace>::new();
+    let mut ids = (Vec::new(), Vec::new(), true, true);
+    for (name, element) in &header.elements {
+        // Every row takes at least a byte: a count beyond the file is refused before reading.
+        if element.count as u64 > size {
+            return Err(mesh_err(
+                path,
+                format!(
+                    "element '{name}' declares {} rows, more than the file's {size} bytes",
+                    element.count
+                ),
+            ));
+        }
+        match name.as_str() {
+            "vertex" => {
+                let rows = vertex_parser
+                    .read_payload_for_element(&mut reader, element, &header)
+                    .map_err(|e| mesh_err(path, format!("vertex data: {}", first_line(&e))))?;
+                for v in rows {
+                    mesh.positions.push(DVec3::from_array(v.xyz));
+                    match v.primitive_id {
+                        Some(id) => ids.0.push(id),
+                        None => ids.2 = false,
+                    }
+                    match v.corner_id {
+                        Some(id) => ids.1.push(id),
+                        None => ids.3 = false,
+                    }
+                }
+            }
+            "face" => {
+                let rows = face_parser
+                    .read_payload_for_element(&mut reader, element, &header)
+                    .map_err(|e| mesh_err(path, format!("face data: {}", first_line(&e))))?;
+                mesh.faces = rows.into_iter().map(|f| f.0).collect();
+            }
+            _ => {
+                // Another element: read past it.
+                ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new()
+                    .read_payload_for_element(&mut reader, element, &header)
+                    .map_err(|e| mesh_err(path, format!("element '{name}': {}", first_line(&e))))?;
+            }
+        }
+    }
+    if !header.elements.contains_key("vertex") {
+        return Err(mesh_err(path, "no 'vertex' element"));
+    }
+    if ids.2 && ids.3 && !mesh.positions.is_empty() {
+        mesh.primitive_ids = Some(ids.0);
+        mesh.corner_ids = Some(ids.1);
+    }
+    Ok(mesh)
+}
+
+fn first_line(e: &dyn std::fmt::Display) -> String {
+    e.to_string().lines().next().unwrap_or("").to_string()
+}
+
+fn read_obj_mesh(path: &Path) -> Result<MeshData> {
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    // Materials do not matter here; a missing .mtl must not fail the import.
+    let (models, _) = tobj::load_obj_buf(&mut BufReader::new(open(path)?), &options, |_| {
+        Ok(Default::default())
+    })
+    .map_err(|e| mesh_err(path, format!("OBJ: {e}")))?;
+    let mut mesh = MeshData::default();
+    for model in models {
+        let m = model.mesh;
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|p| DVec3::new(p[0], p[1], p[2])),
+        );
+        let mut next = 0usize;
+        let arities: Vec<u32> = if m.face_arities.is_empty() {
+            vec![3; m.indices.len() / 3]
+        } else {
+            m.face_arities.clone()
+        };
+        for n in arities {
+            let n = n as usize;
+            let face = m.indices[next..next + n]
+                .iter()
+                .map(|&i| base + i)
+                .collect();
+            mesh.faces.push(face);
+            next += n;
+        }
+    }
+    Ok(mesh)
+}
+
+fn read_glb_mesh(path: &Path) -> Result<MeshData> {
+    let mut bytes = Vec::new();
+    open(path)?
+        .read_to_end(&mut bytes)
+        .map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| mesh_err(path, format!("glTF: {e}")))?;
+    let blob = gltf.blob.as_deref();
+    let buffer_data = |b: gltf::Buffer| match b.source() {
+        gltf::buffer::Source::Bin => blob,
+        gltf::buffer::Source::Uri(_) => None,
+    };
+    let mut mesh = MeshData::default();
+    let mut all_ids = true;
+    let (mut primitive_ids, mut corner_ids) = (Vec::new(), Vec::new());
+    for m in gltf.meshes() {
+        for primitive in m.primitives() {
+            if primitive.mode() != gltf::mesh::Mode::Triangles {
+                return Err(mesh_err(path, "a primitive that is not triangles"));
+            }
+            let reader = primitive.reader(buffer_data);
+            let base = mesh.positions.len() as u32;
+            let positions = reader.read_positions().ok_or_else(|| {
+                mesh_err(path, "a primitive without POSITION (or external buffer)")
+            })?;
+            mesh.positions
+                .extend(positions.map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)));
+            let count = mesh.positions.len() - base as usize;
+            let read_ids = |name: &str, out: &mut Vec<u32>| -> bool {
+                let semantic = gltf::Semantic::Extras(name.to_string());
+                let Some(accessor) = primitive.get(&semantic) else {
+                    return false;
+                };
+                let Some(iter) = gltf::accessor::Iter::<f32>::new(accessor, buffer_data) else {
+                    return false;
+                };
+                let before = out.len();
+                out.extend(iter.map(|v| {
+                    if v >= 0.0 && v.fract() == 0.0 {
+                        v as u32
+                    } else {
+                        u32::MAX
+                    }
+                }));
+                out.len() - before == count
+            };
+            all_ids &= read_ids("PRIMITIVE_ID", &mut primitive_ids);
+            all_ids &= read_ids("CORNER_ID", &mut corner_ids);
+            match reader.read_indices() {
+                Some(indices) => {
+                    let idx: Vec<u32> = indices.into_u32().collect();
+                    mesh.faces
+                        .extend(idx.chunks(3).map(|t| t.iter().map(|&i| base + i).collect()));
+                }
+                None => mesh.faces.extend(
+                    (0..count as u32 / 3).map(|t| (0..3).map(|k| base + 3 * t + k).collect()),
+                ),
+            }
+        }
+    }
+    if all_ids && !mesh.positions.is_empty() {
+        mesh.primitive_ids = Some(primitive_ids);
+        mesh.corner_ids = Some(corner_ids);
+    }
+    Ok(mesh)
+}
+
+/// What an import did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImportReport {
+    /// Gaussians refitted from their octagons.
+    pub fitted: usize,
+    /// Gaussians without an octagon, kept as they were.
+    pub kept: usize,
+    /// How vertices were matched to Gaussians.
+    pub matched_by_ids: bool,
+    /// Vertices per octagon: 8, or 9 with a centre.
+    pub vertices_per_octagon: usize,
+}
+
+/// A mesh's octagons matched to the Gaussians of the original scene.
+#[derive(Clone, Debug)]
+pub struct MatchedOctagons {
+    /// Per Gaussian, its octagon's corners, or `None` (no octagon).
+    pub corners: Vec<Option<[DVec3; CORNERS]>>,
+    /// Matched by `primitive_id` / `corner_id` (else by order).
+    pub by_ids: bool,
+    /// Vertices per octagon: 8, or 9 with a centre.
+    pub vertices_per_octagon: usize,
+}
+
+/// The corners of every octagon in `mesh`, matched to the Gaussians of `original`, with the
+/// faces checked (within one octagon, distinct in-range vertices, some area).
+pub fn match_octagons(
+    mesh: &MeshData,
+    original: &Scene,
+    options: &ImportOptions,
+    path: &Path,
+) -> Result<MatchedOctagons> {
+    let n = original.len();
+    let v = mesh.positions.len();
+    if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(mesh_err(
+            path,
+            format!("vertex {i} is not finite: {}", mesh.positions[i]),
+        ));
+    }
+    let selected: Vec<usize> = (0..n)
+        .filter(|&i| has_octagon(original, i, options.q, options.min_opacity))
+        .collect();
+    let mut corners: Vec<Option<[DVec3; CORNERS]>> = vec![None; n];
+    // For each vertex, the octagon it belongs to (for the face check).
+    let owner: Vec<u32>;
+    let per;
+    match (&mesh.primitive_ids, &mesh.corner_ids) {
+        (Some(prim), Some(corner)) => {
+            let mut filled: Vec<u16> = vec![0; n];
+            let mut has_centre = false;
+            for (j, (&g, &k)) in prim.iter().zip(corner).enumerate() {
+                let g = g as usize;
+                if g >= n {
+                    return Err(mesh_err(
+                        path,
+                        format!(
+                            "vertex {j} has primitive_id {g}, but the original has {n} Gaussians"
+                        ),
+                    ));
+                }
+                if k as usize == CORNERS {
+                    has_centre = true;
+                    continue;
+                }
+                if k as usize > CORNERS {
+                    return Err(mesh_err(path, format!("vertex {j} has corner_id {k}: an octagon has corners 0-7 (and 8, a centre)")));
+                }
+                let bit = 1u16 << k;
+                if filled[g] & bit != 0 {
+                    return Err(mesh_err(
+                        path,
+                        format!("Gaussian {g} has corner {k} twice (vertex {j})"),
+                    ));
+                }
+                filled[g] |= bit;
+                corners[g].get_or_insert([DVec3::ZERO; CORNERS])[k as usize] = mesh.positions[j];
+            }
+            for (g, &f) in filled.iter().enumerate() {
+                if f != 0 && f != 0xff {
+                    let missing = (0..8).find(|k| f & (1 << k) == 0).unwrap();
+                    return Err(mesh_err(
+                        path,
+                        format!("the octagon of Gaussian {g} lacks corner {missing}"),
+                    ));
+                }
+            }
+            let with_octagon = filled.iter().filter(|&&f| f != 0).count();
+            if let Some(&g) = selected.iter().find(|&&g| filled[g] == 0) {
+                return Err(mesh_err(
+                    path,
+                    format!(
+                        "the mesh has octagons for {with_octagon} Gaussians, but {} of the original's have one \
+                         (Q {}, min opacity {}): Gaussian {g} has none",
+                        selected.len(), options.q, options.min_opacity
+                    ),
+                ));
+            }
+            owner = prim.clone();
+            per = if has_centre { CORNERS + 1 } else { CORNERS };
+            Ok::<(), Error>(())
+        }
+        _ => {
+            let s = selected.len();
+            per = if v == s * CORNERS {
+                CORNERS
+            } else if v == s * (CORNERS + 1) && s > 0 {
+                CORNERS + 1
+            } else {
+                return Err(mesh_err(
+                    path,
+                    format!(
+                        "{v} vertices, no primitive_id/corner_id to match them by, and the original has {s} \
+                         Gaussians with an octagon (Q {}, min opacity {}): {} or {} vertices were expected, \
+                         in Gaussian order",
+                        options.q,
+                        options.min_opacity,
+                        s * CORNERS,
+                        s * (CORNERS + 1)
+                    ),
+                ));
+            };
+            let falloff = if per == CORNERS {
+                Falloff::Constant
+            } else {
+                Falloff::Centre
+            };
+            for (j, &g) in selected.iter().enumerate() {
+                corners[g] = Some(std::array::from_fn(|k| {
+                    mesh.positions[j * per + falloff.corner_slot(k)]
+                }));
+            }
+            owner = (0..v).map(|j| selected[j / per] as u32).collect();
+            Ok(())
+        }
+    }?;
+    // Faces: within one octagon, with distinct in-range vertices and some area.
+    for (f, face) in mesh.faces.iter().enumerate() {
+        if face.len() < 3 {
+            return Err(mesh_err(
+                path,
+                format!("face {f} has {} vertices", face.len()),
+            ));
+        }
+        if let Some(&i) = face.iter().find(|&&i| i as usize >= v) {
+            return Err(mesh_err(
+                path,
+                format!("face {f} names vertex {i}; the mesh has {v}"),
+            ));
+        }
+        let g = owner[face[0] as usize];
+        if face.iter().any(|&i| owner[i as usize] != g) {
+            return Err(mesh_err(
+                path,
+                format!("face {f} joins vertices of different octagons (Gaussians {g} and {}): not an octagon mesh",
+                    face.iter().map(|&i| owner[i as usize]).find(|&o| o != g).unwrap()),
+            ));
+        }
+        let p: Vec<DVec3> = face.iter().map(|&i| mesh.positions[i as usize]).collect();
+        let normal: DVec3 = (1..p.len() - 1)
+            .map(|k| (p[k] - p[0]).cross(p[k + 1] - p[0]))
+            .sum();
+        let size = p.iter().map(|q| (*q - p[0]).length()).fold(0.0, f64::max);
+        // Written so that NaN counts as degenerate.
+        if normal.length().partial_cmp(&(1e-12 * size * size)) != Some(std::cmp::Ordering::Greater)
+        {
+            return Err(mesh_err(path, format!("face {f} is degenerate (no area)")));
+        }
+    }
+    Ok(MatchedOctagons {
+        corners,
+        by_ids: mesh.primitive_ids.is_some(),
+        vertices_per_octagon: per,
+    })
+}
+
+/// Turns the edited `mesh` back into Gaussians: the original's opacity and SH (turned with
+/// `--rotate-sh`), the geometry fitted from each octagon; Gaussians without one are kept.
+pub fn import_mesh(
+    mesh: &MeshData,
+    original: &Scene,
+    options: &ImportOptions,
+    path: &Path,
+) -> Result<(Scene, ImportReport)> {
+    let matched = match_octagons(mesh, original, options, path)?;
+    let mut scene = original.clone();
+    let mut report = ImportReport {
+        matched_by_ids: matched.by_ids,
+        vertices_per_octagon: matched.vertices_per_octagon,
+        ..Default::default()
+    };
+    let stride = original.sh_stride();
+    for (g, c) in matched.corners.iter().enumerate() {
+        let Some(c) = c else {
+            report.kept += 1;
+            continue;
+        };
+        let rho = octagon_radius(options.q, original.opacities[g]);
+        let fitted = match options.fit {
+            Fit::Redisplats => fit_redisplats(c, rho),
+            Fit::Lsq => fit_lsq(c, rho),
+        }
+        .map_err(|e| mesh_err(path, format!("the octagon of Gaussian {g}: {e}")))?;
+        scene.means[g] = fitted.mean.as_vec3();
+        scene.scales[g] = fitted.scales();
+        scene.rotations[g] = fitted.rotation();
+        if options.rotate_sh && original.sh_degree > 0 {
+            let before = FlatFrame::of(original, g);
+            let turn = frame_matrix(&fitted) * frame_matrix(&before).transpose();
+            super::sh_rotation::rotate_sh(
+                &mut scene.sh[g * stride..(g + 1) * stride],
+                original.sh_degree,
+                turn,
+            );
+        }
+        report.fitted += 1;
+    }
+    Ok((scene, report))
+}
+
+/// `[n r_a r_b]`.
+fn frame_matrix(f: &FlatFrame) -> DMat3 {
+    DMat3::from_cols(f.normal, f.r_a, f.r_b)
+}
+
+/// The mesh files of a folder of frames (.obj, .ply, .glb), in name order.
+pub fn frame_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(dir).map_err(|source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && p.extension().is_some_and(|e| {
+                    super::export::MeshFormat::EXTENSIONS
+                        .contains(&e.to_string_lossy().to_ascii_lowercase().as_str())
+                })
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(Error::InvalidInput(format!(
+            "{}: no mesh frames (.obj, .ply, .glb) in this folder",
+            dir.display()
+        )));
+    }
+    Ok(files)
+}
