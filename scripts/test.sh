@@ -6,6 +6,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/setup.sh
+# Blender and the glTF validator, for the tests of the mesh export (RARA_NO_CLIENTS=1 skips).
+if [ -z "${RARA_NO_CLIENTS:-}" ]; then . scripts/clients.sh; fi
 data="${RARA_REAL_DATA:-../shared/data/real}"
 if [ -d "$data" ]; then echo "real scenes: $data"; else echo "real scenes: none at $data (those cases are skipped)"; fi
 log=$(mktemp)

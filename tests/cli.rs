@@ -854,10 +854,26 @@ fn cli_reference_is_current() {
         .filter_map(|l| l.split_whitespace().next().map(str::to_owned))
         .filter(|c| c != "help")
         .collect();
-    assert!(commands.len() >= 7, "{top}");
+    assert!(commands.len() >= 10, "{top}");
+    // The subcommands, in the order a help text lists them.
+    let subcommands = |help_text: &str| -> Vec<String> {
+        help_text
+            .lines()
+            .skip_while(|l| !l.starts_with("Commands:"))
+            .skip(1)
+            .take_while(|l| l.starts_with("  "))
+            .filter_map(|l| l.split_whitespace().next().map(str::to_owned))
+            .filter(|c| c != "help")
+            .collect()
+    };
     for c in &commands {
         let text = help(&[c, "--help"]);
         generated.push_str(&format!("\n## `rara {c}`\n\n```text\n{text}```\n"));
+        // A command with commands of its own (rara mesh export / import).
+        for sub in subcommands(&text) {
+            let text = help(&[c, &sub, "--help"]);
+            generated.push_str(&format!("\n### `rara {c} {sub}`\n\n```text\n{text}```\n"));
+        }
     }
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/CLI.md");
     let doc = std::fs::read_to_string(&path).unwrap();
@@ -950,4 +966,186 @@ fn readme_quick_tour_runs_as_shown() {
             );
         }
     }
+}
+
+/// `rara flatten`, `rara mesh export` / `import` (a file and a folder of frames) and
+/// `rara render-sequence`, end to end, and their errors.
+#[test]
+fn flatten_mesh_and_render_sequence() {
+    let (scene, cams) = good_scene();
+    let (scene, cams) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    let d = dir().join("mesh_cli");
+    std::fs::create_dir_all(&d).unwrap();
+    let p = |name: &str| d.join(name).to_string_lossy().into_owned();
+
+    // flatten: the GaMeS layout, every Gaussian flat, a PSNR per view and a median.
+    let out = rara(&[
+        "flatten",
+        scene,
+        "-o",
+        &p("flat.ply"),
+        "--layout",
+        "games",
+        "--views",
+        "2",
+    ]);
+    assert_success(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("view 1: PSNR") && stdout.contains("median PSNR"),
+        "{stdout}"
+    );
+    let info = rara(&["info", &p("flat.ply")]);
+    assert!(String::from_utf8_lossy(&info.stdout).contains("flat:        500 "));
+
+    // export: the warning counts Gaussians that were not flat.
+    for ext in ["ply", "obj", "glb"] {
+        let out = rara(&["mesh", "export", scene, "-o", &p(&format!("m.{ext}"))]);
+        assert_success(&out);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("500 of 500 octagons are of Gaussians that were not flat"),
+            "{stderr}"
+        );
+        assert!(String::from_utf8_lossy(&out.stdout).contains("500 octagons of 500 Gaussians"));
+    }
+    assert!(d.join("m.mtl").is_file());
+    let out = rara(&[
+        "mesh",
+        "export",
+        &p("flat.ply"),
+        "-o",
+        &p("flat.obj"),
+        "--falloff",
+        "centre",
+    ]);
+    assert_success(&out);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("not flat"));
+
+    // import: by ids (PLY) and by order (OBJ); the result renders.
+    for ext in ["ply", "obj", "glb"] {
+        let out = rara(&[
+            "mesh",
+            "import",
+            &p(&format!("m.{ext}")),
+            "--original",
+            scene,
+            "-o",
+            &p(&format!("back_{ext}.ply")),
+            "--rotate-sh",
+            "--fit",
+            "lsq",
+        ]);
+        assert_success(&out);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("500 Gaussians fitted"), "{stdout}");
+        let by = if ext == "obj" {
+            "matched by order"
+        } else {
+            "matched by primitive_id/corner_id"
+        };
+        assert!(stdout.contains(by), "{stdout}");
+    }
+    assert_success(&rara(&render_args(
+        &p("back_ply.ply"),
+        cams,
+        &p("back.png"),
+    )));
+
+    // A folder of frames, then render-sequence.
+    let frames = d.join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    for k in 0..3 {
+        std::fs::copy(d.join("m.obj"), frames.join(format!("frame_{k:03}.obj"))).unwrap();
+    }
+    let out = rara(&[
+        "mesh",
+        "import",
+        frames.to_str().unwrap(),
+        "--original",
+        scene,
+        "-o",
+        &p("imported"),
+    ]);
+    assert_success(&out);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("imported 3 frames"));
+    assert!(d.join("imported/frame_002.ply").is_file());
+    let out = rara(&[
+        "render-sequence",
+        &p("imported"),
+        "--cameras",
+        cams,
+        "-o",
+        &p("rendered"),
+    ]);
+    assert_success(&out);
+    assert!(
+        d.join("rendered/frame_000.png").is_file() && d.join("rendered/sequence.gif").is_file()
+    );
+
+    // Errors: a missing original, a mismatch, a bad extension, a bad Q, an empty folder.
+    assert_error(
+        &rara(&[
+            "mesh",
+            "import",
+            &p("m.obj"),
+            "--original",
+            &p("nope.ply"),
+            "-o",
+            &p("x.ply"),
+        ]),
+        &["--original", "no such file"],
+    );
+    let (other, _) = good_scene();
+    let small = rara::synth::shell(40, 1, 3);
+    rara::ply::write_ply(&small, &other, rara::ply::PlyEncoding::BinaryLittleEndian).unwrap();
+    assert_error(
+        &rara(&[
+            "mesh",
+            "import",
+            &p("m.obj"),
+            "--original",
+            other.to_str().unwrap(),
+            "-o",
+            &p("x.ply"),
+        ]),
+        &["4000 vertices", "320 or 360 vertices were expected"],
+    );
+    assert_error(
+        &rara(&[
+            "mesh",
+            "import",
+            &p("m.ply"),
+            "--original",
+            other.to_str().unwrap(),
+            "-o",
+            &p("x.ply"),
+        ]),
+        &["primitive_id", "the original has 40 Gaussians"],
+    );
+    assert_error(
+        &rara(&["mesh", "export", scene, "-o", &p("m.stl")]),
+        &["'.stl' is not a mesh format"],
+    );
+    assert_error(
+        &rara(&["mesh", "export", scene, "-o", &p("q.ply"), "--q", "0"]),
+        &["Q must be a positive number"],
+    );
+    std::fs::create_dir_all(d.join("empty")).unwrap();
+    assert_error(
+        &rara(&[
+            "mesh",
+            "import",
+            &p("empty"),
+            "--original",
+            scene,
+            "-o",
+            &p("o2"),
+        ]),
+        &["no mesh frames"],
+    );
+    assert_error(
+        &rara(&["flatten", scene, "-o", &p("flat.txt")]),
+        &["unknown extension '.txt'"],
+    );
 }

@@ -349,3 +349,85 @@ fn hostile_meshes_give_clear_errors() {
         .to_string()
         .contains(".stl"));
 }
+
+/// Real scenes through every format: the round-trip errors (an unedited export, then an
+/// import), within 1e-5 relative for PLY (double positions) and OBJ (shortest decimals); glb
+/// stores positions as f32, which bounds its error by the f32 rounding of the corners against
+/// the octagon's size, so it is reported and held to 1e-3.
+#[test]
+fn real_scenes_round_trip() {
+    let mut ran = 0;
+    for (stem, formats) in [
+        ("plant_capture_sh0", &["ply", "obj", "glb"][..]),
+        ("playbot_lod0_500k_sh2", &["ply", "glb"][..]),
+    ] {
+        let Some((ply, _)) = common::real_scene(stem) else {
+            continue;
+        };
+        eprintln!("real-scene case '{stem}' RAN");
+        ran += 1;
+        let s = rara::ply::load_ply(&ply).unwrap().0;
+        let dir = tempdir(&format!("real_{stem}"));
+        for ext in formats {
+            let path = dir.join(format!("m.{ext}"));
+            export(&s, &path, Falloff::Constant);
+            let back = import(&s, &path, &ImportOptions::default()).unwrap();
+            let fitted: Vec<usize> = (0..s.len())
+                .filter(|&i| rara::mesh::export::has_octagon(&s, i, DEFAULT_Q, 0.0))
+                .collect();
+            let pick = |scene: &Scene| {
+                let mut out = Scene {
+                    sh_degree: scene.sh_degree,
+                    ..Scene::default()
+                };
+                for &i in &fitted {
+                    out.push(
+                        scene.means[i],
+                        scene.opacities[i],
+                        scene.scales[i],
+                        scene.rotations[i],
+                        scene.sh_of(i),
+                    );
+                }
+                out
+            };
+            let (dm, dc) = errors(&pick(&s), &pick(&back));
+            eprintln!(
+                "{stem} {ext}: {} octagons, centre {dm:.2e}, covariance {dc:.2e} relative",
+                fitted.len()
+            );
+            let bound = if *ext == "glb" { 1e-3 } else { 1e-5 };
+            assert!(dm < bound && dc < bound, "{stem} {ext}: {dm} {dc}");
+            std::fs::remove_file(&path).ok();
+        }
+    }
+    if ran == 0 {
+        common::test_skipped("none of its real scenes is here");
+    }
+}
+
+/// A glb whose mesh sits under a node transform (as other tools write them) imports where the
+/// scene places it: a translated node gives translated Gaussians.
+#[test]
+fn glb_node_transforms_are_applied() {
+    let dir = tempdir("node");
+    let s = scene(200, 0, Vec3::ZERO, 8);
+    let path = dir.join("m.glb");
+    export(&s, &path, Falloff::Constant);
+    let bytes = std::fs::read(&path).unwrap();
+    let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    json["nodes"][0]["translation"] = serde_json::json!([1.0, -2.0, 0.5]);
+    let moved = gltf::binary::Glb {
+        header: glb.header,
+        json: serde_json::to_vec(&json).unwrap().into(),
+        bin: glb.bin.clone(),
+    };
+    let moved_path = dir.join("moved.glb");
+    std::fs::write(&moved_path, moved.to_vec().unwrap()).unwrap();
+    let back = import(&s, &moved_path, &ImportOptions::default()).unwrap();
+    for i in 0..s.len() {
+        let d = back.means[i] - s.means[i] - Vec3::new(1.0, -2.0, 0.5);
+        assert!(d.length() < 1e-5, "{i}: {d}");
+    }
+}

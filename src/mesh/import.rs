@@ -10,7 +10,7 @@
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DMat4, DVec3};
 
 use super::export::{has_octagon, Falloff};
 use super::{fit_lsq, fit_redisplats, octagon_radius, FlatFrame, CORNERS};
@@ -284,7 +284,30 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
     let mut mesh = MeshData::default();
     let mut all_ids = true;
     let (mut primitive_ids, mut corner_ids) = (Vec::new(), Vec::new());
-    for m in gltf.meshes() {
+    // Every mesh where the scene places it: a glb another tool wrote (Blender's exporter
+    // among them) may put its mesh under a node transform. A file without scenes is read
+    // with its meshes where they are.
+    let mut placed: Vec<(gltf::Mesh, DMat4)> = Vec::new();
+    let scenes: Vec<_> = gltf.scenes().collect();
+    if scenes.is_empty() {
+        placed.extend(gltf.meshes().map(|m| (m, DMat4::IDENTITY)));
+    } else {
+        let mut stack: Vec<(gltf::Node, DMat4)> = scenes
+            .iter()
+            .flat_map(|s| s.nodes())
+            .map(|n| (n, DMat4::IDENTITY))
+            .collect();
+        while let Some((node, parent)) = stack.pop() {
+            let local =
+                DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+            let world = parent * local;
+            if let Some(m) = node.mesh() {
+                placed.push((m, world));
+            }
+            stack.extend(node.children().map(|c| (c, world)));
+        }
+    }
+    for (m, world) in placed {
         for primitive in m.primitives() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 return Err(mesh_err(path, "a primitive that is not triangles"));
@@ -294,8 +317,9 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
             let positions = reader.read_positions().ok_or_else(|| {
                 mesh_err(path, "a primitive without POSITION (or external buffer)")
             })?;
-            mesh.positions
-                .extend(positions.map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)));
+            mesh.positions.extend(positions.map(|p| {
+                world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            }));
             let count = mesh.positions.len() - base as usize;
             let read_ids = |name: &str, out: &mut Vec<u32>| -> bool {
                 let semantic = gltf::Semantic::Extras(name.to_string());

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs the real clients the tests drive, where they are missing: Debian's Blender (with
+# python3-numpy, which its glTF importer needs) and the Khronos glTF validator from npm (into
+# target/clients). Sourced by scripts/test.sh after setup.sh; a client that cannot be
+# installed is reported, and the tests that need it say TEST SKIPPED.
+
+client_packages=(blender python3-numpy)
+missing=()
+for p in "${client_packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if ((${#missing[@]})); then
+  if [ "$(id -u)" -eq 0 ]; then
+    echo "clients: installing ${missing[*]}" >&2
+    apt-get update -qq &&
+      DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null ||
+      echo "clients: could not install ${missing[*]}; the Blender tests will be skipped" >&2
+  else
+    echo "clients: ${missing[*]} missing and not root; the Blender tests will be skipped" >&2
+  fi
+fi
+
+validator_version=2.0.0-dev.3.10
+if [ ! -d target/clients/node_modules/gltf-validator ]; then
+  if command -v npm >/dev/null 2>&1; then
+    echo "clients: installing gltf-validator@$validator_version from npm into target/clients" >&2
+    mkdir -p target/clients
+    npm install --silent --no-audit --no-fund --prefix target/clients "gltf-validator@$validator_version" >/dev/null ||
+      echo "clients: npm install gltf-validator failed; the validator test will be skipped" >&2
+  else
+    echo "clients: npm not found; the glTF validator test will be skipped" >&2
+  fi
+fi
