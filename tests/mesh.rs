@@ -431,3 +431,35 @@ fn glb_node_transforms_are_applied() {
         assert!(d.length() < 1e-5, "{i}: {d}");
     }
 }
+
+/// `--min-opacity`: only Gaussians at or above it get an octagon; an import by order needs the
+/// same value to find them, and says what it expected otherwise.
+#[test]
+fn min_opacity_selects_the_octagons() {
+    let dir = tempdir("min_opacity");
+    let s = scene(400, 0, Vec3::ZERO, 9);
+    let path = dir.join("m.obj");
+    let options = ExportOptions {
+        min_opacity: 0.5,
+        ..ExportOptions::default()
+    };
+    let report = export_mesh(&s, &path, &path, MeshFormat::Obj, &options, &mut |_, _| {}).unwrap();
+    let above = s.opacities.iter().filter(|&&o| o >= 0.5).count();
+    assert_eq!(report.octagons, above);
+    assert_eq!(report.below_min_opacity, s.len() - above);
+    let with = ImportOptions {
+        min_opacity: 0.5,
+        ..ImportOptions::default()
+    };
+    let back = import(&s, &path, &with).unwrap();
+    for i in 0..s.len() {
+        if s.opacities[i] < 0.5 {
+            assert_eq!(back.means[i], s.means[i]);
+            assert_eq!(back.scales[i], s.scales[i]);
+        }
+    }
+    let err = import(&s, &path, &ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("vertices were expected"), "{err}");
+}

@@ -129,7 +129,11 @@ pub fn run(args: &FlattenArgs) -> Result<()> {
     output.write_with(|path| {
         write_ply_layout(&flat, path, PlyEncoding::BinaryLittleEndian, layout)
     })?;
-    println!("wrote {} ({:?} layout)", args.output.display(), args.layout);
+    let layout_name = match args.layout {
+        LayoutArg::Inria => "INRIA layout",
+        LayoutArg::Games => "GaMeS layout, normal along local x",
+    };
+    println!("wrote {} ({layout_name})", args.output.display());
 
     let camera_file = args.cameras.clone().or_else(|| cameras_beside(&args.scene));
     let (cameras, source) = match &camera_file {
