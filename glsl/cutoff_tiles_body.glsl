@@ -63,6 +63,59 @@ vec4 clip_plane(uint k) {
 #endif
 }
 
+// Below this |n.d| / |d| at a corner ray, a flat splat's plane is too close to edge-on across
+// the tile for flat_tile_class (well above FLAT_PARALLEL_EPSILON: see there).
+#define FLAT_TILE_MIN_COS 1e-3
+
+// TILE_CLASS_* of a flat splat's pair (SPEC section 6: its weight at a pixel is whether the
+// pixel ray's crossing with its plane is visible), from the tile's corner rays dirs[k] and the
+// region's planes. While every corner ray meets the plane from the same side, n.d / |d| >= c
+// over their whole convex hull (n.d is linear, |d| at most the corners' combination), so no
+// pixel of the tile takes the parallel rule, and the crossings fill the convex quadrilateral
+// spanned by the corners' crossings (a projective image of the tile's). A half-space then holds
+// all of it when it holds the four corners, and none of it when it holds none of them; the
+// intersection K holds all of it when every half-space does, and none when one holds none.
+// slack covers the rasterizer's own rounding of the crossing and of the planes' spans.
+uint flat_tile_class(CutoffRecord rec, vec3 eye, vec3 dirs[4], uint planes, uint flags) {
+    vec3 n = rec.m0.xyz;
+    float ne = rec.m0.w;    // n.(eye - mu)
+    vec3 p[4];
+    float cos_lo = UNBOUNDED;
+    float cos_hi = -UNBOUNDED;
+    float reach = 0.0;
+    for (uint k = 0u; k < 4u; ++k) {
+        float nd = dot(n, dirs[k]);
+        float c = nd / length(dirs[k]);
+        cos_lo = min(cos_lo, c);
+        cos_hi = max(cos_hi, c);
+        p[k] = eye - (ne / nd) * dirs[k];
+        reach = max(reach, length(p[k] - eye));
+    }
+    if (!(cos_lo > FLAT_TILE_MIN_COS || cos_hi < -FLAT_TILE_MIN_COS)) {
+        return TILE_CLASS_PARTIAL;
+    }
+    bool inside_all = true;
+    bool outside_some = false;
+    for (uint plane = 0u; plane < planes; ++plane) {
+        vec4 pl = clip_plane(plane);
+        float slack = 1e-4 * (abs(dot(pl.xyz, eye) + pl.w) + reach);
+        bool all_in = true;
+        bool all_out = true;
+        for (uint k = 0u; k < 4u; ++k) {
+            float side = dot(pl.xyz, p[k]) + pl.w;
+            all_in = all_in && side > slack;
+            all_out = all_out && side < -slack;
+        }
+        inside_all = inside_all && all_in;
+        outside_some = outside_some || all_out;
+    }
+    bool invert = (flags & CLIP_FLAG_INVERT) != 0u;
+    if (invert ? inside_all : outside_some) {
+        return TILE_CLASS_EMPTY;
+    }
+    return (invert ? outside_some : inside_all) ? TILE_CLASS_FULL : TILE_CLASS_PARTIAL;
+}
+
 // The next cutoff record of the workgroup's LINEAR_WORKGROUP to take.
 shared uint next_record;
 
@@ -126,9 +179,9 @@ void main() {
                                    pixel_ray(f, box.zw), pixel_ray(f, box.xw));
             float q_min = footprint_q_min_in_tile(p.uv, p.conic, xy.x, xy.y);
             float peak_alpha = p.opacity * exp(-0.5 * q_min);
-            // A flat splat's weight is a step along its plane (SPEC section 6), which these
-            // bounds (worked out in the whitened frame it does not have) do not cover: its
-            // pairs take the per-pixel weight.
+            // A flat splat's weight is a step along its plane (SPEC section 6): the mass
+            // bounds, worked out in the whitened frame it does not have, give way to
+            // flat_tile_class.
             bool flat_splat = cutoff_record_is_flat(rec);
             TileMassBounds bounds = tile_mass_bounds_none();
             uint bounded_planes = flat_splat ? 0u : config.w;
@@ -136,8 +189,14 @@ void main() {
                 tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(plane),
                                                                 f.cam_pos.xyz, dirs));
             }
-            uint tile_class = flat_splat ? TILE_CLASS_PARTIAL
-                                   : cutoff_tile_class(config.z, bounds, peak_alpha);
+            uint tile_class;
+            if (flat_splat) {
+                tile_class = peak_alpha < 0.99 / 255.0
+                           ? TILE_CLASS_EMPTY
+                           : flat_tile_class(rec, f.cam_pos.xyz, dirs, config.w, config.z);
+            } else {
+                tile_class = cutoff_tile_class(config.z, bounds, peak_alpha);
+            }
             // No pixel centre of the tile in the footprint's bounding box: nothing to draw.
             tile_class = box.x > box.z || box.y > box.w ? TILE_CLASS_EMPTY : tile_class;
             if (tile_class == TILE_CLASS_EMPTY) {

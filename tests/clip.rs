@@ -487,6 +487,8 @@ fn tile_class_cases() -> Vec<(&'static str, Scene, Camera)> {
     for (name, scene) in [
         ("shell", rara::synth::shell(6000, 1, 3)),
         ("layers", rara::synth::layers(12000, 2, 5)),
+        // Flat Gaussians take flat_tile_class (cutoff_tiles_body.glsl).
+        ("layers_flat", rara::synth::layers(12000, 2, 5).flattened()),
     ] {
         let camera = orbit_camera(&scene, 240);
         cases.push((name, scene, camera));
