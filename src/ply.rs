@@ -261,6 +261,13 @@ impl Stored {
 /// ([`read_ply_stream`]), where memory grows only with the bytes that actually arrive.
 pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     let path = path.as_ref();
+    let (reader, len) = open_scene_file(path)?;
+    read_ply_from(reader, len, path)
+}
+
+/// The file at `path`, buffered, and its size when it is a regular file (`None` for a pipe or
+/// a device, which is then read as a stream).
+fn open_scene_file(path: &Path) -> Result<(BufReader<File>, Option<u64>)> {
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -271,7 +278,7 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
         return Err(ply_err(path, "is a directory, not a PLY file"));
     }
     let len = meta.is_file().then_some(meta.len());
-    read_ply_from(BufReader::with_capacity(1 << 20, file), len, path)
+    Ok((BufReader::with_capacity(1 << 20, file), len))
 }
 
 /// [`load_ply`] from any seekable reader holding `len` bytes (a file, a `Cursor` over bytes
@@ -331,17 +338,7 @@ pub fn for_each_chunk(
     sink: &mut dyn FnMut(&Scene, ChunkInfo) -> Result<()>,
 ) -> Result<LoadReport> {
     let path = path.as_ref();
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = File::open(path).map_err(io)?;
-    let meta = file.metadata().map_err(io)?;
-    if meta.is_dir() {
-        return Err(ply_err(path, "is a directory, not a PLY file"));
-    }
-    let len = meta.is_file().then_some(meta.len());
-    let reader = BufReader::with_capacity(1 << 20, file);
+    let (reader, len) = open_scene_file(path)?;
     read_ply_into(reader, len, path, Some((chunk.max(1), sink))).map(|(_, report)| report)
 }
 

@@ -193,12 +193,7 @@ fn blender_imports_and_renders_every_export() {
     let camera = fixture_camera(&scene, 160);
     let cams = dir.join("camera.json");
     camera_json(&camera, &cams);
-    let ctx = common::context();
-    let mut renderer = Renderer::new(&ctx).unwrap();
-    let gpu = renderer.upload(&scene).unwrap();
-    let (ours, _) = renderer
-        .render(&gpu, &camera, &RenderOptions::default())
-        .unwrap();
+    let ours = rara_render(&scene, &camera);
     // The least PSNR each must reach: the texture and the centre vertex carry the falloff,
     // constant alpha does not, and OBJ and PLY carry no alpha at all (opaque octagons).
     let cases = [
@@ -239,7 +234,18 @@ fn blender_imports_and_renders_every_export() {
             side_by_side(&ours, &theirs, "blender_side_by_side_fixture.png");
         }
     }
+}
+
+/// rara's render of `scene` (validation layer on), unclipped over black.
+fn rara_render(scene: &Scene, camera: &Camera) -> image::RgbaImage {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let gpu = renderer.upload(scene).unwrap();
+    let (image, _) = renderer
+        .render(&gpu, camera, &RenderOptions::default())
+        .unwrap();
     common::assert_no_validation_messages(&ctx);
+    image
 }
 
 /// rara's render and Blender's side by side, into target/test-artifacts.
@@ -276,19 +282,13 @@ fn blender_renders_a_real_scene() {
     export(&scene, &glb, Falloff::Texture);
     let png = dir.join("plant.png");
     run_blender(&blender, "render.py", &[&glb, &cam_json, &png], &["64"]);
-    let ctx = common::context();
-    let mut renderer = Renderer::new(&ctx).unwrap();
-    let gpu = renderer.upload(&scene).unwrap();
-    let (ours, _) = renderer
-        .render(&gpu, &camera, &RenderOptions::default())
-        .unwrap();
+    let ours = rara_render(&scene, &camera);
     let theirs = image::open(&png).unwrap().to_rgba8();
     let d = rara::metrics::compare(&ours, &theirs);
     let ssim = rara::metrics::ssim(&ours, &theirs);
     eprintln!("Blender plant (texture glb, 64 samples): PSNR {:.2} dB, SSIM {ssim:.3} against rara's flat render", d.psnr);
     side_by_side(&ours, &theirs, "blender_side_by_side_plant.png");
     assert!(d.psnr >= 20.0, "PSNR {} dB", d.psnr);
-    common::assert_no_validation_messages(&ctx);
 }
 
 /// The Khronos glTF validator (npm `gltf-validator`) finds no error and no warning in any glb.

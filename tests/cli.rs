@@ -845,16 +845,6 @@ fn cli_reference_is_current() {
     let mut generated = String::new();
     let top = help(&["--help"]);
     generated.push_str(&format!("## `rara`\n\n```text\n{top}```\n"));
-    // The subcommands, in the order the top-level help lists them.
-    let commands: Vec<String> = top
-        .lines()
-        .skip_while(|l| !l.starts_with("Commands:"))
-        .skip(1)
-        .take_while(|l| l.starts_with("  "))
-        .filter_map(|l| l.split_whitespace().next().map(str::to_owned))
-        .filter(|c| c != "help")
-        .collect();
-    assert!(commands.len() >= 10, "{top}");
     // The subcommands, in the order a help text lists them.
     let subcommands = |help_text: &str| -> Vec<String> {
         help_text
@@ -866,6 +856,8 @@ fn cli_reference_is_current() {
             .filter(|c| c != "help")
             .collect()
     };
+    let commands = subcommands(&top);
+    assert!(commands.len() >= 10, "{top}");
     for c in &commands {
         let text = help(&[c, "--help"]);
         generated.push_str(&format!("\n## `rara {c}`\n\n```text\n{text}```\n"));
