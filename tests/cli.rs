@@ -1140,4 +1140,8 @@ fn flatten_mesh_and_render_sequence() {
         &rara(&["flatten", scene, "-o", &p("flat.txt")]),
         &["unknown extension '.txt'"],
     );
+    assert_error(
+        &rara(&["mesh", "export", "/dev/stdin", "-o", &p("pipe.ply")]),
+        &["not a regular file", "reads the scene twice"],
+    );
 }

@@ -184,8 +184,20 @@ pub struct PlySource {
 }
 
 impl PlySource {
-    /// The scene at `path`, its header read for the count.
+    /// The scene at `path`, its header read for the count. It must be a regular file: the
+    /// export reads it twice.
     pub fn open(path: &Path) -> Result<PlySource> {
+        let meta = std::fs::metadata(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        if !meta.is_file() {
+            return Err(Error::InvalidInput(format!(
+                "{}: not a regular file; the mesh export reads the scene twice (a count, then \
+                 the octagons), so give it a file, not a pipe",
+                path.display()
+            )));
+        }
         Ok(PlySource {
             path: path.to_path_buf(),
             chunk: 65536,

@@ -326,18 +326,33 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
                 let Some(accessor) = primitive.get(&semantic) else {
                     return false;
                 };
-                let Some(iter) = gltf::accessor::Iter::<f32>::new(accessor, buffer_data) else {
+                // rara writes floats (glTF has no plain integer attributes); another tool may
+                // write unsigned integers. Anything else is no id.
+                use gltf::accessor::{DataType, Dimensions, Iter};
+                if accessor.dimensions() != Dimensions::Scalar {
                     return false;
-                };
-                let before = out.len();
-                out.extend(iter.map(|v| {
-                    if v >= 0.0 && v.fract() == 0.0 {
+                }
+                let id = |v: f64| {
+                    if v >= 0.0 && v.fract() == 0.0 && v < u32::MAX as f64 {
                         v as u32
                     } else {
                         u32::MAX
                     }
-                }));
-                out.len() - before == count
+                };
+                let before = out.len();
+                let read = match accessor.data_type() {
+                    DataType::F32 => Iter::<f32>::new(accessor, buffer_data)
+                        .map(|it| out.extend(it.map(|v| id(v as f64)))),
+                    DataType::U32 => {
+                        Iter::<u32>::new(accessor, buffer_data).map(|it| out.extend(it))
+                    }
+                    DataType::U16 => Iter::<u16>::new(accessor, buffer_data)
+                        .map(|it| out.extend(it.map(u32::from))),
+                    DataType::U8 => Iter::<u8>::new(accessor, buffer_data)
+                        .map(|it| out.extend(it.map(u32::from))),
+                    _ => None,
+                };
+                read.is_some() && out.len() - before == count
             };
             all_ids &= read_ids("PRIMITIVE_ID", &mut primitive_ids);
             all_ids &= read_ids("CORNER_ID", &mut corner_ids);
