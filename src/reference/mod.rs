@@ -5,6 +5,7 @@
 
 pub mod project;
 pub mod rasterize;
+pub mod raytrace;
 
 use crate::camera::Camera;
 use crate::renderer::RenderOptions;

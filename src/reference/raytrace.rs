@@ -1,0 +1,522 @@
+//! The CPU reference ray tracer (SPEC section 7), the oracle of the GPU tracer: every pixel's
+//! ray (section 2) against the Gaussians, their hits composited front to back.
+//!
+//! Stage by stage, as the GPU tracer is built: [`proxy_bounds`] (each Gaussian's box: a flat
+//! one's octagon, a volumetric one's `q <= 2 ln(255 o)` ellipsoid), a BVH over the boxes
+//! ([`Bvh`], a plain median split here; the GPU builds an LBVH), [`gaussian_hit`] (the octagon
+//! crossing, or 3DGRT's maximum response), [`clip_weight`], and [`composite`] over the hits in
+//! ascending `(t, index)`. Geometry is in f64; colours and alphas round to f32 as the
+//! rasterizer's reference does.
+
+use glam::{DMat3, DVec3, Vec3};
+
+use super::project::eval_sh;
+use super::Rgba8Image;
+use crate::camera::Camera;
+use crate::clip::{Classification, Clip, ClipMode, ClipRegion, CutoffRay, FLAT_PARALLEL_EPSILON};
+use crate::mesh::{octagon_radius, FlatFrame, DEFAULT_Q};
+use crate::renderer::RenderOptions;
+use crate::scene::{flat_axis, Scene};
+
+/// Hits composited per ray at most (REdiSplats' default); a ray that needed more is counted.
+pub const DEFAULT_MAX_HITS: usize = 512;
+
+/// Settings of the ray tracer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayTraceOptions {
+    /// `Q` of the flat Gaussians' octagons (SPEC section 6).
+    pub q: f64,
+    /// Hits composited per ray at most.
+    pub max_hits: usize,
+}
+
+impl Default for RayTraceOptions {
+    fn default() -> Self {
+        RayTraceOptions {
+            q: DEFAULT_Q,
+            max_hits: DEFAULT_MAX_HITS,
+        }
+    }
+}
+
+/// What a frame's rays did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TraceStats {
+    /// Rays traced.
+    pub rays: usize,
+    /// Hits found over all rays (before compositing stops a ray).
+    pub hits: u64,
+    /// Hits composited (or skipped for alpha) before each ray stopped.
+    pub hits_walked: u64,
+    /// Rays that reached [`RayTraceOptions::max_hits`] with hits left and light left.
+    pub capped: usize,
+}
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub lo: DVec3,
+    /// Upper corner.
+    pub hi: DVec3,
+}
+
+impl Aabb {
+    /// Where the ray `e + t d` (t > 0) is inside the box: `(t_in, t_out)`, or `None`.
+    pub fn ray_range(&self, e: DVec3, inv_d: DVec3) -> Option<(f64, f64)> {
+        let a = (self.lo - e) * inv_d;
+        let b = (self.hi - e) * inv_d;
+        let t_in = a.min(b).max_element().max(0.0);
+        let t_out = a.max(b).min_element();
+        // NaN (0 * inf, a ray in a face's plane) counts as inside, so no hit is lost.
+        (t_in.partial_cmp(&t_out) != Some(std::cmp::Ordering::Greater)).then_some((t_in, t_out))
+    }
+
+    fn union(&self, o: &Aabb) -> Aabb {
+        Aabb {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+        }
+    }
+}
+
+/// The proxy box of Gaussian `i`: for a flat Gaussian its octagon's corners, for a volumetric
+/// one the ellipsoid `q <= 2 ln(255 o)` (half extent `sqrt(q_max Sigma_jj)` along axis j).
+/// `None` when it can never be hit (an opacity under 1/255, or no octagon).
+pub fn proxy_bounds(scene: &Scene, i: usize, q: f64) -> Option<Aabb> {
+    let o = scene.opacities[i] as f64;
+    if flat_axis(scene.scales[i]).is_some() {
+        let rho = octagon_radius(q, scene.opacities[i]);
+        if rho <= 0.0 {
+            return None;
+        }
+        let frame = FlatFrame::of(scene, i);
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for k in 0..crate::mesh::CORNERS {
+            let p = frame.corner(rho, k);
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        return Some(Aabb { lo, hi });
+    }
+    let q_max = 2.0 * (255.0 * o).ln();
+    // (NaN, from a zero opacity, fails too.)
+    if q_max.is_nan() || q_max <= 0.0 {
+        return None;
+    }
+    let r = DMat3::from_quat(scene.rotations[i].as_dquat().normalize());
+    let s = scene.scales[i].as_dvec3();
+    // Sigma_jj = sum_k (R_jk s_k)^2.
+    let ext = DVec3::new(
+        (r.row(0) * s).length(),
+        (r.row(1) * s).length(),
+        (r.row(2) * s).length(),
+    ) * q_max.sqrt();
+    let mu = scene.means[i].as_dvec3();
+    Some(Aabb {
+        lo: mu - ext,
+        hi: mu + ext,
+    })
+}
+
+/// A Gaussian's hit on a ray: its parameter and alpha before clipping, and for a flat one
+/// the crossing point (its clip weight needs it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// `t_g > 0`.
+    pub t: f64,
+    /// The Gaussian's index.
+    pub index: u32,
+    /// `alpha_g` (before the clip weight).
+    pub alpha: f64,
+}
+
+/// Gaussian `i`'s hit on the ray `e + t d` (unit `d`), SPEC section 7: a flat Gaussian where
+/// the ray crosses its plane inside its octagon (the polygon), alpha `o exp(-(a^2+b^2)/2)`
+/// there; a volumetric one at its maximum response `t* = -B/(2A)`, when
+/// `q = Cq - B^2/(4A) <= 2 ln(255 o)`, alpha `o exp(-q/2)`; alphas capped at 0.99; `t > 0`.
+pub fn gaussian_hit(scene: &Scene, i: usize, e: DVec3, d: DVec3, q: f64) -> Option<Hit> {
+    let o = scene.opacities[i] as f64;
+    let mu = scene.means[i].as_dvec3();
+    if flat_axis(scene.scales[i]).is_some() {
+        let frame = FlatFrame::of(scene, i);
+        let nd = frame.normal.dot(d);
+        if nd.abs() < FLAT_PARALLEL_EPSILON {
+            return None;
+        }
+        let t = frame.normal.dot(mu - e) / nd;
+        let rho = octagon_radius(q, scene.opacities[i]);
+        if t.is_nan() || t <= 0.0 || rho <= 0.0 {
+            return None;
+        }
+        let (a, b) = frame.in_plane(e + t * d);
+        // Inside the regular octagon of circumradius rho with corners at angles 2 pi k / 8:
+        // within its apothem rho cos(pi/8) of the centre along every edge's normal, at
+        // angles (2k + 1) pi / 8.
+        let apothem = rho * (std::f64::consts::PI / 8.0).cos();
+        let inside = (0..8).all(|k| {
+            let phi = (2 * k + 1) as f64 * std::f64::consts::PI / 8.0;
+            a * phi.cos() + b * phi.sin() <= apothem
+        });
+        if !inside {
+            return None;
+        }
+        let alpha = (o * (-(a * a + b * b) / 2.0).exp()).min(0.99);
+        return Some(Hit {
+            t,
+            index: i as u32,
+            alpha,
+        });
+    }
+    let r = DMat3::from_quat(scene.rotations[i].as_dquat().normalize());
+    let s = scene.scales[i].as_dvec3();
+    // M = S^-1 R^T: A = |M d|^2, B = 2 (M d).(M (e - mu)), Cq = |M (e - mu)|^2.
+    let m = DMat3::from_cols(r.x_axis / s.x, r.y_axis / s.y, r.z_axis / s.z).transpose();
+    let md = m * d;
+    let mo = m * (e - mu);
+    let a = md.length_squared();
+    let b = 2.0 * md.dot(mo);
+    let cq = mo.length_squared();
+    let t = -b / (2.0 * a);
+    let q_ray = (cq - b * b / (4.0 * a)).max(0.0);
+    let q_max = 2.0 * (255.0 * o).ln();
+    if t.is_nan() || t <= 0.0 || q_ray.is_nan() || q_ray > q_max {
+        return None;
+    }
+    Some(Hit {
+        t,
+        index: i as u32,
+        alpha: (o * (-q_ray / 2.0).exp()).min(0.99),
+    })
+}
+
+/// The clip weight of a hit (SPEC section 7): `hard` keeps a Gaussian whose centre is visible;
+/// `rara` gives a flat Gaussian 1 where its crossing point is visible and 0 elsewhere (no band,
+/// no classification), and a volumetric one section 5's classification and, when cutoff, its
+/// weight on this ray. 1 without clipping.
+pub fn clip_weight(scene: &Scene, hit: &Hit, e: DVec3, d: DVec3, clip: &Clip) -> f64 {
+    let Some(region) = &clip.region else {
+        return 1.0;
+    };
+    let i = hit.index as usize;
+    match clip.effective_mode() {
+        ClipMode::None => 1.0,
+        ClipMode::Hard => {
+            if region.signed_distance(scene.means[i]) >= 0.0 {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        ClipMode::Rara => {
+            if flat_axis(scene.scales[i]).is_some() {
+                return if visible(region, e + hit.t * d) {
+                    1.0
+                } else {
+                    0.0
+                };
+            }
+            match clip.classify(scene.means[i], scene.scales[i]) {
+                Classification::Dropped => 0.0,
+                Classification::Drawn => 1.0,
+                Classification::Cutoff => {
+                    let ray = CutoffRay::new(
+                        scene.means[i],
+                        scene.scales[i],
+                        scene.rotations[i],
+                        e.as_vec3(),
+                    );
+                    let spans = region.ray_intervals(e, d);
+                    ray.weight(d, &spans, clip.weight, clip.band as f64)
+                }
+            }
+        }
+    }
+}
+
+/// Whether point `p` is in the visible set: on the ray through it, `t = 0` is visible (the
+/// same interval arithmetic as the weights, so the boundary rounds the same way).
+fn visible(region: &ClipRegion, p: DVec3) -> bool {
+    region.ray_intervals(p, DVec3::Z).contains(0.0)
+}
+
+/// A BVH over the proxy boxes: a median split on the longest axis of the centroids' bounds,
+/// four or fewer Gaussians per leaf.
+pub struct Bvh {
+    nodes: Vec<BvhNode>,
+    /// Gaussian indices, each leaf a run of them.
+    items: Vec<u32>,
+}
+
+struct BvhNode {
+    bounds: Aabb,
+    /// Leaf: `(first item, count)`; inner: `(left child, 0)`, the right child follows the
+    /// left's subtree (stored at `right`).
+    first: u32,
+    count: u32,
+    right: u32,
+}
+
+impl Bvh {
+    /// The BVH of every Gaussian that has a proxy.
+    pub fn build(scene: &Scene, q: f64) -> Bvh {
+        let mut boxes = Vec::new();
+        let mut items = Vec::new();
+        for i in 0..scene.len() {
+            if let Some(b) = proxy_bounds(scene, i, q) {
+                boxes.push(b);
+                items.push(i as u32);
+            }
+        }
+        let mut order: Vec<usize> = (0..items.len()).collect();
+        let mut bvh = Bvh {
+            nodes: Vec::new(),
+            items: Vec::new(),
+        };
+        if !order.is_empty() {
+            bvh.split(&boxes, &items, &mut order[..]);
+        }
+        bvh
+    }
+
+    fn split(&mut self, boxes: &[Aabb], items: &[u32], order: &mut [usize]) -> u32 {
+        let bounds = order[1..]
+            .iter()
+            .fold(boxes[order[0]], |acc, &k| acc.union(&boxes[k]));
+        let node = self.nodes.len() as u32;
+        self.nodes.push(BvhNode {
+            bounds,
+            first: 0,
+            count: 0,
+            right: 0,
+        });
+        if order.len() <= 4 {
+            self.nodes[node as usize].first = self.items.len() as u32;
+            self.nodes[node as usize].count = order.len() as u32;
+            self.items.extend(order.iter().map(|&k| items[k]));
+            return node;
+        }
+        let centre = |k: usize| 0.5 * (boxes[k].lo + boxes[k].hi);
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for &k in order.iter() {
+            lo = lo.min(centre(k));
+            hi = hi.max(centre(k));
+        }
+        let extent = hi - lo;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        let mid = order.len() / 2;
+        order.select_nth_unstable_by(mid, |&a, &b| centre(a)[axis].total_cmp(&centre(b)[axis]));
+        let (left, right) = order.split_at_mut(mid);
+        self.split(boxes, items, left);
+        let r = self.split(boxes, items, right);
+        self.nodes[node as usize].right = r;
+        node
+    }
+
+    /// Calls `f` with every Gaussian whose box the ray `e + t d` (t > 0) enters.
+    pub fn candidates(&self, e: DVec3, d: DVec3, mut f: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let inv = DVec3::ONE / d;
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            if node.bounds.ray_range(e, inv).is_none() {
+                continue;
+            }
+            if node.count > 0 {
+                let run = node.first as usize..(node.first + node.count) as usize;
+                self.items[run].iter().for_each(|&i| f(i));
+            } else {
+                stack.push(node.right);
+                stack.push(n + 1);
+            }
+        }
+    }
+}
+
+/// Composites the hits of one ray (sorted here by `(t, index)`) by SPEC section 4's rule:
+/// skip `alpha w < 1/255`, stop before `T_next < 1e-4`, at most `max_hits` walked. Returns the
+/// colour, the transmittance, the hits walked and whether the cap cut the ray short.
+pub fn composite(
+    scene: &Scene,
+    hits: &mut [Hit],
+    e: DVec3,
+    d: DVec3,
+    clip: &Clip,
+    background: Vec3,
+    max_hits: usize,
+) -> (Vec3, usize, bool) {
+    hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.index.cmp(&b.index)));
+    let mut colour = Vec3::ZERO;
+    let mut transmittance = 1.0f32;
+    let mut walked = 0;
+    for hit in hits.iter() {
+        if walked == max_hits {
+            return (colour + transmittance * background, walked, true);
+        }
+        walked += 1;
+        let alpha = (hit.alpha * clip_weight(scene, hit, e, d, clip)) as f32;
+        if alpha < 1.0 / 255.0 {
+            continue;
+        }
+        let next = transmittance * (1.0 - alpha);
+        if next < 1e-4 {
+            break;
+        }
+        let i = hit.index as usize;
+        let dir = (scene.means[i].as_dvec3() - e).normalize().as_vec3();
+        colour += alpha * transmittance * eval_sh(scene.sh_of(i), scene.sh_degree, dir);
+        transmittance = next;
+    }
+    (colour + transmittance * background, walked, false)
+}
+
+/// The ray of pixel `(i, j)` (SPEC section 2): origin and unit direction.
+pub fn pixel_ray(camera: &Camera, i: u32, j: u32) -> (DVec3, DVec3) {
+    let (cx, cy) = camera.principal_point();
+    let c = DVec3::new(
+        (i as f64 - cx as f64) / camera.fx as f64,
+        (j as f64 - cy as f64) / camera.fy as f64,
+        1.0,
+    );
+    (
+        camera.position.as_dvec3(),
+        (camera.rotation.as_dmat3() * c).normalize(),
+    )
+}
+
+/// Which Gaussians a primary ray may hit: all but those section 3 culls (`t.z <= 0.2`).
+fn not_culled(scene: &Scene, camera: &Camera) -> Vec<bool> {
+    let forward = camera.rotation.col(2);
+    scene
+        .means
+        .iter()
+        .map(|&m| forward.dot(m - camera.position) > 0.2)
+        .collect()
+}
+
+/// What every primary ray of a frame shares.
+struct Frame<'a> {
+    scene: &'a Scene,
+    /// `None`: test every Gaussian on every ray.
+    bvh: Option<&'a Bvh>,
+    /// Per Gaussian, whether primary rays may hit it.
+    live: &'a [bool],
+    options: &'a RenderOptions,
+    rt: &'a RayTraceOptions,
+}
+
+impl Frame<'_> {
+    /// Traces the ray `e + t d` and composites its hits.
+    fn trace(&self, e: DVec3, d: DVec3, stats: &mut TraceStats) -> Vec3 {
+        let mut hits = Vec::new();
+        let mut test = |i: u32| {
+            if self.live[i as usize] {
+                if let Some(h) = gaussian_hit(self.scene, i as usize, e, d, self.rt.q) {
+                    hits.push(h);
+                }
+            }
+        };
+        match self.bvh {
+            Some(b) => b.candidates(e, d, &mut test),
+            None => (0..self.scene.len() as u32).for_each(&mut test),
+        }
+        stats.rays += 1;
+        stats.hits += hits.len() as u64;
+        let (c, walked, capped) = composite(
+            self.scene,
+            &mut hits,
+            e,
+            d,
+            &self.options.clip,
+            self.options.background,
+            self.rt.max_hits,
+        );
+        stats.hits_walked += walked as u64;
+        stats.capped += capped as usize;
+        c
+    }
+}
+
+/// Ray traces `scene` from `camera` (SPEC section 7), through a BVH, the rows shared among the
+/// machine's threads.
+pub fn render(
+    scene: &Scene,
+    camera: &Camera,
+    options: &RenderOptions,
+    rt: &RayTraceOptions,
+) -> (Rgba8Image, TraceStats) {
+    render_with(scene, camera, options, rt, true)
+}
+
+/// [`render`] testing every Gaussian on every ray, no BVH: the brute-force check of the BVH.
+pub fn render_brute_force(
+    scene: &Scene,
+    camera: &Camera,
+    options: &RenderOptions,
+    rt: &RayTraceOptions,
+) -> (Rgba8Image, TraceStats) {
+    render_with(scene, camera, options, rt, false)
+}
+
+fn render_with(
+    scene: &Scene,
+    camera: &Camera,
+    options: &RenderOptions,
+    rt: &RayTraceOptions,
+    use_bvh: bool,
+) -> (Rgba8Image, TraceStats) {
+    let bvh = use_bvh.then(|| Bvh::build(scene, rt.q));
+    let live = not_culled(scene, camera);
+    let (w, h) = (camera.width, camera.height);
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(h as usize)
+        .max(1);
+    let rows_per = (h as usize).div_ceil(threads);
+    let mut pixels = vec![[0u8; 4]; (w * h) as usize];
+    let mut stats = TraceStats::default();
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = pixels
+            .chunks_mut(rows_per * w as usize)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let frame = Frame {
+                    scene,
+                    bvh: bvh.as_ref(),
+                    live: &live,
+                    options,
+                    rt,
+                };
+                scope.spawn(move || {
+                    let mut s = TraceStats::default();
+                    for (k, px) in chunk.iter_mut().enumerate() {
+                        let idx = c * rows_per * w as usize + k;
+                        let (i, j) = ((idx % w as usize) as u32, (idx / w as usize) as u32);
+                        let (e, d) = pixel_ray(camera, i, j);
+                        let colour = frame.trace(e, d, &mut s);
+                        *px = super::rasterize::to_rgba8(colour);
+                    }
+                    s
+                })
+            })
+            .collect();
+        for handle in handles {
+            let s = handle.join().expect("a ray tracing thread panicked");
+            stats.rays += s.rays;
+            stats.hits += s.hits;
+            stats.hits_walked += s.hits_walked;
+            stats.capped += s.capped;
+        }
+    });
+    let img = image::RgbaImage::from_fn(w, h, |i, j| image::Rgba(pixels[(j * w + i) as usize]));
+    (img, stats)
+}
