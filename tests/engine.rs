@@ -106,6 +106,15 @@ fn a_device_missing_a_required_feature_gets_a_clear_error() {
         Err(e) => panic!("wrong error: {e}"),
         Ok(_) => panic!("a device without shaderInt64 was accepted"),
     }
+    let no_memory_model = EnabledFeatures {
+        vulkan_memory_model: false,
+        ..EnabledFeatures::default()
+    };
+    match unsafe { Context::borrowed(lend(no_memory_model)) } {
+        Err(Error::MissingRequirement(m)) => assert!(m.contains("vulkanMemoryModel"), "{m}"),
+        Err(e) => panic!("wrong error: {e}"),
+        Ok(_) => panic!("a device without vulkanMemoryModel was accepted"),
+    }
     let old = EnabledFeatures {
         api_version: ash::vk::API_VERSION_1_1,
         ..EnabledFeatures::default()

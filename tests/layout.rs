@@ -115,6 +115,15 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuCutoffRecord, m2),
     ];
     assert_layout(shaders::PROJECT_DEG3, "CutoffRecord", &cutoff);
+    let node = [
+        offset_of!(rara::stages::bvh::GpuBvhNode, lo),
+        offset_of!(rara::stages::bvh::GpuBvhNode, left),
+        offset_of!(rara::stages::bvh::GpuBvhNode, hi),
+        offset_of!(rara::stages::bvh::GpuBvhNode, right),
+    ];
+    for kernel in [shaders::BVH_BOUNDS, shaders::BVH_PROXIES] {
+        assert_layout(kernel, "BvhNode", &node);
+    }
 }
 
 #[test]

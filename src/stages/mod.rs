@@ -80,6 +80,7 @@ impl FrameRecording<'_> {
     }
 }
 
+pub mod bvh;
 pub mod cutoff_tiles;
 pub mod depth_order;
 pub mod emit;

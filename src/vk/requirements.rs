@@ -30,6 +30,11 @@ pub struct Requirements {
     /// `VkPhysicalDeviceVulkan12Features::bufferDeviceAddress`: every kernel reaches its
     /// buffers through device addresses.
     pub buffer_device_address: bool,
+    /// `VkPhysicalDeviceVulkan12Features::vulkanMemoryModel` and
+    /// `vulkanMemoryModelDeviceScope`: the ray tracer's BVH build orders its bottom-up walk with
+    /// acquire/release atomics (`glsl/bvh_bounds.comp`; a memory barrier in divergent control
+    /// flow is not honoured by every driver).
+    pub vulkan_memory_model: bool,
     /// `VkPhysicalDeviceFeatures::shaderInt64`: the kernels move 16-byte records as two
     /// 64-bit words, which halves the scalar per-lane loops a CPU driver makes of each load
     /// and store (see `load_vec4` in `glsl/common.glsl`).
@@ -56,6 +61,7 @@ pub fn requirements() -> Requirements {
         api_version: vk::API_VERSION_1_2,
         device_extensions: Vec::new(),
         buffer_device_address: true,
+        vulkan_memory_model: true,
         shader_int64: true,
         subgroup_operations: vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
     }
@@ -75,6 +81,10 @@ impl Requirements {
     pub fn enable_vulkan12_features(&self, features: &mut vk::PhysicalDeviceVulkan12Features) {
         if self.buffer_device_address {
             features.buffer_device_address = vk::TRUE;
+        }
+        if self.vulkan_memory_model {
+            features.vulkan_memory_model = vk::TRUE;
+            features.vulkan_memory_model_device_scope = vk::TRUE;
         }
     }
 
@@ -112,6 +122,12 @@ impl Requirements {
         }
         if self.buffer_device_address && f12.buffer_device_address != vk::TRUE {
             missing.push("the bufferDeviceAddress feature".into());
+        }
+        if self.vulkan_memory_model
+            && (f12.vulkan_memory_model != vk::TRUE
+                || f12.vulkan_memory_model_device_scope != vk::TRUE)
+        {
+            missing.push("the vulkanMemoryModel and vulkanMemoryModelDeviceScope features".into());
         }
         if self.shader_int64 && !shader_int64 {
             missing.push("the shaderInt64 feature".into());
@@ -169,6 +185,13 @@ impl Requirements {
         if self.shader_int64 && !enabled.shader_int64 {
             missing.push("VkPhysicalDeviceFeatures::shaderInt64 enabled at vkCreateDevice".into());
         }
+        if self.vulkan_memory_model && !enabled.vulkan_memory_model {
+            missing.push(
+                "VkPhysicalDeviceVulkan12Features::vulkanMemoryModel and \
+                 vulkanMemoryModelDeviceScope enabled at vkCreateDevice"
+                    .into(),
+            );
+        }
         if missing.is_empty() {
             Ok(())
         } else {
@@ -192,6 +215,9 @@ pub struct EnabledFeatures {
     pub buffer_device_address: bool,
     /// `VkPhysicalDeviceFeatures::shaderInt64`.
     pub shader_int64: bool,
+    /// `VkPhysicalDeviceVulkan12Features::vulkanMemoryModel` and
+    /// `vulkanMemoryModelDeviceScope`.
+    pub vulkan_memory_model: bool,
     /// Optional capabilities the engine enabled.
     pub optional: Optional,
 }
@@ -203,6 +229,7 @@ impl Default for EnabledFeatures {
             api_version: vk::API_VERSION_1_2,
             buffer_device_address: true,
             shader_int64: true,
+            vulkan_memory_model: true,
             optional: Optional::default(),
         }
     }
