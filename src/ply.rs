@@ -1123,7 +1123,7 @@ pub fn write_ply_layout(
                 let written = s.max_element() * FLAT_SCALE_WRITTEN;
                 row.extend(
                     s.to_array()
-                        .map(|v| if v == 0.0 { written } else { v }.ln()),
+                        .map(|v| (if v == 0.0 { written } else { v }).ln()),
                 );
                 scene.rotations[i]
             }

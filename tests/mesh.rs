@@ -463,3 +463,29 @@ fn min_opacity_selects_the_octagons() {
         .to_string();
     assert!(err.contains("vertices were expected"), "{err}");
 }
+
+/// Ids that do not cover every vertex, and an octagon for a Gaussian that cannot have one
+/// under the import's Q, are errors too.
+#[test]
+fn inconsistent_ids_and_q_are_errors() {
+    let dir = tempdir("ids_q");
+    let s = scene(30, 0, Vec3::ZERO, 10);
+    let path = dir.join("m.ply");
+    export(&s, &path, Falloff::Constant);
+    let mesh = read_mesh(&path).unwrap();
+    let mut short = mesh.clone();
+    short.corner_ids.as_mut().unwrap().pop();
+    let err = import_mesh(&short, &s, &ImportOptions::default(), &path)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("corner ids"), "{err}");
+    // Under a tiny Q every Gaussian here has rho = 0, yet the mesh has their octagons.
+    let tiny = ImportOptions {
+        q: 1e-3,
+        ..ImportOptions::default()
+    };
+    let err = import_mesh(&mesh, &s, &tiny, &path)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("another --q"), "{err}");
+}

@@ -424,6 +424,16 @@ pub fn match_octagons(
     let per;
     match (&mesh.primitive_ids, &mesh.corner_ids) {
         (Some(prim), Some(corner)) => {
+            if prim.len() != v || corner.len() != v {
+                return Err(mesh_err(
+                    path,
+                    format!(
+                        "{v} vertices but {} primitive ids and {} corner ids",
+                        prim.len(),
+                        corner.len()
+                    ),
+                ));
+            }
             let mut filled: Vec<u16> = vec![0; n];
             let mut has_centre = false;
             for (j, (&g, &k)) in prim.iter().zip(corner).enumerate() {
@@ -573,6 +583,16 @@ pub fn import_mesh(
             continue;
         };
         let rho = octagon_radius(options.q, original.opacities[g]);
+        if rho <= 0.0 {
+            return Err(mesh_err(
+                path,
+                format!(
+                    "the mesh has an octagon for Gaussian {g}, whose opacity {} gives it none \
+                     under Q {} (was it exported with another --q?)",
+                    original.opacities[g], options.q
+                ),
+            ));
+        }
         let fitted = match options.fit {
             Fit::Redisplats => fit_redisplats(c, rho),
             Fit::Lsq => fit_lsq(c, rho),
