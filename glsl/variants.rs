@@ -513,4 +513,76 @@ const VARIANTS: &[Variant] = &[
             "frame's texel view (CPU drivers; see write_target_body.glsl).",
         ],
     },
+    Variant {
+        name: "trace_deg0",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as 32-bit floats",
+            "(see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg0_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as half floats",
+            "(see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as 32-bit floats",
+            "(see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as half floats",
+            "(see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as 32-bit floats",
+            "(see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as half floats",
+            "(see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as 32-bit floats",
+            "(see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as half floats",
+            "(see trace_body.glsl).",
+        ],
+    },
 ];

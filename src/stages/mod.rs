@@ -90,6 +90,7 @@ pub mod rasterize;
 pub mod sort;
 pub mod tile_lists;
 pub mod tile_ranges;
+pub mod trace;
 pub mod write_target;
 
 /// Rounds (dispatches) in which project and emit walk the splats' tile rectangles on an image
