@@ -1,6 +1,6 @@
-// The ray tracer (SPEC section 7, issue 32), unclipped so far: one invocation per pixel walks
-// the BVH (bvh_common.glsl) and composites its hits front to back. CPU twin:
-// src/reference/raytrace.rs.
+// The ray tracer (SPEC section 7, issue 32): one invocation per pixel walks the BVH
+// (bvh_common.glsl) and composites its hits front to back, each hit's alpha times its clip
+// weight (clip_weight below). CPU twin: src/reference/raytrace.rs.
 //
 // k-closest hits: a traversal pass collects, in a sorted buffer of TRACE_K entries, the K
 // hits after the last one composited in (t, index) order (so no hit is missed or repeated,
@@ -17,6 +17,7 @@
 // Included by trace_deg<D> (SH of degree D in 32-bit floats) and trace_deg<D>_sh16.
 #include "bvh_common.glsl"
 #include "sh.glsl"
+#include "clip.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
 
@@ -59,6 +60,18 @@ struct TraceParams {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer TraceParamsRef { TraceParams p; };
 
+// Column k of the rotation of a normalised quaternion (w, x, y, z).
+vec3 quat_column(vec4 q, uint k) {
+    float w = q.x, x = q.y, y = q.z, z = q.w;
+    if (k == 0u) {
+        return vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y));
+    }
+    if (k == 1u) {
+        return vec3(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x));
+    }
+    return vec3(2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y));
+}
+
 layout(push_constant) uniform Push {
     TraceParamsRef params;
     Gaussians gaussians;
@@ -71,20 +84,56 @@ layout(push_constant) uniform Push {
     F32s k_alpha;
     U32s pixels;        // out: RGBA8 per pixel
     U32s counters;      // TRACE_* slots
+    ClipParamsRef clip;
     uint init;          // 1: set every ray up (first dispatch)
     uint pad;
 } pc;
 
-// Column k of the rotation of a normalised quaternion (w, x, y, z).
-vec3 quat_column(vec4 q, uint k) {
-    float w = q.x, x = q.y, y = q.z, z = q.w;
-    if (k == 0u) {
-        return vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y));
+// The clip weight of hit (t, Gaussian g) on the ray e + t d whose visible intervals are spans
+// (SPEC section 7): hard keeps g when its centre is visible; rara gives a flat g 1 where its
+// crossing point is visible (no band, no classification) and a volumetric one section 5's
+// classification and, when cutoff, its mass or length weight on this ray.
+float clip_weight(ClipParams clip, vec4 spans, uint g, float t, vec3 e, vec3 d) {
+    uvec4 config = clip.config;
+    if (config.x == CLIP_MODE_NONE) {
+        return 1.0;
     }
-    if (k == 1u) {
-        return vec3(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x));
+    Gaussian gs = load_gaussian(pc.gaussians, g);
+    vec3 mu = gs.pos_opacity.xyz;
+    if (config.x == CLIP_MODE_HARD) {
+        return clip_signed_distance(clip, mu) >= 0.0 ? 1.0 : 0.0;
     }
-    return vec3(2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y));
+    vec3 s = gs.scale.xyz;
+    if (min(s.x, min(s.y, s.z)) == 0.0) {
+        bool seen = (spans.x <= t && t <= spans.y && spans.x < spans.y)
+                 || (spans.z <= t && t <= spans.w && spans.z < spans.w);
+        return seen ? 1.0 : 0.0;
+    }
+    uint kind = clip_classify(clip, mu, s);
+    if (kind != CLASS_CUTOFF) {
+        return kind == CLASS_DRAWN ? 1.0 : 0.0;
+    }
+    // The cutoff record of the rasterizer (project_body.glsl): rows of M = S^-1 R^T and
+    // o' = M (e - mu); one ray is a strip's r = 0.
+    vec3 rel = mu - e;
+    vec3 w0 = quat_column(gs.rot, 0u) / s.x;
+    vec3 w1 = quat_column(gs.rot, 1u) / s.y;
+    vec3 w2 = quat_column(gs.rot, 2u) / s.z;
+    CutoffRecord rec = CutoffRecord(vec4(w0, -dot(w0, rel)), vec4(w1, -dot(w1, rel)),
+                                    vec4(w2, -dot(w2, rel)));
+    WhitenedStrip strip = whitened_strip(rec, d, vec3(0.0));
+    if (config.y == CLIP_WEIGHT_LENGTH) {
+        return cutoff_weight_length(strip, 0.0, spans, clip.band.y);
+    }
+    MassEnds m = clip_mass_ends(spans);
+    float w = m.base;
+    if (m.count > 0u) {
+        w += end_mass(strip, 0.0, m.ends.xy);
+    }
+    if (m.count > 1u) {
+        w += end_mass(strip, 0.0, m.ends.zw);
+    }
+    return clamp(w, 0.0, 1.0);
 }
 
 // Gaussian i's hit on the ray e + t d (unit d): (t, alpha), alpha 0 for none (SPEC section 7).
@@ -183,6 +232,22 @@ void main() {
                      + f.down.xyz * ((float(px.y) - f.focal.w) / f.focal.y) + f.forward.xyz);
     // No zero component: 0 * inf in the slab test would be NaN and lose the box.
     vec3 inv_d = 1.0 / (sign(d) * max(abs(d), vec3(1e-20)) + vec3(equal(d, vec3(0.0))) * 1e-20);
+    // The ray's visible intervals, once (clip.glsl).
+    ClipParams clip = load_clip_params(pc.clip);
+    float span_lo = -UNBOUNDED;
+    float span_hi = UNBOUNDED;
+    if ((clip.config.z & CLIP_FLAG_SPHERE) != 0u) {
+        vec2 chord = clip_span_in_sphere(clip.sphere, e, d);
+        span_lo = chord.x;
+        span_hi = chord.y;
+    } else {
+        [[unroll]] for (uint k = 0u; k < MAX_CLIP_PLANES; ++k) {
+            if (k < clip.config.w) {
+                clip_span_cut_by_plane(clip.planes[k], e, d, span_lo, span_hi);
+            }
+        }
+    }
+    vec4 spans = clip_visible_spans(clip.config.z, span_lo, span_hi);
     uint max_hits = uint(f.options.y);
     uint leaves = f.size.z - 1u;
 
@@ -294,8 +359,8 @@ void main() {
             continue;
         }
         ++walked;
-        float alpha = ka[k_pos];
         uint g = ki[k_pos];
+        float alpha = ka[k_pos] * clip_weight(clip, spans, g, kt[k_pos], e, d);
         last_t = kt[k_pos];
         last_index = g;
         flags |= RAY_HAS_LAST;

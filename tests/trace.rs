@@ -5,6 +5,7 @@
 mod common;
 
 use glam::{Quat, Vec3};
+use rara::clip::{Clip, ClipRegion, ClipWeight, Plane};
 use rara::reference::raytrace::{self, RayTraceOptions};
 use rara::stages::trace::RayTracer;
 use rara::synth::Rng;
@@ -49,21 +50,55 @@ fn camera(width: u32) -> Camera {
     .unwrap()
 }
 
+/// The clips of the comparison: none, hard, rara (mass and length) by a plane, a box cutaway,
+/// a sphere.
+fn clips(lo: Vec3, hi: Vec3) -> Vec<(&'static str, Clip)> {
+    let c = 0.5 * (lo + hi);
+    let ext = hi - lo;
+    let n = Vec3::new(1.0, 0.3, -0.2).normalize();
+    let plane = ClipRegion::planes(vec![Plane::new(n, -n.dot(c)).unwrap()]).unwrap();
+    let cutaway = ClipRegion::oriented_box(c - 0.2 * ext, 0.35 * ext, Quat::from_rotation_y(0.4))
+        .unwrap()
+        .inverted();
+    let sphere = ClipRegion::sphere(c + 0.2 * ext, 0.4 * ext.max_element()).unwrap();
+    vec![
+        ("none", Clip::default()),
+        ("plane_hard", Clip::hard(plane.clone())),
+        ("plane_mass", Clip::rara(plane.clone())),
+        (
+            "plane_length",
+            Clip {
+                weight: ClipWeight::Length,
+                ..Clip::rara(plane)
+            },
+        ),
+        ("cutaway_mass", Clip::rara(cutaway)),
+        ("sphere_mass", Clip::rara(sphere)),
+    ]
+}
+
 /// GPU against CPU: generated scenes (flat and volumetric mixed, a solid and the solid
-/// flattened) and, when present, plant and plant flattened at 320 px: >= 50 dB, max 8-bit
-/// difference <= 4.
+/// flattened) under every clip, and, when present, plant and plant flattened at 320 px,
+/// unclipped and under a rara cutaway: >= 50 dB, max 8-bit difference <= 4.
 #[test]
 fn gpu_tracer_matches_the_cpu_reference() {
     let ctx = common::context();
     let renderer = Renderer::new(&ctx).unwrap();
     let tracer = RayTracer::new(&ctx).unwrap();
-    let mut cases: Vec<(String, Scene, Camera)> = vec![
-        ("mixed".into(), mixed_scene(3000, 1), camera(96)),
-        ("solid".into(), rara::synth::solid(20000, 2, 2), camera(160)),
+    // (name, scene, camera, the clips to run: all, or those named)
+    let mut cases: Vec<(String, Scene, Camera, Option<&str>)> = vec![
+        ("mixed".into(), mixed_scene(3000, 1), camera(96), None),
+        (
+            "solid".into(),
+            rara::synth::solid(20000, 2, 2),
+            camera(128),
+            None,
+        ),
         (
             "solid_flat".into(),
             rara::synth::solid(20000, 2, 2).flattened(),
-            camera(160),
+            camera(128),
+            None,
         ),
     ];
     if let Some((ply, Some(cams))) = common::real_scene("plant_capture_sh0") {
@@ -73,37 +108,97 @@ fn gpu_tracer_matches_the_cpu_reference() {
             .unwrap()
             .resized(320, None)
             .unwrap();
-        cases.push(("plant_flat".into(), scene.flattened(), cam));
-        cases.push(("plant".into(), scene, cam));
+        // One frame of each at 320 px is 12-13 s of lavapipe: one clip each.
+        cases.push((
+            "plant_flat".into(),
+            scene.flattened(),
+            cam,
+            Some("cutaway_mass"),
+        ));
+        cases.push(("plant".into(), scene, cam, Some("none")));
     }
     let rt = RayTraceOptions::default();
     let background = Vec3::new(0.1, 0.1, 0.15);
-    for (name, scene, cam) in cases {
+    for (name, scene, cam, only) in cases {
         let gpu_scene = renderer.upload(&scene).unwrap();
-        let start = std::time::Instant::now();
-        let (gpu, stats) = tracer
-            .render(&ctx, &gpu_scene, &cam, background, &rt)
-            .unwrap();
-        let wall = start.elapsed().as_secs_f64() * 1e3;
+        let (lo, hi) = common::percentile_box(&scene);
+        let mut unclipped = None;
+        for (clip_name, clip) in clips(lo, hi) {
+            if only.is_some_and(|o| o != clip_name) {
+                continue;
+            }
+            let options = RenderOptions {
+                background,
+                clip,
+                ..RenderOptions::default()
+            };
+            let start = std::time::Instant::now();
+            let (gpu, stats) = tracer
+                .render(&ctx, &gpu_scene, &cam, &options, &rt)
+                .unwrap();
+            let wall = start.elapsed().as_secs_f64() * 1e3;
+            let (cpu, cpu_stats) = raytrace::render(&scene, &cam, &options, &rt);
+            let d = common::check_images(&format!("trace_{name}_{clip_name}"), &gpu, &cpu, 50.0, 4);
+            eprintln!(
+                "  {name} {clip_name}: PSNR {:.2} dB, max diff {}; GPU {wall:.0} ms wall ({}x{}, \
+                 BVH build included), {} dispatches, {:.1} hits walked per ray (CPU {:.1}), {} capped",
+                d.psnr,
+                d.max_diff,
+                cam.width,
+                cam.height,
+                stats.dispatches,
+                stats.hits_walked as f64 / stats.rays as f64,
+                cpu_stats.hits_walked as f64 / cpu_stats.rays as f64,
+                stats.capped
+            );
+            assert_eq!(
+                stats.capped as usize, cpu_stats.capped,
+                "{name} {clip_name}"
+            );
+            // A clip must change the picture, or the case tests nothing.
+            match &unclipped {
+                None => unclipped = Some(gpu),
+                Some(u) => assert!(
+                    rara::metrics::compare(u, &gpu).differing_pixels > 0,
+                    "{name} {clip_name}"
+                ),
+            }
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// SPEC section 7: with a plane at infinity the GPU tracer's rara image equals its unclipped
+/// one exactly, both weights, flat and volumetric Gaussians alike.
+#[test]
+fn gpu_plane_at_infinity_changes_nothing() {
+    let ctx = common::context();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let tracer = RayTracer::new(&ctx).unwrap();
+    let scene = mixed_scene(3000, 2);
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let cam = camera(96);
+    let rt = RayTraceOptions::default();
+    let (unclipped, _) = tracer
+        .render(&ctx, &gpu_scene, &cam, &RenderOptions::default(), &rt)
+        .unwrap();
+    let far = ClipRegion::planes(vec![Plane::new(Vec3::new(0.3, 1.0, 0.2), 1e6).unwrap()]).unwrap();
+    for weight in [ClipWeight::Mass, ClipWeight::Length] {
         let options = RenderOptions {
-            background,
+            clip: Clip {
+                weight,
+                ..Clip::rara(far.clone())
+            },
             ..RenderOptions::default()
         };
-        let (cpu, cpu_stats) = raytrace::render(&scene, &cam, &options, &rt);
-        let d = common::check_images(&format!("trace_{name}"), &gpu, &cpu, 50.0, 4);
-        eprintln!(
-            "  {name}: PSNR {:.2} dB, max diff {}; GPU {wall:.0} ms wall ({}x{}, BVH build included), \
-             {} dispatches, {:.1} hits walked per ray (CPU {:.1}), {} capped",
-            d.psnr,
-            d.max_diff,
-            cam.width,
-            cam.height,
-            stats.dispatches,
-            stats.hits_walked as f64 / stats.rays as f64,
-            cpu_stats.hits_walked as f64 / cpu_stats.rays as f64,
-            stats.capped
+        let (img, _) = tracer
+            .render(&ctx, &gpu_scene, &cam, &options, &rt)
+            .unwrap();
+        assert_eq!(
+            rara::metrics::compare(&img, &unclipped).differing_pixels,
+            0,
+            "{weight:?}"
         );
-        assert_eq!(stats.capped as usize, cpu_stats.capped, "{name}");
     }
     common::assert_no_validation_messages(&ctx);
 }
@@ -152,7 +247,7 @@ fn a_ray_past_the_loop_budget() {
     };
     let gpu_scene = renderer.upload(&scene).unwrap();
     let (gpu, stats) = tracer
-        .render(&ctx, &gpu_scene, &cam, Vec3::ZERO, &rt)
+        .render(&ctx, &gpu_scene, &cam, &RenderOptions::default(), &rt)
         .unwrap();
     let (cpu, cpu_stats) = raytrace::render(&scene, &cam, &RenderOptions::default(), &rt);
     eprintln!(

@@ -1,9 +1,9 @@
-//! The ray tracer (SPEC section 7, issue 32), unclipped so far: a BVH built on the GPU
+//! The ray tracer (SPEC section 7, issue 32): a BVH built on the GPU
 //! ([`super::bvh`]) every frame, then `glsl/trace_body.glsl` per pixel with a buffer of the
 //! k = 16 closest hits, in dispatches of a bounded number of steps each (lavapipe's loop cap)
-//! until every ray is done. [`RayTracer::render`] runs a headless frame; clipping, the
-//! `--tracer ray` option and recording into an engine's command buffer are the next parts of
-//! the issue. CPU twin: [`crate::reference::raytrace`].
+//! until every ray is done, every clip mode included. [`RayTracer::render`] runs a headless
+//! frame; the `--tracer ray` option and recording into an engine's command buffer are the next
+//! parts of the issue. CPU twin: [`crate::reference::raytrace`].
 
 use bytemuck::{Pod, Zeroable};
 
@@ -52,6 +52,7 @@ struct TracePush {
     k_alpha: u64,
     pixels: u64,
     counters: u64,
+    clip: u64,
     init: u32,
     pad: u32,
 }
@@ -103,17 +104,18 @@ impl RayTracer {
         })
     }
 
-    /// Ray traces `scene` from `camera` over `background` (headless: builds the BVH, runs
-    /// the tracer's dispatches until every ray is done, reads the image back).
+    /// Ray traces `scene` from `camera` with `render` (background, clip), headless: builds
+    /// the BVH, runs the tracer's dispatches until every ray is done, reads the image back.
     pub fn render(
         &self,
         ctx: &Context,
         scene: &GpuScene,
         camera: &Camera,
-        background: glam::Vec3,
+        render: &crate::RenderOptions,
         options: &RayTraceOptions,
     ) -> Result<(image::RgbaImage, TraceFrameStats)> {
         camera.validate()?;
+        let background = render.background;
         let n = scene.len();
         let (w, h) = (camera.width, camera.height);
         let rays = w as u64 * h as u64;
@@ -132,6 +134,14 @@ impl RayTracer {
         let k_alpha = Buffer::new(ctx, "trace k-buffer alpha", rays * TRACE_K * 4, gpu)?;
         let pixels = Buffer::new(ctx, "trace pixels", rays * 4, MemoryLocation::GpuToCpu)?;
         let counters = Buffer::new(ctx, "trace counters", 32, MemoryLocation::GpuToCpu)?;
+        let clip_params = render.clip.to_gpu();
+        let clip = Buffer::new(
+            ctx,
+            "trace clip params",
+            std::mem::size_of_val(&clip_params) as u64,
+            MemoryLocation::CpuToGpu,
+        )?;
+        clip.upload(bytemuck::bytes_of(&clip_params))?;
         let rot = camera.rotation;
         let (cx, cy) = camera.principal_point();
         let col = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
@@ -172,6 +182,7 @@ impl RayTracer {
             k_alpha: k_alpha.address,
             pixels: pixels.address,
             counters: counters.address,
+            clip: clip.address,
             init: 1,
             pad: 0,
         };
