@@ -564,6 +564,8 @@ pub struct FrameStats {
     pub gpu_ms: f64,
     /// Wall-clock milliseconds of the last render: recording, submission and wait.
     pub wall_ms: f64,
+    /// The ray tracer's counts, on its frames ([`crate::Tracer::Ray`]).
+    pub trace: Option<crate::stages::trace::TraceFrameStats>,
 }
 
 impl FrameStats {

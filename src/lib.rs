@@ -66,7 +66,7 @@ pub use clip::{Clip, ClipMode, ClipRegion, ClipWeight, Plane};
 pub use error::{Error, Result};
 pub use frame::{FrameMemory, FrameSlot};
 pub use precision::ShPrecision;
-pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer};
+pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer, Tracer};
 pub use scene::Scene;
 pub use target::{Composite, Target, TargetFormat};
 pub use timing::PassTimer;

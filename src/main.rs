@@ -150,8 +150,30 @@ struct RenderArgs {
     /// Render this many more times after the first and report median timings.
     #[arg(long, default_value_t = 0)]
     repeat: usize,
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7, a BVH built per
+    /// frame; slow on CPU drivers so far).
+    #[arg(long, value_enum, default_value_t = TracerArg::Raster)]
+    tracer: TracerArg,
     #[command(flatten)]
     clip: ClipArgs,
+}
+
+/// `--tracer`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum TracerArg {
+    /// The tile rasterizer.
+    Raster,
+    /// The ray tracer.
+    Ray,
+}
+
+impl From<TracerArg> for rara::Tracer {
+    fn from(t: TracerArg) -> rara::Tracer {
+        match t {
+            TracerArg::Raster => rara::Tracer::Raster,
+            TracerArg::Ray => rara::Tracer::Ray,
+        }
+    }
 }
 
 pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
@@ -273,8 +295,16 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     let options = RenderOptions {
         background: args.background,
         clip: args.clip.build(&[])?,
+        tracer: args.tracer.into(),
         ..RenderOptions::default()
     };
+    if args.reference && options.tracer == rara::Tracer::Ray {
+        return Err(Error::InvalidInput(
+            "--reference renders with the CPU rasterizer; the CPU ray tracer is the library's \
+             rara::reference::raytrace::render"
+                .into(),
+        ));
+    }
     let output = Output::prepare(&args.output, &["png"])?;
     let scene = load_scene(&args.scene)?;
     if options.clip.region.is_some() {
@@ -314,6 +344,21 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     spinner.finish_and_clear();
     let (img, stats) = rendered?;
     output.write_png(&img)?;
+    if let Some(t) = &stats.trace {
+        println!(
+            "wrote {} ({}x{}) on {}: ray traced, {:.1} hits walked per ray, {} capped at 512, \
+             {} dispatches, {:.0} ms wall (BVH build included)",
+            args.output.display(),
+            camera.width,
+            camera.height,
+            ctx.info().name,
+            t.hits_walked as f64 / t.rays.max(1) as f64,
+            t.capped,
+            t.dispatches,
+            stats.wall_ms
+        );
+        return Ok(());
+    }
     warn_oversized(stats.oversized as usize, gpu_scene.len() as usize);
     println!(
         "wrote {} ({}x{}) on {}: {} visible Gaussians ({} cutoff), {} tile intersections",

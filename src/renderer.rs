@@ -40,6 +40,8 @@ pub struct RenderOptions {
     pub composite: Composite,
     /// Clipping (SPEC section 5); the default clips nothing.
     pub clip: Clip,
+    /// The tile rasterizer (SPEC sections 3-5) or the ray tracer (section 7).
+    pub tracer: Tracer,
 }
 
 impl Default for RenderOptions {
@@ -48,8 +50,20 @@ impl Default for RenderOptions {
             background: Vec3::ZERO,
             composite: Composite::Background,
             clip: Clip::default(),
+            tracer: Tracer::Raster,
         }
     }
+}
+
+/// How a frame is drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Tracer {
+    /// The tile rasterizer (SPEC sections 3-5).
+    #[default]
+    Raster,
+    /// The ray tracer (SPEC section 7): a BVH built per frame, k-closest hits per ray. So far
+    /// headless only ([`Renderer::render`]); [`Renderer::record`] refuses it.
+    Ray,
 }
 
 /// The intermediate buffers of the last rendered frame, read back for tests and debugging.
@@ -95,6 +109,8 @@ pub struct Renderer {
     timer: PassTimer,
     /// The slot and rgba8 image (+ host copy) of the headless path, [`Renderer::render`].
     headless: Option<HeadlessFrame>,
+    /// The ray tracer, made on the first frame that asks for it.
+    ray_tracer: Option<crate::stages::trace::RayTracer>,
     /// The layout of the frame's texel views, for the kernels that read through them (with the
     /// strips rasterizer, i.e. on CPU drivers).
     _frame_texels_layout: Option<FrameTexelsLayout>,
@@ -146,6 +162,7 @@ impl Renderer {
             write_target: WriteTarget::new(ctx, texels)?,
             timer: PassTimer::new(ctx)?,
             headless: None,
+            ray_tracer: None,
             _frame_texels_layout: frame_texels_layout,
         })
     }
@@ -209,6 +226,9 @@ impl Renderer {
         options: &RenderOptions,
     ) -> Result<(image::RgbaImage, FrameStats)> {
         camera.validate()?;
+        if options.tracer == Tracer::Ray {
+            return self.render_ray(scene, camera, options);
+        }
         let (w, h) = (camera.width, camera.height);
         let mut headless = match self.headless.take() {
             Some(h) => h,
@@ -220,6 +240,30 @@ impl Renderer {
         let result = self.render_headless(&mut headless, scene, camera, options, w, h);
         self.headless = Some(headless);
         result
+    }
+
+    /// A headless frame of the ray tracer, its counts in [`FrameStats::trace`].
+    fn render_ray(
+        &mut self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+    ) -> Result<(image::RgbaImage, FrameStats)> {
+        options.clip.validate()?;
+        if self.ray_tracer.is_none() {
+            self.ray_tracer = Some(crate::stages::trace::RayTracer::new(&self.ctx)?);
+        }
+        let tracer = self.ray_tracer.as_ref().expect("made above");
+        let start = std::time::Instant::now();
+        let rt = crate::reference::raytrace::RayTraceOptions::default();
+        let (img, trace) = tracer.render(&self.ctx, scene, camera, options, &rt)?;
+        let stats = FrameStats {
+            complete: true,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            trace: Some(trace),
+            ..FrameStats::default()
+        };
+        Ok((img, stats))
     }
 
     fn render_headless(
@@ -370,6 +414,13 @@ impl Renderer {
     ) -> Result<()> {
         camera.validate()?;
         options.clip.validate()?;
+        if options.tracer == Tracer::Ray {
+            return Err(Error::InvalidInput(
+                "the ray tracer renders headless only so far (Renderer::render); recording it \
+                 into a command buffer is not written yet"
+                    .into(),
+            ));
+        }
         let (w, h) = (camera.width, camera.height);
         if target.size() != (w, h) {
             return Err(Error::InvalidInput(format!(

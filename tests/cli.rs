@@ -1145,3 +1145,45 @@ fn flatten_mesh_and_render_sequence() {
         &["not a regular file", "reads the scene twice"],
     );
 }
+
+/// `rara render --tracer ray` ray traces (SPEC section 7) and says so; with `--reference` it is
+/// an error that points to the library's CPU ray tracer.
+#[test]
+fn render_with_the_ray_tracer() {
+    let (scene, cams) = good_scene();
+    let (scene, cams) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    let out = dir().join("ray.png");
+    let o = rara(&[
+        "render",
+        scene,
+        "--cameras",
+        cams,
+        "--tracer",
+        "ray",
+        "--clip-plane",
+        "1,0,0,0",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_success(&o);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("ray traced") && stdout.contains("hits walked per ray"),
+        "{stdout}"
+    );
+    assert!(out.is_file());
+    assert_error(
+        &rara(&[
+            "render",
+            scene,
+            "--cameras",
+            cams,
+            "--tracer",
+            "ray",
+            "--reference",
+            "-o",
+            out.to_str().unwrap(),
+        ]),
+        &["rara::reference::raytrace"],
+    );
+}

@@ -260,3 +260,33 @@ fn a_ray_past_the_loop_budget() {
     common::check_images("trace_loop_budget", &gpu, &cpu, 50.0, 2);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The library's `Tracer::Ray` through `Renderer::render` is the tracer's frame, with its
+/// counts in the frame's stats.
+#[test]
+fn tracer_option_in_the_renderer() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let scene = mixed_scene(500, 3);
+    let gpu_scene = renderer.upload(&scene).unwrap();
+    let cam = camera(48);
+    let options = RenderOptions {
+        tracer: rara::Tracer::Ray,
+        ..RenderOptions::default()
+    };
+    let (img, stats) = renderer.render(&gpu_scene, &cam, &options).unwrap();
+    let trace = stats.trace.expect("the ray tracer's counts");
+    assert_eq!(trace.rays, 48 * 36);
+    let tracer = RayTracer::new(&ctx).unwrap();
+    let (direct, _) = tracer
+        .render(
+            &ctx,
+            &gpu_scene,
+            &cam,
+            &options,
+            &RayTraceOptions::default(),
+        )
+        .unwrap();
+    assert_eq!(rara::metrics::compare(&img, &direct).differing_pixels, 0);
+    common::assert_no_validation_messages(&ctx);
+}
