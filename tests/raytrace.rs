@@ -280,7 +280,9 @@ fn capped_rays_are_counted() {
 
 /// Raster against ray on the same scenes: different models (a splat's 2D footprint against
 /// the maximum response along the ray; the octagon's polygon against the ellipse), so a gap is
-/// expected and reported; the pictures must still agree in the large (PSNR >= 20 dB).
+/// expected and reported; the pictures must still agree in the large (PSNR >= 15 dB). Plant is
+/// at 320 px wide, the generated scenes at 160; the pictures go side by side (raster | ray)
+/// into target/test-artifacts.
 #[test]
 fn raster_and_ray_agree_in_the_large() {
     let ctx = common::context();
@@ -298,7 +300,7 @@ fn raster_and_ray_agree_in_the_large() {
         let scene = rara::ply::load_ply(&ply).unwrap().0;
         let cam = Camera::load_one(&cams, 0)
             .unwrap()
-            .resized(160, None)
+            .resized(320, None)
             .unwrap();
         cases.push(("plant_flat".into(), scene.flattened(), cam));
         cases.push(("plant".into(), scene, cam));
@@ -324,11 +326,12 @@ fn raster_and_ray_agree_in_the_large() {
             stats.hits as f64 / stats.rays as f64,
             stats.capped
         );
-        let dir = common::artifacts_dir();
-        raster
-            .save(dir.join(format!("raster_vs_ray_{name}_raster.png")))
-            .unwrap();
-        ray.save(dir.join(format!("raster_vs_ray_{name}_ray.png")))
+        // Side by side, raster | ray, into target/test-artifacts.
+        let (w, h) = (raster.width(), raster.height());
+        let mut side = image::RgbaImage::new(2 * w, h);
+        image::imageops::replace(&mut side, &raster, 0, 0);
+        image::imageops::replace(&mut side, &ray, w as i64, 0);
+        side.save(common::artifacts_dir().join(format!("raster_vs_ray_{name}.png")))
             .unwrap();
         assert!(d.psnr >= 15.0, "{name}: {} dB", d.psnr);
     }
