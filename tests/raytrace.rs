@@ -10,45 +10,6 @@ use rara::reference::raytrace::{self, gaussian_hit, RayTraceOptions};
 use rara::synth::Rng;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
-/// Flat and volumetric Gaussians mixed, SH degree 1.
-fn mixed_scene(count: usize, seed: u64) -> Scene {
-    let mut rng = Rng::new(seed);
-    let mut s = Scene {
-        sh_degree: 1,
-        ..Scene::default()
-    };
-    for i in 0..count {
-        let mut scale = Vec3::new(
-            rng.range(0.02, 0.15),
-            rng.range(0.02, 0.15),
-            rng.range(0.02, 0.15),
-        );
-        if i % 2 == 0 {
-            scale[(i / 2) % 3] = 0.0;
-        }
-        let mean = Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        );
-        let sh: Vec<f32> = (0..12).map(|_| rng.range(-0.7, 0.7)).collect();
-        s.push(mean, rng.range(0.05, 0.99), scale, rng.rotation(), &sh);
-    }
-    s
-}
-
-fn camera(width: u32) -> Camera {
-    Camera::look_at(
-        Vec3::new(0.4, -0.9, -3.5),
-        Vec3::ZERO,
-        Vec3::NEG_Y,
-        50.0,
-        width,
-        width * 3 / 4,
-    )
-    .unwrap()
-}
-
 fn clips() -> Vec<(&'static str, Clip)> {
     let plane =
         ClipRegion::planes(vec![Plane::new(Vec3::new(1.0, 0.3, -0.2), -0.1).unwrap()]).unwrap();
@@ -80,8 +41,8 @@ fn clips() -> Vec<(&'static str, Clip)> {
 /// image bit for bit and the same hit count, under every clip.
 #[test]
 fn bvh_finds_every_hit() {
-    let scene = mixed_scene(1500, 1);
-    let cam = camera(48);
+    let scene = common::mixed_scene(1500, 1);
+    let cam = common::tracer_camera(48);
     let rt = RayTraceOptions::default();
     for (name, clip) in clips() {
         let options = RenderOptions {
@@ -100,8 +61,8 @@ fn bvh_finds_every_hit() {
 /// exactly, for both weights, flat and volumetric Gaussians alike.
 #[test]
 fn plane_at_infinity_changes_nothing() {
-    let scene = mixed_scene(1500, 2);
-    let cam = camera(64);
+    let scene = common::mixed_scene(1500, 2);
+    let cam = common::tracer_camera(64);
     let rt = RayTraceOptions::default();
     let (unclipped, _) = raytrace::render(&scene, &cam, &RenderOptions::default(), &rt);
     let far = ClipRegion::planes(vec![Plane::new(Vec3::new(0.3, 1.0, 0.2), 1e6).unwrap()]).unwrap();
@@ -288,11 +249,15 @@ fn raster_and_ray_agree_in_the_large() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
     let mut cases: Vec<(String, Scene, Camera)> = vec![
-        ("solid".into(), rara::synth::solid(20000, 1, 2), camera(160)),
+        (
+            "solid".into(),
+            rara::synth::solid(20000, 1, 2),
+            common::tracer_camera(160),
+        ),
         (
             "solid_flat".into(),
             rara::synth::solid(20000, 1, 2).flattened(),
-            camera(160),
+            common::tracer_camera(160),
         ),
     ];
     if let Some((ply, Some(cams))) = common::real_scene("plant_capture_sh0") {

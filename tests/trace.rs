@@ -8,47 +8,7 @@ use glam::{Quat, Vec3};
 use rara::clip::{Clip, ClipRegion, ClipWeight, Plane};
 use rara::reference::raytrace::{self, RayTraceOptions};
 use rara::stages::trace::RayTracer;
-use rara::synth::Rng;
 use rara::{Camera, RenderOptions, Renderer, Scene};
-
-/// Flat and volumetric Gaussians mixed, SH degree 1.
-fn mixed_scene(count: usize, seed: u64) -> Scene {
-    let mut rng = Rng::new(seed);
-    let mut s = Scene {
-        sh_degree: 1,
-        ..Scene::default()
-    };
-    for i in 0..count {
-        let mut scale = Vec3::new(
-            rng.range(0.02, 0.15),
-            rng.range(0.02, 0.15),
-            rng.range(0.02, 0.15),
-        );
-        if i % 2 == 0 {
-            scale[(i / 2) % 3] = 0.0;
-        }
-        let mean = Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        );
-        let sh: Vec<f32> = (0..12).map(|_| rng.range(-0.7, 0.7)).collect();
-        s.push(mean, rng.range(0.05, 0.99), scale, rng.rotation(), &sh);
-    }
-    s
-}
-
-fn camera(width: u32) -> Camera {
-    Camera::look_at(
-        Vec3::new(0.4, -0.9, -3.5),
-        Vec3::ZERO,
-        Vec3::NEG_Y,
-        50.0,
-        width,
-        width * 3 / 4,
-    )
-    .unwrap()
-}
 
 /// The clips of the comparison: none, hard, rara (mass and length) by a plane, a box cutaway,
 /// a sphere.
@@ -87,17 +47,22 @@ fn gpu_tracer_matches_the_cpu_reference() {
     let tracer = RayTracer::new(&ctx).unwrap();
     // (name, scene, camera, the clips to run: all, or those named)
     let mut cases: Vec<(String, Scene, Camera, Option<&str>)> = vec![
-        ("mixed".into(), mixed_scene(3000, 1), camera(96), None),
+        (
+            "mixed".into(),
+            common::mixed_scene(3000, 1),
+            common::tracer_camera(96),
+            None,
+        ),
         (
             "solid".into(),
             rara::synth::solid(20000, 2, 2),
-            camera(128),
+            common::tracer_camera(128),
             None,
         ),
         (
             "solid_flat".into(),
             rara::synth::solid(20000, 2, 2).flattened(),
-            camera(128),
+            common::tracer_camera(128),
             None,
         ),
     ];
@@ -175,9 +140,9 @@ fn gpu_plane_at_infinity_changes_nothing() {
     let ctx = common::context();
     let renderer = Renderer::new(&ctx).unwrap();
     let tracer = RayTracer::new(&ctx).unwrap();
-    let scene = mixed_scene(3000, 2);
+    let scene = common::mixed_scene(3000, 2);
     let gpu_scene = renderer.upload(&scene).unwrap();
-    let cam = camera(96);
+    let cam = common::tracer_camera(96);
     let rt = RayTraceOptions::default();
     let (unclipped, _) = tracer
         .render(&ctx, &gpu_scene, &cam, &RenderOptions::default(), &rt)
@@ -267,9 +232,9 @@ fn a_ray_past_the_loop_budget() {
 fn tracer_option_in_the_renderer() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
-    let scene = mixed_scene(500, 3);
+    let scene = common::mixed_scene(500, 3);
     let gpu_scene = renderer.upload(&scene).unwrap();
-    let cam = camera(48);
+    let cam = common::tracer_camera(48);
     let options = RenderOptions {
         tracer: rara::Tracer::Ray,
         ..RenderOptions::default()

@@ -132,3 +132,43 @@ pub fn percentile_box(scene: &rara::Scene) -> (glam::Vec3, glam::Vec3) {
     }
     (lo, hi)
 }
+
+/// Flat and volumetric Gaussians mixed, SH degree 1 (the ray tracing tests' scene).
+pub fn mixed_scene(count: usize, seed: u64) -> rara::Scene {
+    let mut rng = rara::synth::Rng::new(seed);
+    let mut s = rara::Scene {
+        sh_degree: 1,
+        ..rara::Scene::default()
+    };
+    for i in 0..count {
+        let mut scale = glam::Vec3::new(
+            rng.range(0.02, 0.15),
+            rng.range(0.02, 0.15),
+            rng.range(0.02, 0.15),
+        );
+        if i % 2 == 0 {
+            scale[(i / 2) % 3] = 0.0;
+        }
+        let mean = glam::Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        let sh: Vec<f32> = (0..12).map(|_| rng.range(-0.7, 0.7)).collect();
+        s.push(mean, rng.range(0.05, 0.99), scale, rng.rotation(), &sh);
+    }
+    s
+}
+
+/// The ray tracing tests' camera on `mixed_scene`, `width` wide (4:3).
+pub fn tracer_camera(width: u32) -> rara::Camera {
+    rara::Camera::look_at(
+        glam::Vec3::new(0.4, -0.9, -3.5),
+        glam::Vec3::ZERO,
+        glam::Vec3::NEG_Y,
+        50.0,
+        width,
+        width * 3 / 4,
+    )
+    .unwrap()
+}
