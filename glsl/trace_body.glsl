@@ -348,9 +348,18 @@ void main() {
             continue;
         }
         ++walked;
-        uint g = ki[k_pos];
-        float alpha = ka[k_pos] * clip_weight(clip, spans, g, kt[k_pos], e, d);
-        last_t = kt[k_pos];
+        // Entry k_pos by fixed indices (selects), not a dynamic index into the arrays.
+        uint g = 0u;
+        float hit_t = 0.0;
+        float hit_alpha = 0.0;
+        [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
+            bool at = k == k_pos;
+            g = at ? ki[k] : g;
+            hit_t = at ? kt[k] : hit_t;
+            hit_alpha = at ? ka[k] : hit_alpha;
+        }
+        float alpha = hit_alpha * clip_weight(clip, spans, g, hit_t, e, d);
+        last_t = hit_t;
         last_index = g;
         flags |= RAY_HAS_LAST;
         ++k_pos;
