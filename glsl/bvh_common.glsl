@@ -34,17 +34,5 @@ float order_float(uint u) {
 
 #define BVH_NO_PARENT 0xffffffffu
 
-// Column k of the rotation of a normalised quaternion (w, x, y, z).
-vec3 quat_column(vec4 q, uint k) {
-    float w = q.x, x = q.y, y = q.z, z = q.w;
-    if (k == 0u) {
-        return vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y));
-    }
-    if (k == 1u) {
-        return vec3(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x));
-    }
-    return vec3(2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y));
-}
-
 
 #endif

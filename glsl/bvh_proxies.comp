@@ -30,12 +30,11 @@ void main() {
         vec3 mu = g.pos_opacity.xyz;
         float o = g.pos_opacity.w;
         vec3 s = g.scale.xyz;
-        vec3 c0 = quat_column(g.rot, 0u);
-        vec3 c1 = quat_column(g.rot, 1u);
-        vec3 c2 = quat_column(g.rot, 2u);
-        if (min(s.x, min(s.y, s.z)) == 0.0) {
-            // The normal is the first axis whose scale is 0; r_a, r_b the next two, cyclically.
-            uint axis = s.x == 0.0 ? 0u : (s.y == 0.0 ? 1u : 2u);
+        vec3 c0, c1, c2;
+        quat_columns(g.rot, c0, c1, c2);
+        uint axis = flat_axis(s);
+        if (axis < 3u) {
+            // r_a, r_b: the axes after the normal, cyclically.
             vec3 cols[3] = vec3[3](c0, c1, c2);
             float scales[3] = float[3](s.x, s.y, s.z);
             vec3 ra = cols[(axis + 1u) % 3u] * scales[(axis + 1u) % 3u];

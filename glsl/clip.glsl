@@ -55,6 +55,16 @@ CutoffRecord flat_cutoff_record(vec3 n, vec3 rel) {
     return CutoffRecord(vec4(n, -dot(n, rel)), vec4(-rel, 0.0), vec4(0.0));
 }
 
+// The record of a Gaussian with three nonzero scales s, local axes (the columns of R) c0..c2,
+// at rel = mu - eye: M = S^-1 R^T, row k column k of R over s_k, and o' = M (eye - mu) = -M rel.
+CutoffRecord volume_cutoff_record(vec3 c0, vec3 c1, vec3 c2, vec3 s, vec3 rel) {
+    vec3 w0 = c0 / s.x;
+    vec3 w1 = c1 / s.y;
+    vec3 w2 = c2 / s.z;
+    return CutoffRecord(vec4(w0, -dot(w0, rel)), vec4(w1, -dot(w1, rel)),
+                        vec4(w2, -dot(w2, rel)));
+}
+
 // Below this |n.d| / |d| a ray counts as parallel to a flat Gaussian's plane (SPEC section 6;
 // FLAT_PARALLEL_EPSILON in src/clip.rs).
 #define FLAT_PARALLEL_EPSILON 1e-7

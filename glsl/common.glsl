@@ -159,6 +159,29 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DispatchArg
 
 uint div_ceil(uint a, uint b) { return (a + b - 1u) / b; }
 
+// Rotation matrix of a normalised quaternion (w, x, y, z), as rows.
+void quat_rows(vec4 q, out vec3 r0, out vec3 r1, out vec3 r2) {
+    float w = q.x, x = q.y, y = q.z, z = q.w;
+    r0 = vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y));
+    r1 = vec3(2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x));
+    r2 = vec3(2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y));
+}
+
+// The same matrix's columns (its local axes in world coordinates).
+void quat_columns(vec4 q, out vec3 c0, out vec3 c1, out vec3 c2) {
+    vec3 r0, r1, r2;
+    quat_rows(q, r0, r1, r2);
+    c0 = vec3(r0.x, r1.x, r2.x);
+    c1 = vec3(r0.y, r1.y, r2.y);
+    c2 = vec3(r0.z, r1.z, r2.z);
+}
+
+// The normal axis of a flat Gaussian (SPEC section 6): the first whose scale is 0, or 3 for a
+// Gaussian with three nonzero scales.
+uint flat_axis(vec3 s) {
+    return s.x == 0.0 ? 0u : (s.y == 0.0 ? 1u : (s.z == 0.0 ? 2u : 3u));
+}
+
 // Workgroup grid of a linear kernel over `items` (the host's `stages::linear_grid`): rows of
 // at most LINEAR_GRID_X workgroups, since only 65,535 per dimension are guaranteed.
 uvec3 linear_grid(uint items) {

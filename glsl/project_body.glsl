@@ -49,14 +49,6 @@ shared uint wg_cutoff_count;
 shared uint wg_cutoff_base;
 #endif
 
-// Rotation matrix of a normalised quaternion (w, x, y, z), as rows.
-void quat_rows(vec4 q, out vec3 r0, out vec3 r1, out vec3 r2) {
-    float w = q.x, x = q.y, y = q.z, z = q.w;
-    r0 = vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y));
-    r1 = vec3(2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x));
-    r2 = vec3(2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y));
-}
-
 // Writes the record of a Gaussian that draws nothing.
 void skip(uint i) {
     pc.tiles_touched.v[i] = 0u;
@@ -170,20 +162,16 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     if (kind != CLASS_CUTOFF) {
         return false;
     }
-    if (min(s.x, min(s.y, s.z)) == 0.0) {
+    vec3 c0 = vec3(r0.x, r1.x, r2.x);
+    vec3 c1 = vec3(r0.y, r1.y, r2.y);
+    vec3 c2 = vec3(r0.z, r1.z, r2.z);
+    uint axis = flat_axis(s);
+    if (axis < 3u) {
         // Flat (SPEC section 6): the normal is the first axis of R whose scale is 0.
-        vec3 n = s.x == 0.0 ? vec3(r0.x, r1.x, r2.x)
-               : (s.y == 0.0 ? vec3(r0.y, r1.y, r2.y) : vec3(r0.z, r1.z, r2.z));
-        rec = flat_cutoff_record(n, rel);
+        rec = flat_cutoff_record(axis == 0u ? c0 : (axis == 1u ? c1 : c2), rel);
         return true;
     }
-    // M = S^-1 R^T: row k is column k of R over s_k. o' = M (eye - mu) = -M rel.
-    vec3 w0 = vec3(r0.x, r1.x, r2.x) / s.x;
-    vec3 w1 = vec3(r0.y, r1.y, r2.y) / s.y;
-    vec3 w2 = vec3(r0.z, r1.z, r2.z) / s.z;
-    rec.m0 = vec4(w0, -dot(w0, rel));
-    rec.m1 = vec4(w1, -dot(w1, rel));
-    rec.m2 = vec4(w2, -dot(w2, rel));
+    rec = volume_cutoff_record(c0, c1, c2, s, rel);
     return true;
 }
 

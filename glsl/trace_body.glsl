@@ -93,7 +93,7 @@ float clip_weight(ClipParams clip, vec4 spans, uint g, float t, vec3 e, vec3 d) 
         return clip_signed_distance(clip, mu) >= 0.0 ? 1.0 : 0.0;
     }
     vec3 s = gs.scale.xyz;
-    if (min(s.x, min(s.y, s.z)) == 0.0) {
+    if (flat_axis(s) < 3u) {
         bool seen = (spans.x <= t && t <= spans.y && spans.x < spans.y)
                  || (spans.z <= t && t <= spans.w && spans.z < spans.w);
         return seen ? 1.0 : 0.0;
@@ -104,12 +104,9 @@ float clip_weight(ClipParams clip, vec4 spans, uint g, float t, vec3 e, vec3 d) 
     }
     // The cutoff record of the rasterizer (project_body.glsl): rows of M = S^-1 R^T and
     // o' = M (e - mu); one ray is a strip's r = 0.
-    vec3 rel = mu - e;
-    vec3 w0 = quat_column(gs.rot, 0u) / s.x;
-    vec3 w1 = quat_column(gs.rot, 1u) / s.y;
-    vec3 w2 = quat_column(gs.rot, 2u) / s.z;
-    CutoffRecord rec = CutoffRecord(vec4(w0, -dot(w0, rel)), vec4(w1, -dot(w1, rel)),
-                                    vec4(w2, -dot(w2, rel)));
+    vec3 c0, c1, c2;
+    quat_columns(gs.rot, c0, c1, c2);
+    CutoffRecord rec = volume_cutoff_record(c0, c1, c2, s, mu - e);
     WhitenedStrip strip = whitened_strip(rec, d, vec3(0.0));
     if (config.y == CLIP_WEIGHT_LENGTH) {
         return cutoff_weight_length(strip, 0.0, spans, clip.band.y);
@@ -135,11 +132,10 @@ vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d) {
         return vec2(0.0);
     }
     vec3 s = g.scale.xyz;
-    vec3 c0 = quat_column(g.rot, 0u);
-    vec3 c1 = quat_column(g.rot, 1u);
-    vec3 c2 = quat_column(g.rot, 2u);
-    if (min(s.x, min(s.y, s.z)) == 0.0) {
-        uint axis = s.x == 0.0 ? 0u : (s.y == 0.0 ? 1u : 2u);
+    vec3 c0, c1, c2;
+    quat_columns(g.rot, c0, c1, c2);
+    uint axis = flat_axis(s);
+    if (axis < 3u) {
         vec3 cols[3] = vec3[3](c0, c1, c2);
         float scales[3] = float[3](s.x, s.y, s.z);
         vec3 n = cols[axis];
