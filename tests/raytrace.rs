@@ -10,33 +10,6 @@ use rara::reference::raytrace::{self, gaussian_hit, RayTraceOptions};
 use rara::synth::Rng;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
-fn clips() -> Vec<(&'static str, Clip)> {
-    let plane =
-        ClipRegion::planes(vec![Plane::new(Vec3::new(1.0, 0.3, -0.2), -0.1).unwrap()]).unwrap();
-    let cutaway = ClipRegion::oriented_box(
-        Vec3::new(-0.2, 0.0, -0.3),
-        Vec3::splat(0.5),
-        Quat::from_rotation_y(0.4),
-    )
-    .unwrap()
-    .inverted();
-    let sphere = ClipRegion::sphere(Vec3::new(0.2, -0.1, 0.0), 0.7).unwrap();
-    vec![
-        ("none", Clip::default()),
-        ("plane_hard", Clip::hard(plane.clone())),
-        ("plane_mass", Clip::rara(plane.clone())),
-        (
-            "plane_length",
-            Clip {
-                weight: ClipWeight::Length,
-                ..Clip::rara(plane)
-            },
-        ),
-        ("cutaway_mass", Clip::rara(cutaway)),
-        ("sphere_mass", Clip::rara(sphere)),
-    ]
-}
-
 /// The BVH finds exactly the hits that testing every Gaussian on every ray finds: the same
 /// image bit for bit and the same hit count, under every clip.
 #[test]
@@ -44,7 +17,8 @@ fn bvh_finds_every_hit() {
     let scene = common::mixed_scene(1500, 1);
     let cam = common::tracer_camera(48);
     let rt = RayTraceOptions::default();
-    for (name, clip) in clips() {
+    let (lo, hi) = common::percentile_box(&scene);
+    for (name, clip) in common::tracer_clips(lo, hi) {
         let options = RenderOptions {
             clip,
             ..RenderOptions::default()

@@ -10,33 +10,6 @@ use rara::reference::raytrace::{self, RayTraceOptions};
 use rara::stages::trace::RayTracer;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
-/// The clips of the comparison: none, hard, rara (mass and length) by a plane, a box cutaway,
-/// a sphere.
-fn clips(lo: Vec3, hi: Vec3) -> Vec<(&'static str, Clip)> {
-    let c = 0.5 * (lo + hi);
-    let ext = hi - lo;
-    let n = Vec3::new(1.0, 0.3, -0.2).normalize();
-    let plane = ClipRegion::planes(vec![Plane::new(n, -n.dot(c)).unwrap()]).unwrap();
-    let cutaway = ClipRegion::oriented_box(c - 0.2 * ext, 0.35 * ext, Quat::from_rotation_y(0.4))
-        .unwrap()
-        .inverted();
-    let sphere = ClipRegion::sphere(c + 0.2 * ext, 0.4 * ext.max_element()).unwrap();
-    vec![
-        ("none", Clip::default()),
-        ("plane_hard", Clip::hard(plane.clone())),
-        ("plane_mass", Clip::rara(plane.clone())),
-        (
-            "plane_length",
-            Clip {
-                weight: ClipWeight::Length,
-                ..Clip::rara(plane)
-            },
-        ),
-        ("cutaway_mass", Clip::rara(cutaway)),
-        ("sphere_mass", Clip::rara(sphere)),
-    ]
-}
-
 /// GPU against CPU: generated scenes (flat and volumetric mixed, a solid and the solid
 /// flattened) under every clip, and, when present, plant and plant flattened at 320 px,
 /// unclipped and under a rara cutaway: >= 50 dB, max 8-bit difference <= 4.
@@ -88,7 +61,7 @@ fn gpu_tracer_matches_the_cpu_reference() {
         let gpu_scene = renderer.upload(&scene).unwrap();
         let (lo, hi) = common::percentile_box(&scene);
         let mut unclipped = None;
-        for (clip_name, clip) in clips(lo, hi) {
+        for (clip_name, clip) in common::tracer_clips(lo, hi) {
             if only.is_some_and(|o| o != clip_name) {
                 continue;
             }

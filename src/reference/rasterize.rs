@@ -29,13 +29,7 @@ impl PixelClip {
         if clip.effective_mode() != ClipMode::Rara {
             return None;
         }
-        let (cx, cy) = camera.principal_point();
-        let c = DVec3::new(
-            (i as f64 - cx as f64) / camera.fx as f64,
-            (j as f64 - cy as f64) / camera.fy as f64,
-            1.0,
-        );
-        let dir = (camera.rotation.as_dmat3() * c).normalize();
+        let (_, dir) = pixel_ray(camera, i, j);
         Some(PixelClip {
             dir,
             spans: region.ray_intervals(camera.position.as_dvec3(), dir),
@@ -43,6 +37,21 @@ impl PixelClip {
             band: clip.band as f64,
         })
     }
+}
+
+/// The ray of pixel `(i, j)` (SPEC section 2): the camera centre and the unit direction
+/// through the pixel's image coordinates, in f64.
+pub fn pixel_ray(camera: &Camera, i: u32, j: u32) -> (DVec3, DVec3) {
+    let (cx, cy) = camera.principal_point();
+    let c = DVec3::new(
+        (i as f64 - cx as f64) / camera.fx as f64,
+        (j as f64 - cy as f64) / camera.fy as f64,
+        1.0,
+    );
+    (
+        camera.position.as_dvec3(),
+        (camera.rotation.as_dmat3() * c).normalize(),
+    )
 }
 
 /// Per tile, the splats whose visible footprint reaches it, in compositing order: ascending

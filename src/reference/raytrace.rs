@@ -11,6 +11,7 @@
 use glam::{DMat3, DVec3, Vec3};
 
 use super::project::eval_sh;
+use super::rasterize::pixel_ray;
 use super::Rgba8Image;
 use crate::camera::Camera;
 use crate::clip::{Classification, Clip, ClipMode, ClipRegion, CutoffRay, FLAT_PARALLEL_EPSILON};
@@ -119,8 +120,7 @@ pub fn proxy_bounds(scene: &Scene, i: usize, q: f64) -> Option<Aabb> {
     })
 }
 
-/// A Gaussian's hit on a ray: its parameter and alpha before clipping, and for a flat one
-/// the crossing point (its clip weight needs it).
+/// A Gaussian's hit on a ray: its parameter and its alpha before clipping.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// `t_g > 0`.
@@ -377,20 +377,6 @@ pub fn composite(
         transmittance = next;
     }
     (colour + transmittance * background, walked, false)
-}
-
-/// The ray of pixel `(i, j)` (SPEC section 2): origin and unit direction.
-pub fn pixel_ray(camera: &Camera, i: u32, j: u32) -> (DVec3, DVec3) {
-    let (cx, cy) = camera.principal_point();
-    let c = DVec3::new(
-        (i as f64 - cx as f64) / camera.fx as f64,
-        (j as f64 - cy as f64) / camera.fy as f64,
-        1.0,
-    );
-    (
-        camera.position.as_dvec3(),
-        (camera.rotation.as_dmat3() * c).normalize(),
-    )
 }
 
 /// Which Gaussians a primary ray may hit: all but those section 3 culls (`t.z <= 0.2`).

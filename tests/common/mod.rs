@@ -172,3 +172,32 @@ pub fn tracer_camera(width: u32) -> rara::Camera {
     )
     .unwrap()
 }
+
+/// The ray tracing tests' clips of a scene whose bulk is the box (lo, hi): none, hard, rara
+/// (mass and length) by a plane through it, a box cutaway, a sphere.
+pub fn tracer_clips(lo: glam::Vec3, hi: glam::Vec3) -> Vec<(&'static str, rara::Clip)> {
+    use glam::{Quat, Vec3};
+    use rara::clip::{Clip, ClipRegion, ClipWeight, Plane};
+    let c = 0.5 * (lo + hi);
+    let ext = hi - lo;
+    let n = Vec3::new(1.0, 0.3, -0.2).normalize();
+    let plane = ClipRegion::planes(vec![Plane::new(n, -n.dot(c)).unwrap()]).unwrap();
+    let cutaway = ClipRegion::oriented_box(c - 0.2 * ext, 0.35 * ext, Quat::from_rotation_y(0.4))
+        .unwrap()
+        .inverted();
+    let sphere = ClipRegion::sphere(c + 0.2 * ext, 0.4 * ext.max_element()).unwrap();
+    vec![
+        ("none", Clip::default()),
+        ("plane_hard", Clip::hard(plane.clone())),
+        ("plane_mass", Clip::rara(plane.clone())),
+        (
+            "plane_length",
+            Clip {
+                weight: ClipWeight::Length,
+                ..Clip::rara(plane)
+            },
+        ),
+        ("cutaway_mass", Clip::rara(cutaway)),
+        ("sphere_mass", Clip::rara(sphere)),
+    ]
+}
