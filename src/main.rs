@@ -253,10 +253,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
 
 pub fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+        cli::output::create_dir(dir)?;
     }
     img.save(path).map_err(|source| Error::Image {
         path: path.to_path_buf(),
@@ -562,10 +559,7 @@ fn cmd_synth(
     };
     let scene = rara::synth::generate(kind, count, sh_degree, seed);
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+        cli::output::create_dir(dir)?;
     }
     rara::ply::write_ply(&scene, output, rara::ply::PlyEncoding::BinaryLittleEndian)?;
     let (lo, hi) = scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));

@@ -8,7 +8,7 @@ use std::path::Path;
 use glam::{Quat, Vec3};
 
 use rara::clip::{Clip, ClipMode, ClipRegion, Plane};
-use rara::{Camera, Context, Error, RenderOptions, Renderer, Result};
+use rara::{Camera, Context, RenderOptions, Renderer, Result};
 
 use super::sweep::{concat_horizontally, GifWriter, Sweep};
 use crate::save_png;
@@ -46,10 +46,7 @@ pub fn demo_cut() -> Result<ClipRegion> {
 /// Runs the demo into `dir`.
 pub fn run(dir: &Path) -> Result<()> {
     let start = std::time::Instant::now();
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    super::output::create_dir(dir)?;
     let scene = rara::synth::solid(DEMO_GAUSSIANS, 1, 7);
     let camera = demo_camera()?;
     let ctx = Context::from_env()?;

@@ -237,10 +237,7 @@ fn run_import(args: &ImportArgs) -> Result<()> {
                 args.output.display()
             )));
         }
-        std::fs::create_dir_all(&args.output).map_err(|source| Error::Io {
-            path: args.output.clone(),
-            source,
-        })?;
+        super::output::create_dir(&args.output)?;
         let original = crate::load_scene(&args.original)?;
         let progress = bar(frames.len() as u64, "import frames");
         for frame in &frames {
@@ -300,10 +297,7 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
             args.frames.display()
         )));
     }
-    std::fs::create_dir_all(&args.output).map_err(|source| Error::Io {
-        path: args.output.clone(),
-        source,
-    })?;
+    super::output::create_dir(&args.output)?;
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let options = RenderOptions {

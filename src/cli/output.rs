@@ -14,6 +14,11 @@ use std::path::{Path, PathBuf};
 
 use rara::{Error, Result};
 
+/// Creates the output folder `dir` and its parents (no error when it exists).
+pub fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(io(dir))
+}
+
 /// A prepared output file; dropping it unwritten removes its temporary file.
 pub struct Output {
     path: PathBuf,

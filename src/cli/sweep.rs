@@ -146,10 +146,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     } else {
         configs.push(base);
     }
-    std::fs::create_dir_all(&args.output).map_err(|source| Error::Io {
-        path: args.output.clone(),
-        source,
-    })?;
+    super::output::create_dir(&args.output)?;
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;

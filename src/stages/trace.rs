@@ -152,7 +152,12 @@ impl RayTracer {
             forward: col(rot.col(2)),
             focal: [camera.fx, camera.fy, cx, cy],
             background: col(background),
-            size: [w, h, n, (3 * (scene.sh_degree() + 1).pow(2))],
+            size: [
+                w,
+                h,
+                n,
+                3 * crate::scene::sh_coeffs(scene.sh_degree()) as u32,
+            ],
             options: [options.q as f32, options.max_hits as f32, 0.0, 0.0],
         };
         params.upload(bytemuck::bytes_of(&p))?;
