@@ -14,12 +14,6 @@ use rara::mesh::import::{import_mesh, read_mesh, ImportOptions, MeshData};
 use rara::mesh::FlatFrame;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
-fn tempdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rara_blender_{name}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 fn script(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/blender")
@@ -94,7 +88,7 @@ fn blender_bend(mesh: &MeshData, angle: f64) -> impl Fn(DVec3) -> DVec3 {
 #[test]
 fn blender_bend_and_rotation_round_trip() {
     let Some(blender) = blender() else { return };
-    let dir = tempdir("round_trip");
+    let dir = common::tempdir("round_trip");
     let scene = fixture();
     let exported = dir.join("octagons.obj");
     export(&scene, &exported, Falloff::Constant);
@@ -188,7 +182,7 @@ fn camera_json(camera: &Camera, path: &Path) {
 #[test]
 fn blender_imports_and_renders_every_export() {
     let Some(blender) = blender() else { return };
-    let dir = tempdir("render");
+    let dir = common::tempdir("render");
     let scene = fixture();
     let camera = fixture_camera(&scene, 160);
     let cams = dir.join("camera.json");
@@ -270,7 +264,7 @@ fn blender_renders_a_real_scene() {
     };
     let Some(blender) = blender() else { return };
     eprintln!("real-scene case 'plant_capture_sh0' RAN");
-    let dir = tempdir("real");
+    let dir = common::tempdir("real");
     let scene = rara::ply::load_ply(&ply).unwrap().0.flattened();
     let camera = Camera::load_one(&cams, 0)
         .unwrap()
@@ -307,7 +301,7 @@ fn gltf_validator_accepts_every_glb() {
         common::test_skipped("node or npm's gltf-validator is not installed (scripts/clients.sh)");
         return;
     }
-    let dir = tempdir("validator");
+    let dir = common::tempdir("validator");
     let scene = fixture();
     for falloff in [Falloff::Constant, Falloff::Centre, Falloff::Texture] {
         let glb = dir.join(format!("{falloff:?}.glb"));

@@ -303,7 +303,7 @@ fn write_games_ply(path: &std::path::Path, rows: &[[f32; 13]]) {
 
 #[test]
 fn two_scale_ply_is_flat_along_local_x() {
-    let dir = tempdir("two_scale");
+    let dir = common::tempdir("two_scale");
     let path = dir.join("games.ply");
     let q = Quat::from_rotation_z(0.5);
     write_games_ply(
@@ -333,7 +333,7 @@ fn two_scale_ply_is_flat_along_local_x() {
 
 #[test]
 fn three_scale_ply_with_a_negligible_scale_is_flat() {
-    let dir = tempdir("three_scale");
+    let dir = common::tempdir("three_scale");
     let mut scene = Scene::default();
     let sh = [0.0f32; 3];
     // REdiSplats' own output: scale_0 = ln 1e-5 beside scales of 0.3.
@@ -374,7 +374,7 @@ fn three_scale_ply_with_a_negligible_scale_is_flat() {
 /// covariance, to float rounding).
 #[test]
 fn flat_scenes_round_trip_through_both_layouts() {
-    let dir = tempdir("layouts");
+    let dir = common::tempdir("layouts");
     let scene = flat_layer(500, 3);
     for (layout, name) in [(PlyLayout::Inria, "inria"), (PlyLayout::Games, "games")] {
         let path = dir.join(format!("{name}.ply"));
@@ -411,10 +411,4 @@ fn flat_scenes_round_trip_through_both_layouts() {
     .unwrap_err()
     .to_string();
     assert!(err.contains("flat"), "{err}");
-}
-
-fn tempdir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("rara_flat_{name}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{DMat3, DQuat, DVec3, Vec3};
 use rara::mesh::export::{export_mesh, ExportOptions, Falloff, MeshFormat};
@@ -11,12 +11,6 @@ use rara::mesh::import::{import_mesh, read_mesh, Fit, ImportOptions, MeshData};
 use rara::mesh::{fit_lsq, fit_redisplats, octagon, octagon_radius, FlatFrame, DEFAULT_Q};
 use rara::synth::Rng;
 use rara::{Camera, RenderOptions, Renderer, Scene};
-
-fn tempdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rara_mesh_{name}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Flat Gaussians in the REdiSplats convention (normal = local x) and some 3D ones, around
 /// `offset`, SH degree `degree`.
@@ -140,7 +134,7 @@ fn import(s: &Scene, path: &Path, options: &ImportOptions) -> rara::Result<Scene
 /// within 1e-5 relative (glb's positions are f32; PLY's are doubles, OBJ's shortest decimals).
 #[test]
 fn files_round_trip_in_every_format() {
-    let dir = tempdir("formats");
+    let dir = common::tempdir("formats");
     let s = scene(3000, 1, Vec3::new(2.0, 1.0, -3.0), 2);
     for ext in ["ply", "obj", "glb"] {
         for falloff in [Falloff::Constant, Falloff::Centre, Falloff::Texture] {
@@ -184,7 +178,7 @@ fn transformed(mesh: &MeshData, f: impl Fn(DVec3) -> DVec3) -> MeshData {
 /// covariances `R Sigma R^T`.
 #[test]
 fn rigid_motions_give_the_moved_gaussians() {
-    let dir = tempdir("rigid");
+    let dir = common::tempdir("rigid");
     let s = scene(1500, 0, Vec3::ZERO, 3);
     let path = dir.join("m.ply");
     export(&s, &path, Falloff::Constant);
@@ -215,7 +209,7 @@ fn rigid_motions_give_the_moved_gaussians() {
 fn rotated_sh_turns_with_the_surface() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
-    let dir = tempdir("rotate_sh");
+    let dir = common::tempdir("rotate_sh");
     let mut s = scene(4000, 3, Vec3::ZERO, 4);
     // Strongly view-dependent: the higher bands dominate.
     for g in 0..s.len() {
@@ -284,7 +278,7 @@ fn expect_error(result: rara::Result<Scene>, needle: &str) {
 /// Hostile meshes: each gets an error that says what is wrong.
 #[test]
 fn hostile_meshes_give_clear_errors() {
-    let dir = tempdir("hostile");
+    let dir = common::tempdir("hostile");
     let s = scene(50, 0, Vec3::ZERO, 5);
     let path = dir.join("m.ply");
     export(&s, &path, Falloff::Constant);
@@ -367,7 +361,7 @@ fn real_scenes_round_trip() {
         eprintln!("real-scene case '{stem}' RAN");
         ran += 1;
         let s = rara::ply::load_ply(&ply).unwrap().0;
-        let dir = tempdir(&format!("real_{stem}"));
+        let dir = common::tempdir(&format!("real_{stem}"));
         for ext in formats {
             let path = dir.join(format!("m.{ext}"));
             export(&s, &path, Falloff::Constant);
@@ -410,7 +404,7 @@ fn real_scenes_round_trip() {
 /// scene places it: a translated node gives translated Gaussians.
 #[test]
 fn glb_node_transforms_are_applied() {
-    let dir = tempdir("node");
+    let dir = common::tempdir("node");
     let s = scene(200, 0, Vec3::ZERO, 8);
     let path = dir.join("m.glb");
     export(&s, &path, Falloff::Constant);
@@ -436,7 +430,7 @@ fn glb_node_transforms_are_applied() {
 /// same value to find them, and says what it expected otherwise.
 #[test]
 fn min_opacity_selects_the_octagons() {
-    let dir = tempdir("min_opacity");
+    let dir = common::tempdir("min_opacity");
     let s = scene(400, 0, Vec3::ZERO, 9);
     let path = dir.join("m.obj");
     let options = ExportOptions {
@@ -468,7 +462,7 @@ fn min_opacity_selects_the_octagons() {
 /// under the import's Q, are errors too.
 #[test]
 fn inconsistent_ids_and_q_are_errors() {
-    let dir = tempdir("ids_q");
+    let dir = common::tempdir("ids_q");
     let s = scene(30, 0, Vec3::ZERO, 10);
     let path = dir.join("m.ply");
     export(&s, &path, Falloff::Constant);

@@ -57,6 +57,13 @@ pub fn real_scene(stem: &str) -> Option<(PathBuf, Option<PathBuf>)> {
     Some((ply, cams.is_file().then_some(cams)))
 }
 
+/// A fresh folder for the calling test binary's files, `name` telling its tests apart.
+pub fn tempdir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rara_test_{name}_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// Marks the calling test as having checked nothing: `scripts/test.sh` counts a test whose
 /// output holds this line as skipped, not passed, in its closing line (libtest has no skip).
 pub fn test_skipped(why: &str) {
