@@ -384,7 +384,9 @@ pub fn export_mesh(
             )
             .map_err(io)?;
         }
-        MeshFormat::Glb => write_glb_mesh(&mut w, source, options, &survey, &mut second_pass)?,
+        MeshFormat::Glb => {
+            write_glb_mesh(&mut w, path, source, options, &survey, &mut second_pass)?
+        }
     }
     w.flush().map_err(io)?;
     let file = w.into_inner().map_err(|e| io(e.into_error()))?;
@@ -630,6 +632,7 @@ fn glb_json(
 /// written by hand only because the BIN chunk is streamed: `gltf::binary::Glb` needs it whole.
 fn write_glb_mesh(
     w: &mut impl Write,
+    path: &Path,
     source: &dyn GaussianSource,
     options: &ExportOptions,
     survey: &Survey,
@@ -662,7 +665,7 @@ fn write_glb_mesh(
         )));
     }
     let io = |source: std::io::Error| Error::Io {
-        path: PathBuf::from("<glb>"),
+        path: path.to_path_buf(),
         source,
     };
     let mut head = Vec::with_capacity(28);
