@@ -51,7 +51,7 @@ void main() {
         }
         if (climbing) {
             uint left = pc.nodes.v[parent].left;
-            uint right = pc.nodes.v[parent].right;
+            uint right = pc.nodes.v[parent].right & BVH_CHILD_MASK;
             uint sibling = left == node ? right : left;
             lo = min(lo, pc.nodes.v[sibling].lo);
             hi = max(hi, pc.nodes.v[sibling].hi);

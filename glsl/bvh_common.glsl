@@ -10,8 +10,11 @@
 #include "common.glsl"
 
 // A node (or a proxy box): its box (lo, hi; empty when lo > hi) and, for an inner node, its
-// children's node indices, for a leaf its Gaussian in `left`. The indices are uints of their
-// own, never float bits: a CPU driver may flush such a float (a denormal) to zero.
+// children's node indices, for a leaf its Gaussian in `left`. An inner node's `right` also
+// holds, in its top two bits, the axis its Morton split is on (0 x, 1 y, 2 z; 3 none: equal
+// codes or the empty-box bit): the left child lies below the right one on it, so a ray visits
+// first the child its direction meets first. The indices are uints of their own, never float
+// bits: a CPU driver may flush such a float (a denormal) to zero.
 struct BvhNode {
     vec3 lo;
     uint left;
@@ -20,6 +23,9 @@ struct BvhNode {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) coherent buffer BvhNodes { BvhNode v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) coherent buffer CoherentU32s { uint v[]; };
+// The built tree as the ray tracer reads it: not coherent (the build wrote it in an earlier
+// dispatch), so a GPU may cache it, and read only.
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BvhTree { BvhNode v[]; };
 
 // Centre bounds of the proxies, as order-preserving uints of the floats (atomicMin/Max):
 // v[0..3] the minimum, v[3..6] the maximum.
@@ -33,6 +39,8 @@ float order_float(uint u) {
 }
 
 #define BVH_NO_PARENT 0xffffffffu
+#define BVH_AXIS_SHIFT 30u
+#define BVH_CHILD_MASK 0x3fffffffu
 
 
 #endif

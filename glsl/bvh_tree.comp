@@ -5,8 +5,8 @@
 // equal (so every key is distinct), -1 outside [0, n). Node i's range runs from i in the
 // direction d where delta grows; its far end is found by an exponential then a binary search,
 // its split by a binary search for the last key sharing more than the range's prefix with i.
-// Both searches take at most 32 steps. Writes each node's children (left, right) and every
-// child's parent. CPU twin: stages::bvh::karras_tree.
+// Both searches take at most 32 steps. Writes each node's children (left, right, with the
+// split's axis) and every child's parent. CPU twin: stages::bvh::karras_tree.
 #include "bvh_common.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
@@ -67,8 +67,12 @@ void main() {
     uint leaves = uint(n - 1);
     uint left = min(i, j) == gamma ? leaves + uint(gamma) : uint(gamma);
     uint right = max(i, j) == gamma + 1 ? leaves + uint(gamma + 1) : uint(gamma + 1);
+    // The split is at the first bit where the range's codes differ: bit 31 - delta_node of a
+    // code whose bits 29, 26, ... are x, 28, 25, ... y and 27, 24, ... z (bvh_morton.comp).
+    int bit = 31 - delta_node;
+    uint axis = bit >= 0 && bit < 30 ? uint(2 - bit % 3) : 3u;
     pc.nodes.v[node].left = left;
-    pc.nodes.v[node].right = right;
+    pc.nodes.v[node].right = right | (axis << BVH_AXIS_SHIFT);
     pc.parents.v[left] = node;
     pc.parents.v[right] = node;
     if (node == 0u) {

@@ -9,21 +9,59 @@
 // with the buffer full, starts after its worst entry.
 //
 // lavapipe stops an invocation after 65,535 loop iterations in all (docs: PLATFORM.md), and a
-// ray can need far more node visits than that. So a dispatch gives each ray at most
-// TRACE_BUDGET steps (a node visit or a composited hit) and leaves its whole state in buffers:
-// the stack, the k-buffer, colour and transmittance, the last hit, its counts; the host
-// dispatches again while rays are live. Nothing waits on another invocation.
+// ray can need far more node visits than that. So the frame runs in rounds: a round gives each
+// ray at most `budget` steps (a node visit or a composited hit) and leaves the whole state of
+// a ray it did not finish in buffers (the stack, the k-buffer, colour and transmittance, the
+// last hit, its counts), and appends the ray to the next round's list. Round r > 0 runs over
+// that list only, its size set by trace_args.comp from the count (an indirect dispatch), so
+// the SIMD lanes of a CPU driver and a GPU's warps are refilled with live rays each round
+// instead of idling beside finished ones. Nothing waits on another invocation.
 //
 // Included by trace_deg<D> (SH of degree D in 32-bit floats) and trace_deg<D>_sh16.
+// With SCENE_TEXELS (CPU drivers) the BVH, the Gaussians and their coefficients are read
+// through texel views (a gather, where a buffer load is a scalar loop over the SIMD lanes per
+// 64-bit word): the Gaussians and coefficients at bindings 10 and 11 of frame_texels.glsl, the
+// nodes at binding 12, two RGBA32_UINT texels each (RayTracer's set layout).
+#extension GL_KHR_shader_subgroup_vote : require
 #include "bvh_common.glsl"
 #include "sh.glsl"
 #include "clip.glsl"
+#ifdef SCENE_TEXELS
+layout(set = 0, binding = 12) uniform utextureBuffer bvh_texels;
+#endif
+
+// Node i as its two 16-byte words.
+void load_node(BvhTree nodes, uint i, out uvec4 w0, out uvec4 w1) {
+#ifdef SCENE_TEXELS
+    w0 = texelFetch(bvh_texels, int(2u * i));
+    w1 = texelFetch(bvh_texels, int(2u * i + 1u));
+#else
+    uint64_t at = uint64_t(nodes) + 32ul * uint64_t(i);
+    w0 = load_uvec4(at);
+    w1 = load_uvec4(at + 16ul);
+#endif
+}
+
+// Gaussian i of the scene.
+Gaussian trace_gaussian(Gaussians gaussians, uint i) {
+#ifdef SCENE_TEXELS
+    int t = int(i) * 3;
+    Gaussian g;
+    g.pos_opacity = uintBitsToFloat(texelFetch(gaussian_texels, t));
+    g.rot = uintBitsToFloat(texelFetch(gaussian_texels, t + 1));
+    g.scale = uintBitsToFloat(texelFetch(gaussian_texels, t + 2));
+    return g;
+#else
+    return load_gaussian(gaussians, i);
+#endif
+}
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
 
 #define TRACE_K 16
 #define TRACE_STACK 64
-#define TRACE_BUDGET 8192u
+#define NO_LEAF 0xffffffffu
+#define NO_NODE 0xffffffffu
 
 // Ray flags.
 #define RAY_DONE 1u
@@ -31,21 +69,26 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 #define RAY_COMPOSITING 4u
 #define RAY_HAS_LAST 8u
 
-// Counter slots.
-#define TRACE_LIVE 0
-#define TRACE_WALKED 1
-#define TRACE_CAPPED 2
-#define TRACE_HITS 3
-#define TRACE_OVERFLOW 4
+// Counter slots (GpuTraceCounters on the host). Sums of counts that can pass 2^32 on a large
+// frame (node visits) are a low word and a carry word.
+#define TRACE_WALKED 0
+#define TRACE_CAPPED 1
+#define TRACE_FOUND 2
+#define TRACE_OVERFLOW 3
+#define TRACE_PASSES 4
+#define TRACE_VISITS_LO 5
+#define TRACE_VISITS_HI 6
 
-// A ray's state between dispatches (GpuRayState): colour and transmittance, the last hit's t,
-// and (last hit's index, hits walked, flags, stack pointer | k count << 8 | k position << 16).
-struct RayState {
-    vec4 colour_t;
-    vec4 last_t;
-    uvec4 info;
-};
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer RayStates { RayState v[]; };
+// Per-ray histograms of finished rays (HIST_* bins each; the last bin holds that many or
+// more): hits composited, hits found, traversal passes.
+#define HIST_BINS 1024u
+#define HIST_WALKED 0u
+#define HIST_FOUND HIST_BINS
+#define HIST_PASSES (2u * HIST_BINS)
+
+// A ray's state between rounds, three 16-byte words at ray * 48 (GpuRayState): (colour,
+// transmittance); (last hit's index, hits walked, flags, stack pointer | k count << 8 | k
+// position << 16); (last hit's t as float bits, hits found, passes, node visits).
 
 // The camera and image (GpuTraceParams).
 struct TraceParams {
@@ -54,28 +97,29 @@ struct TraceParams {
     vec4 down;
     vec4 forward;
     vec4 focal;         // fx, fy, cx, cy
-    vec4 background;
     uvec4 size;         // W, H, Gaussians, SH floats per Gaussian
     vec4 options;       // Q, max hits (as float), unused, unused
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer TraceParamsRef { TraceParams p; };
 
-
 layout(push_constant) uniform Push {
     TraceParamsRef params;
     Gaussians gaussians;
     ShCoefficients sh;
-    BvhNodes nodes;
-    RayStates rays;
-    U32s stacks;        // TRACE_STACK per ray
-    F32s k_t;           // TRACE_K per ray
+    BvhTree nodes;
+    U32s rays;          // per ray its state, 12 words
+    U32s stacks;        // TRACE_STACK entries per ray, entry k of ray r at k * rays + r
+    U32s k_t;           // TRACE_K per ray: t (float bits), Gaussian, alpha (float bits)
     U32s k_index;
-    F32s k_alpha;
-    U32s pixels;        // out: RGBA8 per pixel
+    U32s k_alpha;
+    Vec4s state;        // out: per pixel (premultiplied colour, transmittance)
     U32s counters;      // TRACE_* slots
+    U32s lists;         // two lists of live rays, `rays` entries each
+    U32s live;          // per round, the rays it left live (its list's length)
+    U32s histograms;    // HIST_* bins
     ClipParamsRef clip;
-    uint init;          // 1: set every ray up (first dispatch)
-    uint pad;
+    uint round;         // 0: every ray, set up; r > 0: the rays round r - 1 left live
+    uint budget;        // steps per ray in this round
 } pc;
 
 // The clip weight of hit (t, Gaussian g) on the ray e + t d whose visible intervals are spans
@@ -87,7 +131,7 @@ float clip_weight(ClipParams clip, vec4 spans, uint g, float t, vec3 e, vec3 d) 
     if (config.x == CLIP_MODE_NONE) {
         return 1.0;
     }
-    Gaussian gs = load_gaussian(pc.gaussians, g);
+    Gaussian gs = trace_gaussian(pc.gaussians, g);
     vec3 mu = gs.pos_opacity.xyz;
     if (config.x == CLIP_MODE_HARD) {
         return clip_signed_distance(clip, mu) >= 0.0 ? 1.0 : 0.0;
@@ -124,7 +168,7 @@ float clip_weight(ClipParams clip, vec4 spans, uint g, float t, vec3 e, vec3 d) 
 
 // Gaussian i's hit on the ray e + t d (unit d): (t, alpha), alpha 0 for none (SPEC section 7).
 vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d) {
-    Gaussian g = load_gaussian(pc.gaussians, i);
+    Gaussian g = trace_gaussian(pc.gaussians, i);
     vec3 mu = g.pos_opacity.xyz;
     float o = g.pos_opacity.w;
     // Primary rays skip what section 3 culls.
@@ -188,27 +232,45 @@ bool before(float t, uint i, float t2, uint i2) {
     return t < t2 || (t == t2 && i < i2);
 }
 
+// Adds v to the 64-bit sum in counters lo, lo + 1: the add that wraps the low word carries.
+void add_wide(uint lo, uint v) {
+    uint old = atomicAdd(pc.counters.v[lo], v);
+    if (old + v < old) {
+        atomicAdd(pc.counters.v[lo + 1u], 1u);
+    }
+}
+
 void main() {
     TraceParams f = pc.params.p;
-    uint ray = linear_index();
     uint w = f.size.x, h = f.size.y;
-    if (ray >= w * h) {
-        return;
-    }
-    uint stack_base = ray * uint(TRACE_STACK);
-    uint k_base = ray * uint(TRACE_K);
-    RayState st;
-    if (pc.init != 0u) {
-        st.colour_t = vec4(0.0, 0.0, 0.0, 1.0);
-        st.last_t = vec4(0.0);
-        st.info = uvec4(0u, 0u, 0u, 1u);   // one node on the stack: the root
-        pc.stacks.v[stack_base] = 0u;
+    uint rays = w * h;
+    uint item = linear_index();
+    uint ray;
+    if (pc.round == 0u) {
+        if (item >= rays) {
+            return;
+        }
+        ray = item;
     } else {
-        st = pc.rays.v[ray];
+        if (item >= pc.live.v[pc.round - 1u]) {
+            return;
+        }
+        ray = pc.lists.v[((pc.round - 1u) & 1u) * rays + item];
     }
-    uint flags = st.info.z;
-    if ((flags & RAY_DONE) != 0u) {
-        return;
+    uint64_t state_at = uint64_t(pc.rays) + 48ul * uint64_t(ray);
+    uint64_t k_at = 64ul * uint64_t(ray);
+    vec4 colour_t;
+    uvec4 info;
+    uvec4 more;
+    if (pc.round == 0u) {
+        colour_t = vec4(0.0, 0.0, 0.0, 1.0);
+        info = uvec4(0u, 0u, 0u, 1u);   // one node on the stack: the root
+        more = uvec4(0u);
+        pc.stacks.v[ray] = 0u;
+    } else {
+        colour_t = load_vec4(state_at);
+        info = load_uvec4(state_at + 16ul);
+        more = load_uvec4(state_at + 32ul);
     }
     // The pixel's ray (SPEC section 2).
     uvec2 px = uvec2(ray % w, ray / w);
@@ -236,165 +298,226 @@ void main() {
     uint max_hits = uint(f.options.y);
     uint leaves = f.size.z - 1u;
 
-    uint sp = st.info.w & 0xffu;
-    uint k_count = (st.info.w >> 8u) & 0xffu;
-    uint k_pos = (st.info.w >> 16u) & 0xffu;
-    uint walked = st.info.y;
-    uint last_index = st.info.x;
-    float last_t = st.last_t.x;
-    vec3 colour = st.colour_t.rgb;
-    float T = st.colour_t.a;
-    uint stack[TRACE_STACK];
-    for (uint k = 0u; k < sp; ++k) {
-        stack[k] = pc.stacks.v[stack_base + k];
+    uint flags = info.z;
+    if (f.size.z == 0u) {
+        flags |= RAY_DONE;  // no Gaussians, no tree: the background
     }
+    uint sp = info.w & 0xffu;
+    // The node the traversal visits next, if not the stack's top (saved on the stack between
+    // rounds).
+    uint node = NO_NODE;
+    uint k_count = (info.w >> 8u) & 0xffu;
+    uint k_pos = (info.w >> 16u) & 0xffu;
+    uint walked = info.y;
+    uint last_index = info.x;
+    float last_t = uintBitsToFloat(more.x);
+    uint found = more.y;
+    uint passes = more.z;
+    uint visits = more.w;
+    vec3 colour = colour_t.rgb;
+    float T = colour_t.a;
+    // The k-buffer, always whole: its entries are read and written by constant index only,
+    // so they stay in registers (a dynamic index sends an array to memory on lavapipe).
     float kt[TRACE_K];
     uint ki[TRACE_K];
     float ka[TRACE_K];
-    for (uint k = 0u; k < k_count; ++k) {
-        kt[k] = pc.k_t.v[k_base + k];
-        ki[k] = pc.k_index.v[k_base + k];
-        ka[k] = pc.k_alpha.v[k_base + k];
+    if (pc.round != 0u) {
+        [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
+            uvec4 t4 = load_uvec4(uint64_t(pc.k_t) + k_at + 16ul * q);
+            uvec4 i4 = load_uvec4(uint64_t(pc.k_index) + k_at + 16ul * q);
+            uvec4 a4 = load_uvec4(uint64_t(pc.k_alpha) + k_at + 16ul * q);
+            [[unroll]] for (uint c = 0u; c < 4u; ++c) {
+                kt[4u * q + c] = uintBitsToFloat(t4[c]);
+                ki[4u * q + c] = i4[c];
+                ka[4u * q + c] = uintBitsToFloat(a4[c]);
+            }
+        }
+    } else {
+        [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
+            kt[k] = 0.0;
+            ki[k] = 0u;
+            ka[k] = 0.0;
+        }
     }
-    uint hits = 0u;
+    uint found_now = 0u;
+    uint visits_now = 0u;
     uint steps = 0u;
-    while ((flags & RAY_DONE) == 0u && steps < TRACE_BUDGET) {
-        ++steps;
-        if ((flags & RAY_COMPOSITING) == 0u) {
-            if (sp == 0u) {
+    while ((flags & RAY_DONE) == 0u && steps < pc.budget) {
+        // A step is a node visit (or the end of a pass) or a composited hit. A CPU driver
+        // runs every branch under a mask, so the loop has three parts, each run by the lanes
+        // that need it together: the traversal runs until this ray has a leaf to test (or its
+        // pass ends), then the subgroup tests its leaves, then composites the passes that
+        // ended; the last two sit behind subgroup votes, skipped when no lane needs them
+        // (Aila and Laine's "while-while"; PERFORMANCE.md).
+        uint leaf = NO_LEAF;
+        while ((flags & RAY_COMPOSITING) == 0u && leaf == NO_LEAF && steps < pc.budget) {
+            ++steps;
+            // The node to visit: the near child the last visit went on to, else the stack's
+            // top (so a descent costs one stack write, for the far child, and no read).
+            if (node == NO_NODE && sp > 0u) {
+                --sp;
+                node = pc.stacks.v[sp * rays + ray];
+            }
+            if (node == NO_NODE) {
                 // The pass is over: composite what it found.
                 flags |= RAY_COMPOSITING;
                 k_pos = 0u;
+                ++passes;
                 if (k_count == 0u) {
                     flags |= RAY_DONE;
                 }
-                continue;
+            } else {
+                ++visits_now;
+                uvec4 w0, w1;
+                load_node(pc.nodes, node, w0, w1);
+                vec3 lo = uintBitsToFloat(w0.xyz);
+                vec3 hi = uintBitsToFloat(w1.xyz);
+                vec3 a0 = (lo - e) * inv_d;
+                vec3 a1 = (hi - e) * inv_d;
+                vec3 tmin = min(a0, a1);
+                vec3 tmax = max(a0, a1);
+                float t_in = max(max(tmin.x, max(tmin.y, tmin.z)), 0.0);
+                float t_out = min(tmax.x, min(tmax.y, tmax.z));
+                float slack = 1e-4 * (1.0 + abs(t_out));
+                bool enters = t_in <= t_out + slack && lo.x <= hi.x;
+                // Hits inside lie within the box's stretch of the ray.
+                if ((flags & RAY_HAS_LAST) != 0u && t_out + slack < last_t) {
+                    enters = false;
+                }
+                if (k_count == uint(TRACE_K) && t_in - slack > kt[TRACE_K - 1]) {
+                    enters = false;
+                }
+                bool inner = node < leaves;
+                node = NO_NODE;
+                if (enters && !inner) {
+                    leaf = w0.w;
+                } else if (enters && sp < uint(TRACE_STACK)) {
+                    // The child the ray meets first on the split's axis is visited first, so
+                    // the buffer fills front to back and the far child is culled by its
+                    // worst entry.
+                    uint axis = w1.w >> BVH_AXIS_SHIFT;
+                    uint right = w1.w & BVH_CHILD_MASK;
+                    bool right_first = axis < 3u && d[min(axis, 2u)] < 0.0;
+                    pc.stacks.v[sp * rays + ray] = right_first ? w0.w : right;
+                    ++sp;
+                    node = right_first ? right : w0.w;
+                } else if (enters) {
+                    // Cannot happen (depth <= 63 keeps at most 63 entries): counted, never
+                    // silent.
+                    atomicAdd(pc.counters.v[TRACE_OVERFLOW], 1u);
+                }
             }
-            uint node = stack[--sp];
-            BvhNode b = pc.nodes.v[node];
-            vec3 a0 = (b.lo - e) * inv_d;
-            vec3 a1 = (b.hi - e) * inv_d;
-            vec3 tmin = min(a0, a1);
-            vec3 tmax = max(a0, a1);
-            float t_in = max(max(tmin.x, max(tmin.y, tmin.z)), 0.0);
-            float t_out = min(tmax.x, min(tmax.y, tmax.z));
-            float slack = 1e-4 * (1.0 + abs(t_out));
-            bool enters = t_in <= t_out + slack;
-            // Hits inside lie within the box's stretch of the ray.
-            if ((flags & RAY_HAS_LAST) != 0u && t_out + slack < last_t) {
-                enters = false;
-            }
-            if (k_count == uint(TRACE_K) && t_in - slack > kt[TRACE_K - 1]) {
-                enters = false;
-            }
-            if (!enters || b.lo.x > b.hi.x) {
-                continue;
-            }
-            if (node >= leaves) {
-                uint g = b.left;
-                vec2 hit = gaussian_hit(f, g, e, d);
-                bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
-                bool room = k_count < uint(TRACE_K) || before(hit.x, g, kt[TRACE_K - 1], ki[TRACE_K - 1]);
-                if (hit.y > 0.0 && after && room) {
-                    ++hits;
-                    // Sorted insertion: the new entry takes the last slot (the worst's, when
-                    // the buffer is full) and moves down past every larger one. Unrolled, with
-                    // fixed indices: no loop iterations against the cap, the arrays stay in
-                    // registers.
-                    uint p0 = min(k_count, uint(TRACE_K - 1));
-                    k_count = min(k_count + 1u, uint(TRACE_K));
-                    [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
-                        if (k == p0) {
-                            kt[k] = hit.x;
-                            ki[k] = g;
-                            ka[k] = hit.y;
-                        }
-                    }
-                    [[unroll]] for (int k = TRACE_K - 1; k > 0; --k) {
-                        if (uint(k) <= p0 && before(kt[k], ki[k], kt[k - 1], ki[k - 1])) {
-                            float tt = kt[k]; kt[k] = kt[k - 1]; kt[k - 1] = tt;
-                            uint ti = ki[k]; ki[k] = ki[k - 1]; ki[k - 1] = ti;
-                            float ta = ka[k]; ka[k] = ka[k - 1]; ka[k - 1] = ta;
-                        }
+        }
+        if (subgroupAny(leaf != NO_LEAF) && leaf != NO_LEAF) {
+            uint g = leaf;
+            vec2 hit = gaussian_hit(f, g, e, d);
+            bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
+            bool room = k_count < uint(TRACE_K) || before(hit.x, g, kt[TRACE_K - 1], ki[TRACE_K - 1]);
+            if (hit.y > 0.0 && after && room) {
+                ++found_now;
+                // Sorted insertion: the new entry takes the last slot (the worst's, when the
+                // buffer is full) and moves down past every larger one. Unrolled, with fixed
+                // indices: no loop iterations against the cap, the arrays stay in registers.
+                uint p0 = min(k_count, uint(TRACE_K - 1));
+                k_count = min(k_count + 1u, uint(TRACE_K));
+                [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
+                    if (k == p0) {
+                        kt[k] = hit.x;
+                        ki[k] = g;
+                        ka[k] = hit.y;
                     }
                 }
-            } else if (sp + 2u <= uint(TRACE_STACK)) {
-                stack[sp++] = b.right;
-                stack[sp++] = b.left;
-            } else {
-                // Cannot happen (depth <= 63 keeps at most 64 entries): counted, never silent.
-                atomicAdd(pc.counters.v[TRACE_OVERFLOW], 1u);
+                [[unroll]] for (int k = TRACE_K - 1; k > 0; --k) {
+                    if (uint(k) <= p0 && before(kt[k], ki[k], kt[k - 1], ki[k - 1])) {
+                        float tt = kt[k]; kt[k] = kt[k - 1]; kt[k - 1] = tt;
+                        uint ti = ki[k]; ki[k] = ki[k - 1]; ki[k - 1] = ti;
+                        float ta = ka[k]; ka[k] = ka[k - 1]; ka[k - 1] = ta;
+                    }
+                }
             }
-            continue;
         }
-        // Compositing the pass's hits in order (SPEC section 4's rule).
-        if (k_pos == k_count) {
-            if (k_count < uint(TRACE_K)) {
-                flags |= RAY_DONE;  // the pass found every hit there was
+        bool compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
+        while (subgroupAny(compositing) && compositing && steps < pc.budget) {
+            ++steps;
+            // Compositing the pass's hits in order (SPEC section 4's rule).
+            if (k_pos == k_count) {
+                if (k_count < uint(TRACE_K)) {
+                    flags |= RAY_DONE;  // the pass found every hit there was
+                } else {
+                    flags &= ~RAY_COMPOSITING;
+                    k_count = 0u;
+                    node = 0u;
+                }
+            } else if (walked == max_hits) {
+                flags |= RAY_DONE | RAY_CAPPED;
             } else {
-                flags &= ~RAY_COMPOSITING;
-                k_count = 0u;
-                sp = 1u;
-                stack[0] = 0u;
+                ++walked;
+                // Entry k_pos by fixed indices (selects), not a dynamic index into the arrays.
+                uint g = 0u;
+                float hit_t = 0.0;
+                float hit_alpha = 0.0;
+                [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
+                    bool at = k == k_pos;
+                    g = at ? ki[k] : g;
+                    hit_t = at ? kt[k] : hit_t;
+                    hit_alpha = at ? ka[k] : hit_alpha;
+                }
+                float alpha = hit_alpha * clip_weight(clip, spans, g, hit_t, e, d);
+                last_t = hit_t;
+                last_index = g;
+                flags |= RAY_HAS_LAST;
+                ++k_pos;
+                if (alpha >= 1.0 / 255.0) {
+                    float next_t = T * (1.0 - alpha);
+                    if (next_t < 1e-4) {
+                        flags |= RAY_DONE;
+                    } else {
+                        vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
+                        colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
+                        T = next_t;
+                    }
+                }
             }
-            continue;
+            compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
         }
-        if (walked == max_hits) {
-            flags |= RAY_DONE | RAY_CAPPED;
-            continue;
-        }
-        ++walked;
-        // Entry k_pos by fixed indices (selects), not a dynamic index into the arrays.
-        uint g = 0u;
-        float hit_t = 0.0;
-        float hit_alpha = 0.0;
-        [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
-            bool at = k == k_pos;
-            g = at ? ki[k] : g;
-            hit_t = at ? kt[k] : hit_t;
-            hit_alpha = at ? ka[k] : hit_alpha;
-        }
-        float alpha = hit_alpha * clip_weight(clip, spans, g, hit_t, e, d);
-        last_t = hit_t;
-        last_index = g;
-        flags |= RAY_HAS_LAST;
-        ++k_pos;
-        if (alpha < 1.0 / 255.0) {
-            continue;
-        }
-        float next_t = T * (1.0 - alpha);
-        if (next_t < 1e-4) {
-            flags |= RAY_DONE;
-            continue;
-        }
-        vec3 mu = load_gaussian(pc.gaussians, g).pos_opacity.xyz;
-        colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
-        T = next_t;
     }
-    if (hits > 0u) {
-        atomicAdd(pc.counters.v[TRACE_HITS], hits);
+    found += found_now;
+    visits += visits_now;
+    if (found_now > 0u) {
+        atomicAdd(pc.counters.v[TRACE_FOUND], found_now);
     }
+    add_wide(TRACE_VISITS_LO, visits_now);
+    // The pixel's (C, T) after every round, so that a frame cut short by its rounds still
+    // shows what its rays composited so far.
+    store_vec4_item(pc.state, ray, vec4(colour, T));
     if ((flags & RAY_DONE) != 0u) {
-        vec3 c = clamp(colour + T * f.background.rgb, 0.0, 1.0);
-        uvec3 q = uvec3(round(c * 255.0));
-        pc.pixels.v[ray] = q.r | (q.g << 8u) | (q.b << 16u) | (255u << 24u);
         atomicAdd(pc.counters.v[TRACE_WALKED], walked);
+        atomicAdd(pc.counters.v[TRACE_PASSES], passes);
         if ((flags & RAY_CAPPED) != 0u) {
             atomicAdd(pc.counters.v[TRACE_CAPPED], 1u);
         }
-    } else {
-        atomicAdd(pc.counters.v[TRACE_LIVE], 1u);
+        atomicAdd(pc.histograms.v[HIST_WALKED + min(walked, HIST_BINS - 1u)], 1u);
+        atomicAdd(pc.histograms.v[HIST_FOUND + min(found, HIST_BINS - 1u)], 1u);
+        atomicAdd(pc.histograms.v[HIST_PASSES + min(passes, HIST_BINS - 1u)], 1u);
+        return;
     }
-    st.colour_t = vec4(colour, T);
-    st.last_t = vec4(last_t, 0.0, 0.0, 0.0);
-    st.info = uvec4(last_index, walked, flags, sp | (k_count << 8u) | (k_pos << 16u));
-    pc.rays.v[ray] = st;
-    for (uint k = 0u; k < sp; ++k) {
-        pc.stacks.v[stack_base + k] = stack[k];
+    // Still live: onto the next round's list, with its state (the node it was going on to
+    // back on its stack).
+    if (node != NO_NODE) {
+        pc.stacks.v[sp * rays + ray] = node;
+        ++sp;
     }
-    for (uint k = 0u; k < k_count; ++k) {
-        pc.k_t.v[k_base + k] = kt[k];
-        pc.k_index.v[k_base + k] = ki[k];
-        pc.k_alpha.v[k_base + k] = ka[k];
+    uint at = atomicAdd(pc.live.v[pc.round], 1u);
+    pc.lists.v[(pc.round & 1u) * rays + at] = ray;
+    store_vec4(state_at, vec4(colour, T));
+    store_uvec4(state_at + 16ul, uvec4(last_index, walked, flags, sp | (k_count << 8u) | (k_pos << 16u)));
+    store_uvec4(state_at + 32ul, uvec4(floatBitsToUint(last_t), found, passes, visits));
+    [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
+        store_uvec4(uint64_t(pc.k_t) + k_at + 16ul * q,
+                    floatBitsToUint(vec4(kt[4u * q], kt[4u * q + 1u], kt[4u * q + 2u], kt[4u * q + 3u])));
+        store_uvec4(uint64_t(pc.k_index) + k_at + 16ul * q,
+                    uvec4(ki[4u * q], ki[4u * q + 1u], ki[4u * q + 2u], ki[4u * q + 3u]));
+        store_uvec4(uint64_t(pc.k_alpha) + k_at + 16ul * q,
+                    floatBitsToUint(vec4(ka[4u * q], ka[4u * q + 1u], ka[4u * q + 2u], ka[4u * q + 3u])));
     }
 }

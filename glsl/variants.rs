@@ -585,4 +585,84 @@ const VARIANTS: &[Variant] = &[
             "(see trace_body.glsl).",
         ],
     },
+    Variant {
+        name: "trace_deg0_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as 32-bit floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg0_sh16_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as half floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as 32-bit floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1_sh16_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as half floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as 32-bit floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2_sh16_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as half floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as 32-bit floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3_sh16_texels",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "SCENE_TEXELS"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as half floats, reading",
+            "the BVH, the Gaussians and the coefficients through texel views (CPU drivers; see",
+            "trace_body.glsl).",
+        ],
+    },
 ];

@@ -16,6 +16,7 @@ use crate::stages::cutoff_tiles::CUTOFF_PAIRS_OFFSET;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_lists::TileListsLayout;
+use crate::stages::trace::{RayTracer, TraceBuffers, FIRST_TRACE_ROUNDS, MAX_TRACE_ROUNDS};
 use crate::stages::write_target::image_target_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
 use crate::timing::PassTiming;
@@ -52,6 +53,12 @@ pub struct FrameSlot {
     recorded: Option<(u64, u32)>,
     image_set: Option<ImageTargetSet>,
     frame_texels: Option<FrameTexelsSet>,
+    /// The ray tracer's buffers, made by its first frame ([`crate::Tracer::Ray`]).
+    pub(crate) trace: Option<TraceBuffers>,
+    /// Rounds the ray tracer's next frame records (at least).
+    trace_rounds: u32,
+    /// Rounds the last recorded frame had, when it was ray traced.
+    recorded_trace: Option<u32>,
 }
 
 /// The device memory of a [`FrameSlot`], grouped by what it scales with: the per-frame
@@ -76,6 +83,13 @@ pub struct FrameMemory {
     pub per_pixel: u64,
     /// Parameters and counters.
     pub fixed: u64,
+    /// The ray tracer's BVH ([`crate::Tracer::Ray`] frames): per Gaussian its proxy box
+    /// (32 B), Morton sort (16 B and histograms) and leaf node (32 B), per inner node 32 B,
+    /// per node its parent (4 B), per inner node an arrival count (4 B).
+    pub bvh: u64,
+    /// The ray tracer's per-ray buffers: state (48 B), stack (256 B), k-buffer (192 B),
+    /// pixel state (16 B) and live lists (8 B), 520 B per ray.
+    pub trace_per_ray: u64,
 }
 
 impl FrameMemory {
@@ -86,6 +100,8 @@ impl FrameMemory {
             + self.per_intersection
             + self.per_pixel
             + self.fixed
+            + self.bvh
+            + self.trace_per_ray
     }
 }
 
@@ -183,6 +199,9 @@ impl FrameSlot {
             recorded: None,
             image_set: None,
             frame_texels: None,
+            trace: None,
+            trace_rounds: FIRST_TRACE_ROUNDS,
+            recorded_trace: None,
         })
     }
 
@@ -221,6 +240,11 @@ impl FrameSlot {
             m.intersection_capacity = r.capacity;
             m.per_pixel = r.ranges.size + r.tile_lists.size + r.state.size;
         }
+        if let Some(t) = &self.trace {
+            m.bvh = t.bvh_bytes();
+            m.trace_per_ray = t.per_ray_bytes();
+            m.fixed += t.fixed_bytes();
+        }
         m
     }
 
@@ -228,6 +252,18 @@ impl FrameSlot {
     /// that holds the frame has completed (e.g. after waiting on its fence). `passes` and the
     /// times are left empty: they live in the caller's [`crate::timing::PassTimer`].
     pub fn stats(&mut self) -> Result<FrameStats> {
+        if let (Some(rounds), Some(t)) = (self.recorded_trace, &self.trace) {
+            let trace = t.stats(rounds);
+            let complete = trace.unfinished == 0;
+            if !complete {
+                self.trace_rounds = (rounds * 4).min(MAX_TRACE_ROUNDS);
+            }
+            return Ok(FrameStats {
+                complete,
+                trace: Some(trace),
+                ..FrameStats::default()
+            });
+        }
         let counters: Vec<u32> = bytemuck::pod_collect_to_vec(
             &self.counters_readback.mapped()[..COUNTER_SLOTS as usize * 4],
         );
@@ -259,6 +295,29 @@ impl FrameSlot {
             complete,
             ..FrameStats::default()
         })
+    }
+
+    /// Makes the ray tracer's buffers fit a frame of `(width, height)` over `gaussians`
+    /// Gaussians; returns them and the rounds the frame gets. The slot then counts as holding
+    /// a ray-traced frame.
+    pub(crate) fn prepare_trace(
+        &mut self,
+        tracer: &RayTracer,
+        size: (u32, u32),
+        gaussians: u32,
+    ) -> Result<(&mut TraceBuffers, u32)> {
+        if self.recorded_trace.is_some() {
+            // The previous frame has completed (the slot's contract): learn whether it needed
+            // more rounds.
+            self.stats()?;
+        }
+        if !self.trace.as_ref().is_some_and(|t| t.fits(size, gaussians)) {
+            self.trace = None; // free the old buffers first
+            self.trace = Some(TraceBuffers::new(tracer, &self.ctx, size, gaussians)?);
+        }
+        self.recorded = None;
+        self.recorded_trace = Some(self.trace_rounds);
+        Ok((self.trace.as_mut().expect("made above"), self.trace_rounds))
     }
 
     /// Makes the buffers fit a frame of `(width, height)` and `gaussians` Gaussians (with the
@@ -369,6 +428,7 @@ impl FrameSlot {
             )?);
         }
         self.recorded = Some((capacity, self.rounds));
+        self.recorded_trace = None;
         Ok((capacity, self.rounds))
     }
 

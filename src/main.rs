@@ -343,15 +343,21 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     output.write_png(&img)?;
     if let Some(t) = &stats.trace {
         println!(
-            "wrote {} ({}x{}) on {}: ray traced, {:.1} hits walked per ray, {} capped at 512, \
-             {} dispatches, {:.0} ms wall (BVH build included)",
+            "wrote {} ({}x{}) on {}: ray traced, per ray {:.1} hits composited (p99 {}), {:.1} \
+             found, {:.2} passes, {:.0} nodes visited; {} capped at {}, {} rounds, {:.0} ms wall \
+             (BVH build included)",
             args.output.display(),
             camera.width,
             camera.height,
             ctx.info().name,
-            t.hits_walked as f64 / t.rays.max(1) as f64,
+            t.walked_per_ray(),
+            t.p99_walked,
+            t.found_per_ray(),
+            t.passes_per_ray(),
+            t.visits_per_ray(),
             t.capped,
-            t.dispatches,
+            rara::reference::raytrace::RayTraceOptions::default().max_hits,
+            t.rounds,
             stats.wall_ms
         );
         return Ok(());

@@ -25,6 +25,7 @@ use crate::stages::rasterize::{RasterLayout, Rasterize};
 use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
 use crate::stages::tile_ranges::TileRanges;
+use crate::stages::trace::RayTracer;
 use crate::stages::write_target::WriteTarget;
 use crate::stages::{FrameAddresses, FrameRecording, FrameTexelsLayout};
 use crate::target::{Composite, Target, TargetFormat};
@@ -110,7 +111,7 @@ pub struct Renderer {
     /// The slot and rgba8 image (+ host copy) of the headless path, [`Renderer::render`].
     headless: Option<HeadlessFrame>,
     /// The ray tracer, made on the first frame that asks for it.
-    ray_tracer: Option<crate::stages::trace::RayTracer>,
+    ray_tracer: std::sync::OnceLock<RayTracer>,
     /// The layout of the frame's texel views, for the kernels that read through them (with the
     /// strips rasterizer, i.e. on CPU drivers).
     _frame_texels_layout: Option<FrameTexelsLayout>,
@@ -162,7 +163,7 @@ impl Renderer {
             write_target: WriteTarget::new(ctx, texels)?,
             timer: PassTimer::new(ctx)?,
             headless: None,
-            ray_tracer: None,
+            ray_tracer: std::sync::OnceLock::new(),
             _frame_texels_layout: frame_texels_layout,
         })
     }
@@ -226,9 +227,6 @@ impl Renderer {
         options: &RenderOptions,
     ) -> Result<(image::RgbaImage, FrameStats)> {
         camera.validate()?;
-        if options.tracer == Tracer::Ray {
-            return self.render_ray(scene, camera, options);
-        }
         let (w, h) = (camera.width, camera.height);
         let mut headless = match self.headless.take() {
             Some(h) => h,
@@ -242,28 +240,13 @@ impl Renderer {
         result
     }
 
-    /// A headless frame of the ray tracer, its counts in [`FrameStats::trace`].
-    fn render_ray(
-        &mut self,
-        scene: &GpuScene,
-        camera: &Camera,
-        options: &RenderOptions,
-    ) -> Result<(image::RgbaImage, FrameStats)> {
-        options.clip.validate()?;
-        if self.ray_tracer.is_none() {
-            self.ray_tracer = Some(crate::stages::trace::RayTracer::new(&self.ctx)?);
+    /// The ray tracer's kernels, built by the first frame that asks for them.
+    fn ray_tracer(&self) -> Result<&RayTracer> {
+        if let Some(t) = self.ray_tracer.get() {
+            return Ok(t);
         }
-        let tracer = self.ray_tracer.as_ref().expect("made above");
-        let start = std::time::Instant::now();
-        let rt = crate::reference::raytrace::RayTraceOptions::default();
-        let (img, trace) = tracer.render(&self.ctx, scene, camera, options, &rt)?;
-        let stats = FrameStats {
-            complete: true,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-            trace: Some(trace),
-            ..FrameStats::default()
-        };
-        Ok((img, stats))
+        let tracer = RayTracer::new(&self.ctx)?;
+        Ok(self.ray_tracer.get_or_init(|| tracer))
     }
 
     fn render_headless(
@@ -414,37 +397,19 @@ impl Renderer {
     ) -> Result<()> {
         camera.validate()?;
         options.clip.validate()?;
-        if options.tracer == Tracer::Ray {
-            return Err(Error::InvalidInput(
-                "the ray tracer renders headless only so far (Renderer::render); recording it \
-                 into a command buffer is not written yet"
-                    .into(),
-            ));
-        }
         let (w, h) = (camera.width, camera.height);
-        if target.size() != (w, h) {
-            return Err(Error::InvalidInput(format!(
-                "the target is {}x{} but the camera renders {w}x{h}",
-                target.size().0,
-                target.size().1
-            )));
+        let buffer_target = self.buffer_target_address(target, (w, h))?;
+        if options.tracer == Tracer::Ray {
+            return self.record_trace(
+                cmd,
+                slot,
+                scene,
+                camera,
+                options,
+                (target, buffer_target),
+                timings,
+            );
         }
-        let buffer_target = match *target {
-            Target::Buffer { buffer, offset, .. } => {
-                if offset % 4 != 0 {
-                    return Err(Error::InvalidInput(format!(
-                        "a buffer target's offset must be a multiple of 4, not {offset}"
-                    )));
-                }
-                let base = unsafe {
-                    self.ctx.device().get_buffer_device_address(
-                        &vk::BufferDeviceAddressInfo::default().buffer(buffer),
-                    )
-                };
-                base + offset
-            }
-            Target::Image { .. } => 0,
-        };
         let (gx, gy) = tile_grid(w, h);
         let rara = options.clip.effective_mode() == ClipMode::Rara;
         self.rasterize.check_scene(&self.ctx, scene)?;
@@ -606,6 +571,110 @@ impl Renderer {
     }
 }
 
+impl Renderer {
+    /// Checks that `target` is `size` and returns a buffer target's device address (0 for an
+    /// image target).
+    fn buffer_target_address(&self, target: &Target, (w, h): (u32, u32)) -> Result<u64> {
+        if target.size() != (w, h) {
+            return Err(Error::InvalidInput(format!(
+                "the target is {}x{} but the camera renders {w}x{h}",
+                target.size().0,
+                target.size().1
+            )));
+        }
+        Ok(match *target {
+            Target::Buffer { buffer, offset, .. } => {
+                if offset % 4 != 0 {
+                    return Err(Error::InvalidInput(format!(
+                        "a buffer target's offset must be a multiple of 4, not {offset}"
+                    )));
+                }
+                let base = unsafe {
+                    self.ctx.device().get_buffer_device_address(
+                        &vk::BufferDeviceAddressInfo::default().buffer(buffer),
+                    )
+                };
+                base + offset
+            }
+            Target::Image { .. } => 0,
+        })
+    }
+
+    /// [`Renderer::record`] of a ray-traced frame ([`Tracer::Ray`]): the BVH build and the
+    /// tracer's rounds ([`RayTracer::record`]) into the slot's trace buffers, then the
+    /// write-target pass, under the same synchronisation contract. A frame whose rays needed
+    /// more rounds than the slot recorded shows what they composited so far and is reported
+    /// with [`FrameStats::complete`] `== false`; the slot records more rounds from its next
+    /// frame.
+    #[allow(clippy::too_many_arguments)]
+    fn record_trace(
+        &self,
+        cmd: vk::CommandBuffer,
+        slot: &mut FrameSlot,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        (target, buffer_target): (&Target, u64),
+        timings: Option<&mut PassTimer>,
+    ) -> Result<()> {
+        let tracer = self.ray_tracer()?;
+        let (w, h) = (camera.width, camera.height);
+        let image_set = match *target {
+            Target::Image { view, .. } => Some(slot.image_target_set(view)?),
+            Target::Buffer { .. } => None,
+        };
+        let (bufs, rounds) = slot.prepare_trace(tracer, (w, h), scene.len())?;
+        let ctx = &self.ctx;
+        let mut labels_only;
+        let timer: &mut PassTimer = match timings {
+            Some(t) => t,
+            None => {
+                labels_only = PassTimer::labels_only(ctx);
+                &mut labels_only
+            }
+        };
+        timer.begin_frame(cmd);
+        let trace_options = crate::reference::raytrace::RayTraceOptions::default();
+        tracer.record(
+            ctx,
+            cmd,
+            timer,
+            bufs,
+            scene,
+            camera,
+            &options.clip,
+            &trace_options,
+            0..rounds,
+        )?;
+        let mut rec = FrameRecording {
+            ctx,
+            cmd,
+            timer,
+            texels: None,
+            at: FrameAddresses {
+                params: 0,
+                clip: 0,
+                counters: 0,
+                splats: 0,
+                tiles_touched: 0,
+                slots: 0,
+                cutoffs: 0,
+                ranges: 0,
+                state: bufs.state.address,
+            },
+            size: (w, h),
+            grid: tile_grid(w, h),
+        };
+        self.write_target.record(
+            &mut rec,
+            (target.format(), image_set, buffer_target),
+            options.background,
+            options.composite,
+        );
+        Ok(())
+    }
+}
+
 /// The frame's `FrameParams`: the camera, the image and its tiles, the scene's size and the
 /// pair capacity of the frame's buffers.
 fn frame_params(
@@ -647,29 +716,52 @@ fn copy_to_host(
     readback: &Buffer,
     bytes: u64,
 ) {
+    copy_regions_to_host(ctx, cmd, &[(source, 0, bytes)], readback);
+}
+
+/// [`copy_to_host`] of several whole buffers, each to its offset in `readback`.
+pub(crate) fn copy_parts_to_host(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    parts: &[(&Buffer, u64)],
+    readback: &Buffer,
+) {
+    let regions: Vec<(&Buffer, u64, u64)> = parts.iter().map(|&(b, at)| (b, at, b.size)).collect();
+    copy_regions_to_host(ctx, cmd, &regions, readback);
+}
+
+/// Copies `(source, offset in readback, bytes)` regions, with the barriers of [`copy_to_host`].
+fn copy_regions_to_host(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    regions: &[(&Buffer, u64, u64)],
+    readback: &Buffer,
+) {
     let device = ctx.device();
     let to_transfer = vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
         .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
     let to_host = vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
         .dst_access_mask(vk::AccessFlags::HOST_READ);
-    let region = [vk::BufferCopy {
-        src_offset: 0,
-        dst_offset: 0,
-        size: bytes,
-    }];
     unsafe {
         device.cmd_pipeline_barrier(
             cmd,
-            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
             vk::PipelineStageFlags::TRANSFER,
             vk::DependencyFlags::empty(),
             &[to_transfer],
             &[],
             &[],
         );
-        device.cmd_copy_buffer(cmd, source.raw, readback.raw, &region);
+        for &(source, at, bytes) in regions {
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: at,
+                size: bytes,
+            }];
+            device.cmd_copy_buffer(cmd, source.raw, readback.raw, &region);
+        }
         device.cmd_pipeline_barrier(
             cmd,
             vk::PipelineStageFlags::TRANSFER,

@@ -52,6 +52,10 @@ pub struct BenchArgs {
     /// Weight, band and fixed clip planes for the rara (and hard) modes.
     #[command(flatten)]
     clip: ClipArgs,
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7), each mode then also
+    /// drawn by the rasterizer, taking turns, for the ratio of their frame times in one run.
+    #[arg(long, value_enum, default_value_t = crate::TracerArg::Raster)]
+    tracer: crate::TracerArg,
 }
 
 /// A benchmark mode of the paper's Table 1.
@@ -78,10 +82,19 @@ impl BenchMode {
 /// What one mode measured.
 struct ModeResult {
     mode: BenchMode,
+    tracer: rara::Tracer,
     frames: Vec<FrameStats>,
 }
 
 impl ModeResult {
+    /// The row's name: the mode, "ray " before it for the ray tracer.
+    fn name(&self) -> String {
+        match self.tracer {
+            rara::Tracer::Raster => self.mode.name().to_string(),
+            rara::Tracer::Ray => format!("ray {}", self.mode.name()),
+        }
+    }
+
     fn gpu(&self) -> Vec<f64> {
         self.frames.iter().map(|f| f.gpu_ms).collect()
     }
@@ -201,7 +214,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         normal.y,
         normal.z
     );
-    let total = (args.frames + args.warmup) as u64 * args.modes.len() as u64;
+    let tracers: &[rara::Tracer] = match args.tracer {
+        crate::TracerArg::Raster => &[rara::Tracer::Raster],
+        crate::TracerArg::Ray => &[rara::Tracer::Raster, rara::Tracer::Ray],
+    };
+    let total = (args.frames + args.warmup) as u64 * (args.modes.len() * tracers.len()) as u64;
     let bar = ProgressBar::new(total)
         .with_style(
             ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap(),
@@ -210,12 +227,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // The modes take turns frame by frame (every mode renders plane position k before any
     // renders k + 1): on a shared or throttling machine, speed drifts over a run, and taking
     // turns lets the drift hit every mode alike instead of whichever ran last.
-    let mut results: Vec<ModeResult> = args
-        .modes
+    let mut results: Vec<ModeResult> = tracers
         .iter()
-        .map(|&mode| ModeResult {
-            mode,
-            frames: Vec::new(),
+        .flat_map(|&tracer| {
+            args.modes.iter().map(move |&mode| ModeResult {
+                mode,
+                tracer,
+                frames: Vec::new(),
+            })
         })
         .collect();
     for k in 0..args.warmup + args.frames {
@@ -228,9 +247,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         };
         let moving = Plane::new(normal, d0 + (d1 - d0) * t)?;
         for result in &mut results {
-            bar.set_message(result.mode.name());
+            bar.set_message(result.name());
             let options = RenderOptions {
                 clip: clip_for(result.mode, &base, moving),
+                tracer: result.tracer,
                 ..RenderOptions::default()
             };
             let (_, stats) = renderer.render(&gpu_scene, &camera, &options)?;
@@ -301,7 +321,7 @@ fn print_table(
         }
     }
     print!(
-        "| {:<8} | {:>10} | {:>10} | {:>10} | {:>6} | {:>9} |",
+        "| {:<12} | {:>10} | {:>10} | {:>10} | {:>6} | {:>9} |",
         "mode", "median ms", "mean ms", "wall ms", "FPS", "cutoff"
     );
     for g in &groups {
@@ -313,21 +333,20 @@ fn print_table(
         print!("---|");
     }
     println!();
-    let original = results
-        .iter()
-        .find(|r| r.mode == BenchMode::Original)
-        .map(|r| median(&mut r.gpu()));
-    let hard = results
-        .iter()
-        .find(|r| r.mode == BenchMode::Hard)
-        .map(|r| median(&mut r.gpu()));
+    let raster = |mode| {
+        results
+            .iter()
+            .find(|r| r.mode == mode && r.tracer == rara::Tracer::Raster)
+    };
+    let original = raster(BenchMode::Original).map(|r| median(&mut r.gpu()));
+    let hard = raster(BenchMode::Hard).map(|r| median(&mut r.gpu()));
     for r in results {
         let med = median(&mut r.gpu());
         let wall = median(&mut r.wall());
         let cutoff = mean(&r.frames.iter().map(|f| f.cutoff as f64).collect::<Vec<_>>());
         print!(
-            "| {:<8} | {:>10.1} | {:>10.1} | {:>10.1} | {:>6.2} | {:>9.0} |",
-            r.mode.name(),
+            "| {:<12} | {:>10.1} | {:>10.1} | {:>10.1} | {:>6.2} | {:>9.0} |",
+            r.name(),
             med,
             mean(&r.gpu()),
             wall,
@@ -346,13 +365,14 @@ fn print_table(
     if let (Some(o), Some(h)) = (original, hard) {
         println!("hard / original (median GPU): {:.3}", h / o);
     }
-    if let (Some(h), Some(r)) = (hard, results.iter().find(|r| r.mode == BenchMode::Rara)) {
+    if let (Some(h), Some(r)) = (hard, raster(BenchMode::Rara)) {
         println!("rara / hard (median GPU): {:.3}", median(&mut r.gpu()) / h);
     }
     if let Some(paired) = paired_ratio(results, BenchMode::Rara, BenchMode::Hard) {
         println!("rara / hard, median of the per-frame ratios (same plane position): {paired:.3}");
     }
-    if let Some(r) = results.iter().find(|r| r.mode == BenchMode::Rara) {
+    print_trace_table(results);
+    if let Some(r) = raster(BenchMode::Rara) {
         let sum = |f: fn(&FrameStats) -> u32| r.frames.iter().map(|x| f(x) as f64).sum::<f64>();
         let all = sum(|f| f.cutoff_pairs);
         if all > 0.0 {
@@ -381,10 +401,126 @@ fn print_table(
     }
 }
 
+/// The ray tracer's medians over a mode's frames (`bench --tracer ray`).
+struct TraceSummary {
+    bvh_ms: f64,
+    trace_ms: f64,
+    rays_per_s: f64,
+    walked: f64,
+    p99_walked: f64,
+    found: f64,
+    passes: f64,
+    p99_passes: f64,
+    visits: f64,
+    rounds: f64,
+}
+
+impl ModeResult {
+    /// The ray tracer's medians, for a ray-traced mode.
+    fn trace_summary(&self) -> Option<TraceSummary> {
+        if self.tracer != rara::Tracer::Ray {
+            return None;
+        }
+        let pass = |name: &str| {
+            let mut v: Vec<f64> = self
+                .frames
+                .iter()
+                .map(|f| {
+                    f.passes
+                        .iter()
+                        .filter(|p| p.name == name)
+                        .map(|p| p.ms)
+                        .sum()
+                })
+                .collect();
+            median(&mut v)
+        };
+        let per = |f: &dyn Fn(&rara::stages::trace::TraceFrameStats) -> f64| {
+            let mut v: Vec<f64> = self
+                .frames
+                .iter()
+                .filter_map(|x| x.trace.as_ref())
+                .map(f)
+                .collect();
+            median(&mut v)
+        };
+        let trace_ms = pass("trace");
+        Some(TraceSummary {
+            bvh_ms: pass("bvh build"),
+            trace_ms,
+            rays_per_s: per(&|t| t.rays as f64) / (trace_ms / 1e3),
+            walked: per(&|t| t.walked_per_ray()),
+            p99_walked: per(&|t| t.p99_walked as f64),
+            found: per(&|t| t.found_per_ray()),
+            passes: per(&|t| t.passes_per_ray()),
+            p99_passes: per(&|t| t.p99_passes as f64),
+            visits: per(&|t| t.visits_per_ray()),
+            rounds: per(&|t| t.rounds as f64),
+        })
+    }
+}
+
+/// The ray tracer's table: per ray-traced mode, its BVH build and traversal times, rays per
+/// second, hits and passes per ray, and its frame time over the rasterizer's in this run.
+fn print_trace_table(results: &[ModeResult]) {
+    let rows: Vec<(&ModeResult, TraceSummary)> = results
+        .iter()
+        .filter_map(|r| r.trace_summary().map(|t| (r, t)))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    println!(
+        "| {:<12} | {:>9} | {:>9} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>9} | {:>6} | {:>10} |",
+        "ray tracer", "bvh ms", "trace ms", "Mrays/s", "hits/ray", "hits p99", "found", "passes", "pass p99", "nodes/ray", "rounds", "ray/raster"
+    );
+    println!("|{}|", ["---"; 12].join("|"));
+    for (r, t) in rows {
+        let ratio = paired_tracer_ratio(results, r.mode);
+        println!(
+            "| {:<12} | {:>9.1} | {:>9.1} | {:>9.3} | {:>8.1} | {:>8.0} | {:>8.1} | {:>8.2} | {:>8.0} | {:>9.0} | {:>6.0} | {:>10} |",
+            r.name(),
+            t.bvh_ms,
+            t.trace_ms,
+            t.rays_per_s / 1e6,
+            t.walked,
+            t.p99_walked,
+            t.found,
+            t.passes,
+            t.p99_passes,
+            t.visits,
+            t.rounds,
+            ratio.map_or("-".to_string(), |x| format!("{x:.2}"))
+        );
+    }
+}
+
+/// Median over the frames of the ray tracer's GPU time over the rasterizer's, same mode and
+/// plane position.
+fn paired_tracer_ratio(results: &[ModeResult], mode: BenchMode) -> Option<f64> {
+    let find = |tracer| {
+        results
+            .iter()
+            .find(|r| r.mode == mode && r.tracer == tracer)
+    };
+    let (ray, raster) = (find(rara::Tracer::Ray)?, find(rara::Tracer::Raster)?);
+    let mut ratios: Vec<f64> = ray
+        .frames
+        .iter()
+        .zip(&raster.frames)
+        .map(|(a, b)| a.gpu_ms / b.gpu_ms)
+        .collect();
+    (!ratios.is_empty()).then(|| median(&mut ratios))
+}
+
 /// Median over the frames of `num`'s GPU time over `den`'s at the same plane position: less
 /// sensitive than a ratio of medians to noise that comes and goes during a run.
 fn paired_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Option<f64> {
-    let find = |mode| results.iter().find(|r| r.mode == mode);
+    let find = |mode| {
+        results
+            .iter()
+            .find(|r| r.mode == mode && r.tracer == rara::Tracer::Raster)
+    };
     let (n, d) = (find(num)?, find(den)?);
     let mut ratios: Vec<f64> = n
         .frames
@@ -408,8 +544,23 @@ fn json_report(
             .into_iter()
             .map(|(k, v)| (k, v.into()))
             .collect();
+        let trace = r.trace_summary().map(|t| {
+            serde_json::json!({
+                "bvh_build_ms": t.bvh_ms,
+                "trace_ms": t.trace_ms,
+                "rays_per_s": t.rays_per_s,
+                "hits_per_ray": t.walked,
+                "hits_per_ray_p99": t.p99_walked,
+                "hits_found_per_ray": t.found,
+                "passes_per_ray": t.passes,
+                "passes_per_ray_p99": t.p99_passes,
+                "node_visits_per_ray": t.visits,
+                "rounds": t.rounds,
+                "over_raster": paired_tracer_ratio(results, r.mode),
+            })
+        });
         modes.insert(
-            r.mode.name().into(),
+            r.name(),
             serde_json::json!({
                 "median_ms": median(&mut r.gpu()),
                 "mean_ms": mean(&r.gpu()),
@@ -424,6 +575,7 @@ fn json_report(
                     .map(|f| [f.cutoff_pairs, f.cutoff_pairs_weight_one, f.cutoff_pairs_empty])
                     .collect::<Vec<_>>(),
                 "weighted_tiles_per_frame": r.frames.iter().map(|f| f.weighted_tiles).collect::<Vec<_>>(),
+                "trace": trace,
             }),
         );
     }
@@ -445,7 +597,7 @@ fn trace(results: &[ModeResult]) -> serde_json::Value {
     for (tid, r) in results.iter().enumerate() {
         events.push(serde_json::json!({
             "name": "thread_name", "ph": "M", "pid": 1, "tid": tid,
-            "args": {"name": r.mode.name()}
+            "args": {"name": r.name()}
         }));
     }
     let mut ts_us = 0.0;
@@ -456,7 +608,7 @@ fn trace(results: &[ModeResult]) -> serde_json::Value {
             let mut t = ts_us;
             for p in &f.passes {
                 events.push(serde_json::json!({
-                    "name": p.name, "cat": r.mode.name(), "ph": "X", "pid": 1, "tid": tid,
+                    "name": p.name, "cat": r.name(), "ph": "X", "pid": 1, "tid": tid,
                     "ts": t, "dur": p.ms * 1e3,
                     "args": {"frame": k, "invocations": p.invocations, "cutoff": f.cutoff}
                 }));

@@ -18,6 +18,9 @@ use crate::gpu_scene::GpuScene;
 use crate::shaders;
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
+/// The bits of [`GpuBvhNode::right`] that hold the child (the top two hold the split axis).
+pub const BVH_CHILD_MASK: u32 = (1 << 30) - 1;
+
 /// Bits of the Morton keys: 30 of code (10 per axis) and one above them for empty boxes.
 pub const MORTON_KEY_BITS: u32 = 31;
 
@@ -32,14 +35,23 @@ pub struct GpuBvhNode {
     pub left: u32,
     /// Upper corner.
     pub hi: [f32; 3],
-    /// Right child (inner node).
+    /// Right child (inner node) in the low 30 bits, and in the top two the axis of the node's
+    /// Morton split ([`GpuBvhNode::split_axis`]).
     pub right: u32,
 }
 
 impl GpuBvhNode {
     /// `(left, right)` of an inner node.
     pub fn children(&self) -> (u32, u32) {
-        (self.left, self.right)
+        (self.left, self.right & BVH_CHILD_MASK)
+    }
+
+    /// The axis (0 x, 1 y, 2 z) on which an inner node's left child lies below its right one,
+    /// the first bit where its Morton codes differ; `None` where they are equal. The ray
+    /// tracer visits first the child the ray's direction meets first.
+    pub fn split_axis(&self) -> Option<usize> {
+        let axis = (self.right >> 30) as usize;
+        (axis < 3).then_some(axis)
     }
 
     /// Whether the box is empty (`lo > hi`).
