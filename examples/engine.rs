@@ -7,8 +7,9 @@
 //! that moves from frame to frame, a small compute pass of the engine's own (a vignette), and a
 //! copy for read-back. Each finished frame is written as `engine_frame_<i>.png`.
 //!
-//! Run: `cargo run --release --example engine [OUTPUT_DIR]` (default `target/engine-out`, so
-//! that nothing lands in the checkout). Works headless on lavapipe. At the end it tears rara
+//! Run: `cargo run --release --example engine [OUTPUT_DIR] [--ray]` (default
+//! `target/engine-out`, so that nothing lands in the checkout; `--ray` draws with the ray
+//! tracer, SPEC section 7, through the same `record`). Works headless on lavapipe. At the end it tears rara
 //! down, checks that rara's allocator reports no live allocation, destroys its own objects, and
 //! prints the validation messages (none).
 
@@ -54,8 +55,9 @@ void main() {
 pub struct EngineReport {
     /// The PNGs written, in frame order.
     pub frames: Vec<PathBuf>,
-    /// rara's counters per frame: (visible, cutoff, intersections, complete).
-    pub stats: Vec<(u32, u32, u32, bool)>,
+    /// rara's counters per frame: (visible, cutoff, intersections, complete, and for the ray
+    /// tracer the hits its rays composited).
+    pub stats: Vec<(u32, u32, u32, bool, u64)>,
     /// rara's GPU milliseconds per frame (sum of its passes; 0 without timestamps).
     pub gpu_ms: Vec<f64>,
     /// Live allocations of rara's allocator after rara's objects were dropped.
@@ -246,7 +248,11 @@ struct FrameObjects {
 }
 
 /// Runs the engine for `frame_count` frames, writing PNGs to `out_dir`.
-pub fn run(out_dir: &Path, frame_count: usize) -> Result<EngineReport, Box<dyn Error>> {
+pub fn run(
+    out_dir: &Path,
+    frame_count: usize,
+    tracer: rara::Tracer,
+) -> Result<EngineReport, Box<dyn Error>> {
     std::fs::create_dir_all(out_dir)?;
     MESSAGES.lock().unwrap().clear();
     let engine = Engine::new(true)?;
@@ -498,11 +504,19 @@ pub fn run(out_dir: &Path, frame_count: usize) -> Result<EngineReport, Box<dyn E
             image::RgbaImage::from_raw(WIDTH, HEIGHT, bytes)
                 .ok_or("image size")?
                 .save(&path)?;
+            let counts = match &stats.trace {
+                Some(t) => format!(
+                    "ray traced, {:.1} hits per ray, {} rounds",
+                    t.walked_per_ray(),
+                    t.rounds
+                ),
+                None => format!(
+                    "{} visible, {} cutoff, {} tile pairs",
+                    stats.visible, stats.cutoff, stats.intersections
+                ),
+            };
             println!(
-                "frame {index}: {} visible, {} cutoff, {} tile pairs{}, rara GPU {gpu_ms:.1} ms -> {}",
-                stats.visible,
-                stats.cutoff,
-                stats.intersections,
+                "frame {index}: {counts}{}, rara GPU {gpu_ms:.1} ms -> {}",
                 if stats.complete { "" } else { " (incomplete)" },
                 path.display()
             );
@@ -512,6 +526,7 @@ pub fn run(out_dir: &Path, frame_count: usize) -> Result<EngineReport, Box<dyn E
                 stats.cutoff,
                 stats.intersections,
                 stats.complete,
+                stats.trace.as_ref().map_or(0, |t| t.hits_walked),
             ));
             report.gpu_ms.push(gpu_ms);
             Ok(())
@@ -525,7 +540,7 @@ pub fn run(out_dir: &Path, frame_count: usize) -> Result<EngineReport, Box<dyn E
             finish(f, &mut slots[k], &timers[k], &mut report)?;
             unsafe { device.reset_fences(&[f.fence])? };
 
-            let options = frame_options(&camera, index, frame_count)?;
+            let options = frame_options(&camera, index, frame_count, tracer)?;
             let cmd = f.cmd;
             unsafe {
                 device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
@@ -725,13 +740,19 @@ pub fn camera() -> rara::Result<Camera> {
 
 /// Frame `index` of `count`: drawn over the cleared image, rara-clipped by a plane facing the
 /// camera that sweeps from in front of the scene to behind it.
-pub fn frame_options(camera: &Camera, index: usize, count: usize) -> rara::Result<RenderOptions> {
+pub fn frame_options(
+    camera: &Camera,
+    index: usize,
+    count: usize,
+    tracer: rara::Tracer,
+) -> rara::Result<RenderOptions> {
     let t = index as f32 / (count.max(2) - 1) as f32;
     let depth = -1.1 + 2.2 * t;
     let plane = Plane::new(camera.forward(), -depth)?;
     Ok(RenderOptions {
         composite: Composite::Over,
         clip: Clip::rara(ClipRegion::planes(vec![plane])?),
+        tracer,
         ..RenderOptions::default()
     })
 }
@@ -787,10 +808,17 @@ unsafe fn image_barrier(
 
 #[allow(dead_code)] // the test that includes this file calls `run` instead
 fn main() -> Result<(), Box<dyn Error>> {
-    let out_dir = std::env::args()
-        .nth(1)
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let tracer = if args.iter().any(|a| a == "--ray") {
+        rara::Tracer::Ray
+    } else {
+        rara::Tracer::Raster
+    };
+    let out_dir = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
         .map_or_else(|| PathBuf::from("target/engine-out"), PathBuf::from);
-    let report = run(&out_dir, 6)?;
+    let report = run(&out_dir, 6, tracer)?;
     println!(
         "rara allocator after teardown: {} live allocations; validation {}: {} messages",
         report.leaks.len(),

@@ -20,9 +20,22 @@ use rara::{
 /// and are destroyed by the engine with no validation message; rara's allocator ends empty.
 #[test]
 fn engine_example_frames_match_the_headless_renderer() {
-    let dir = std::env::temp_dir().join(format!("rara-engine-test-{}", std::process::id()));
-    let frames = 4;
-    let report = engine_example::run(&dir, frames).expect("the engine example runs");
+    engine_example_matches(rara::Tracer::Raster, 4);
+}
+
+/// The same with the ray tracer recorded into the engine's command buffer (SPEC section 7):
+/// the same synchronisation contract, the same teardown.
+#[test]
+fn engine_example_ray_traced_frames_match_the_headless_renderer() {
+    engine_example_matches(rara::Tracer::Ray, 3);
+}
+
+fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
+    let dir = std::env::temp_dir().join(format!(
+        "rara-engine-test-{}-{tracer:?}",
+        std::process::id()
+    ));
+    let report = engine_example::run(&dir, frames, tracer).expect("the engine example runs");
     assert_eq!(report.frames.len(), frames);
     assert!(report.leaks.is_empty(), "rara leaked: {:?}", report.leaks);
     assert!(
@@ -36,8 +49,11 @@ fn engine_example_frames_match_the_headless_renderer() {
         if report.validation { "on" } else { "off" }
     );
     assert!(report.stats.iter().all(|s| s.3), "every frame complete");
-    // The plane moves: the cutoff Gaussians change from frame to frame.
-    assert!(report.stats.windows(2).any(|w| w[0].1 != w[1].1));
+    // The plane moves: the cutoff Gaussians (the hits composited) change from frame to frame.
+    assert!(report
+        .stats
+        .windows(2)
+        .any(|w| (w[0].1, w[0].4) != (w[1].1, w[1].4)));
 
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
@@ -46,12 +62,13 @@ fn engine_example_frames_match_the_headless_renderer() {
     // The image holds the clear colour in rgba8, and that is what the draw goes over.
     let clear = engine_example::CLEAR_COLOR.map(|c| (c * 255.0).round() / 255.0);
     for (index, path) in report.frames.iter().enumerate() {
-        let mut options = engine_example::frame_options(&camera, index, frames).unwrap();
+        let mut options = engine_example::frame_options(&camera, index, frames, tracer).unwrap();
         options.composite = Composite::Background;
         options.background = Vec3::new(clear[0], clear[1], clear[2]);
         let (expected, _) = renderer.render(&scene, &camera, &options).unwrap();
         let actual = image::open(path).unwrap().to_rgba8();
         let mut worst = 0f32;
+        let mut ties = 0;
         for (x, y, e) in expected.enumerate_pixels() {
             let a = actual.get_pixel(x, y);
             let v = engine_example::vignette_factor(x, y);
@@ -59,14 +76,27 @@ fn engine_example_frames_match_the_headless_renderer() {
                 // The image is rgba8: rounded once before the vignette (as the headless image
                 // is) and once after it.
                 let want = e[c] as f32 * v;
-                worst = worst.max((a[c] as f32 - want).abs());
+                let diff = (a[c] as f32 - want).abs();
+                worst = worst.max(diff);
+                if diff > 1.0 {
+                    ties += 1;
+                }
             }
             assert_eq!(a[3], 255, "opaque over an opaque clear");
         }
         println!(
-            "engine frame {index}: largest difference from the headless render {worst:.2}/255"
+            "engine frame {index} ({tracer:?}): largest difference from the headless render \
+             {worst:.2}/255, {ties} channels past 1/255"
         );
-        assert!(worst <= 1.0, "frame {index} differs by {worst}/255");
+        // A value exactly halfway between two levels (the synthetic scene's quantised colours
+        // make some: 154.5/255 in the ray-traced frame 1) is rounded up by the buffer path
+        // (floor(x * 255 + 0.5)) and to even by lavapipe's store to the unorm image: one level
+        // before the vignette, so up to 0.5 + v after it, in a handful of channels.
+        assert!(worst <= 1.5, "frame {index} differs by {worst}/255");
+        assert!(
+            ties <= 8,
+            "frame {index}: {ties} channels differ by more than 1/255"
+        );
     }
     common::assert_no_validation_messages(&ctx);
     let _ = std::fs::remove_dir_all(&dir);
@@ -131,6 +161,16 @@ fn a_device_missing_a_required_feature_gets_a_clear_error() {
 /// headless image; two slots and two scenes on one renderer, recorded into one command buffer.
 #[test]
 fn buffer_targets_and_two_slots_in_one_command_buffer() {
+    buffer_targets_and_two_slots(rara::Tracer::Raster);
+}
+
+/// The same with the ray tracer.
+#[test]
+fn ray_traced_buffer_targets_and_two_slots_in_one_command_buffer() {
+    buffer_targets_and_two_slots(rara::Tracer::Ray);
+}
+
+fn buffer_targets_and_two_slots(tracer: rara::Tracer) {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
     let scenes = [
@@ -166,6 +206,7 @@ fn buffer_targets_and_two_slots_in_one_command_buffer() {
                         Composite::Background
                     },
                     background,
+                    tracer,
                     ..RenderOptions::default()
                 };
                 let target = Target::Buffer {
@@ -185,10 +226,11 @@ fn buffer_targets_and_two_slots_in_one_command_buffer() {
             assert!(slot.stats().unwrap().complete);
             let options = RenderOptions {
                 background,
+                tracer,
                 ..RenderOptions::default()
             };
             let (expected, stats) = renderer.render(&scenes[k], camera, &options).unwrap();
-            assert!(stats.visible > 0);
+            assert!(stats.visible > 0 || stats.trace.is_some_and(|t| t.hits_walked > 0));
             let got = &buffers[k].mapped()[..bytes as usize];
             let mut worst = 0f32;
             for (i, e) in expected.pixels().enumerate() {
@@ -199,7 +241,9 @@ fn buffer_targets_and_two_slots_in_one_command_buffer() {
                     worst = worst.max((a[c] * 255.0 - e[c] as f32).abs());
                 }
             }
-            println!("{format:?} buffer target, scene {k}: largest difference {worst:.3}/255");
+            println!(
+                "{format:?} buffer target ({tracer:?}), scene {k}: largest difference {worst:.3}/255"
+            );
             // The headless image is rounded to 8 bits; float targets differ by that rounding
             // (and half floats by their own, 2^-11 near 1).
             let bound = match format {
