@@ -344,94 +344,96 @@ void main() {
     uint steps = 0u;
     while ((flags & RAY_DONE) == 0u && steps < pc.budget) {
         // A step is a node visit (or the end of a pass) or a composited hit. A CPU driver
-        // runs every branch under a mask, so the loop has three parts, each run by the lanes
-        // that need it together: the traversal runs until this ray has a leaf to test (or its
-        // pass ends), then the subgroup tests its leaves, then composites the passes that
-        // ended; the last two sit behind subgroup votes, skipped when no lane needs them
-        // (Aila and Laine's "while-while"; PERFORMANCE.md).
-        uint leaf = NO_LEAF;
-        while ((flags & RAY_COMPOSITING) == 0u && leaf == NO_LEAF && steps < pc.budget) {
-            ++steps;
-            // The node to visit: the near child the last visit went on to, else the stack's
-            // top (so a descent costs one stack write, for the far child, and no read).
-            if (node == NO_NODE && sp > 0u) {
-                --sp;
-                node = pc.stacks.v[sp * rays + ray];
-            }
-            if (node == NO_NODE) {
-                // The pass is over: composite what it found.
-                flags |= RAY_COMPOSITING;
-                k_pos = 0u;
-                ++passes;
-                if (k_count == 0u) {
-                    flags |= RAY_DONE;
+        // runs every branch under a mask and every loop body at least once, so the loops nest
+        // by how often their work is needed, each run by the lanes that need it together: an
+        // iteration of this loop is a pass; in it, the traversal tests one leaf per iteration,
+        // and between two leaves runs over inner nodes alone (Aila and Laine's
+        // "while-while"); then the pass's hits are composited (PERFORMANCE.md).
+        while ((flags & RAY_COMPOSITING) == 0u && steps < pc.budget) {
+            uint leaf = NO_LEAF;
+            while ((flags & RAY_COMPOSITING) == 0u && leaf == NO_LEAF && steps < pc.budget) {
+                ++steps;
+                // The node to visit: the near child the last visit went on to, else the stack's
+                // top (so a descent costs one stack write, for the far child, and no read).
+                if (node == NO_NODE && sp > 0u) {
+                    --sp;
+                    node = pc.stacks.v[sp * rays + ray];
                 }
-            } else {
-                ++visits_now;
-                uvec4 w0, w1;
-                load_node(pc.nodes, node, w0, w1);
-                vec3 lo = uintBitsToFloat(w0.xyz);
-                vec3 hi = uintBitsToFloat(w1.xyz);
-                vec3 a0 = (lo - e) * inv_d;
-                vec3 a1 = (hi - e) * inv_d;
-                vec3 tmin = min(a0, a1);
-                vec3 tmax = max(a0, a1);
-                float t_in = max(max(tmin.x, max(tmin.y, tmin.z)), 0.0);
-                float t_out = min(tmax.x, min(tmax.y, tmax.z));
-                float slack = 1e-4 * (1.0 + abs(t_out));
-                bool enters = t_in <= t_out + slack && lo.x <= hi.x;
-                // Hits inside lie within the box's stretch of the ray.
-                if ((flags & RAY_HAS_LAST) != 0u && t_out + slack < last_t) {
-                    enters = false;
-                }
-                if (k_count == uint(TRACE_K) && t_in - slack > kt[TRACE_K - 1]) {
-                    enters = false;
-                }
-                bool inner = node < leaves;
-                node = NO_NODE;
-                if (enters && !inner) {
-                    leaf = w0.w;
-                } else if (enters && sp < uint(TRACE_STACK)) {
-                    // The child the ray meets first on the split's axis is visited first, so
-                    // the buffer fills front to back and the far child is culled by its
-                    // worst entry.
-                    uint axis = w1.w >> BVH_AXIS_SHIFT;
-                    uint right = w1.w & BVH_CHILD_MASK;
-                    bool right_first = axis < 3u && d[min(axis, 2u)] < 0.0;
-                    pc.stacks.v[sp * rays + ray] = right_first ? w0.w : right;
-                    ++sp;
-                    node = right_first ? right : w0.w;
-                } else if (enters) {
-                    // Cannot happen (depth <= 63 keeps at most 63 entries): counted, never
-                    // silent.
-                    atomicAdd(pc.counters.v[TRACE_OVERFLOW], 1u);
-                }
-            }
-        }
-        if (subgroupAny(leaf != NO_LEAF) && leaf != NO_LEAF) {
-            uint g = leaf;
-            vec2 hit = gaussian_hit(f, g, e, d);
-            bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
-            bool room = k_count < uint(TRACE_K) || before(hit.x, g, kt[TRACE_K - 1], ki[TRACE_K - 1]);
-            if (hit.y > 0.0 && after && room) {
-                ++found_now;
-                // Sorted insertion: the new entry takes the last slot (the worst's, when the
-                // buffer is full) and moves down past every larger one. Unrolled, with fixed
-                // indices: no loop iterations against the cap, the arrays stay in registers.
-                uint p0 = min(k_count, uint(TRACE_K - 1));
-                k_count = min(k_count + 1u, uint(TRACE_K));
-                [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
-                    if (k == p0) {
-                        kt[k] = hit.x;
-                        ki[k] = g;
-                        ka[k] = hit.y;
+                if (node == NO_NODE) {
+                    // The pass is over: composite what it found.
+                    flags |= RAY_COMPOSITING;
+                    k_pos = 0u;
+                    ++passes;
+                    if (k_count == 0u) {
+                        flags |= RAY_DONE;
+                    }
+                } else {
+                    ++visits_now;
+                    uvec4 w0, w1;
+                    load_node(pc.nodes, node, w0, w1);
+                    vec3 lo = uintBitsToFloat(w0.xyz);
+                    vec3 hi = uintBitsToFloat(w1.xyz);
+                    vec3 a0 = (lo - e) * inv_d;
+                    vec3 a1 = (hi - e) * inv_d;
+                    vec3 tmin = min(a0, a1);
+                    vec3 tmax = max(a0, a1);
+                    float t_in = max(max(tmin.x, max(tmin.y, tmin.z)), 0.0);
+                    float t_out = min(tmax.x, min(tmax.y, tmax.z));
+                    float slack = 1e-4 * (1.0 + abs(t_out));
+                    bool enters = t_in <= t_out + slack && lo.x <= hi.x;
+                    // Hits inside lie within the box's stretch of the ray.
+                    if ((flags & RAY_HAS_LAST) != 0u && t_out + slack < last_t) {
+                        enters = false;
+                    }
+                    if (k_count == uint(TRACE_K) && t_in - slack > kt[TRACE_K - 1]) {
+                        enters = false;
+                    }
+                    bool inner = node < leaves;
+                    node = NO_NODE;
+                    if (enters && !inner) {
+                        leaf = w0.w;
+                    } else if (enters && sp < uint(TRACE_STACK)) {
+                        // The child the ray meets first on the split's axis is visited first, so
+                        // the buffer fills front to back and the far child is culled by its
+                        // worst entry.
+                        uint axis = w1.w >> BVH_AXIS_SHIFT;
+                        uint right = w1.w & BVH_CHILD_MASK;
+                        bool right_first = axis < 3u && d[min(axis, 2u)] < 0.0;
+                        pc.stacks.v[sp * rays + ray] = right_first ? w0.w : right;
+                        ++sp;
+                        node = right_first ? right : w0.w;
+                    } else if (enters) {
+                        // Cannot happen (depth <= 63 keeps at most 63 entries): counted, never
+                        // silent.
+                        atomicAdd(pc.counters.v[TRACE_OVERFLOW], 1u);
                     }
                 }
-                [[unroll]] for (int k = TRACE_K - 1; k > 0; --k) {
-                    if (uint(k) <= p0 && before(kt[k], ki[k], kt[k - 1], ki[k - 1])) {
-                        float tt = kt[k]; kt[k] = kt[k - 1]; kt[k - 1] = tt;
-                        uint ti = ki[k]; ki[k] = ki[k - 1]; ki[k - 1] = ti;
-                        float ta = ka[k]; ka[k] = ka[k - 1]; ka[k - 1] = ta;
+            }
+            if (subgroupAny(leaf != NO_LEAF) && leaf != NO_LEAF) {
+                uint g = leaf;
+                vec2 hit = gaussian_hit(f, g, e, d);
+                bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
+                bool room = k_count < uint(TRACE_K) || before(hit.x, g, kt[TRACE_K - 1], ki[TRACE_K - 1]);
+                if (hit.y > 0.0 && after && room) {
+                    ++found_now;
+                    // Sorted insertion: the new entry takes the last slot (the worst's, when the
+                    // buffer is full) and moves down past every larger one. Unrolled, with fixed
+                    // indices: no loop iterations against the cap, the arrays stay in registers.
+                    uint p0 = min(k_count, uint(TRACE_K - 1));
+                    k_count = min(k_count + 1u, uint(TRACE_K));
+                    [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
+                        if (k == p0) {
+                            kt[k] = hit.x;
+                            ki[k] = g;
+                            ka[k] = hit.y;
+                        }
+                    }
+                    [[unroll]] for (int k = TRACE_K - 1; k > 0; --k) {
+                        if (uint(k) <= p0 && before(kt[k], ki[k], kt[k - 1], ki[k - 1])) {
+                            float tt = kt[k]; kt[k] = kt[k - 1]; kt[k - 1] = tt;
+                            uint ti = ki[k]; ki[k] = ki[k - 1]; ki[k - 1] = ti;
+                            float ta = ka[k]; ka[k] = ka[k - 1]; ka[k - 1] = ta;
+                        }
                     }
                 }
             }

@@ -90,6 +90,10 @@ pub struct FrameMemory {
     /// The ray tracer's per-ray buffers: state (48 B), stack (256 B), k-buffer (192 B),
     /// pixel state (16 B) and live lists (8 B), 520 B per ray.
     pub trace_per_ray: u64,
+    /// The rays (pixels) `trace_per_ray` holds, and the Gaussians the BVH is over.
+    pub trace_rays: u64,
+    /// See `trace_rays`.
+    pub bvh_gaussians: u64,
 }
 
 impl FrameMemory {
@@ -243,6 +247,8 @@ impl FrameSlot {
         if let Some(t) = &self.trace {
             m.bvh = t.bvh_bytes();
             m.trace_per_ray = t.per_ray_bytes();
+            m.trace_rays = t.width as u64 * t.height as u64;
+            m.bvh_gaussians = t.gaussians as u64;
             m.fixed += t.fixed_bytes();
         }
         m

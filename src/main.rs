@@ -360,6 +360,10 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             t.rounds,
             stats.wall_ms
         );
+        println!(
+            "{}",
+            cli::describe_memory(&gpu_scene, &renderer.headless_memory())
+        );
         return Ok(());
     }
     warn_oversized(stats.oversized as usize, gpu_scene.len() as usize);

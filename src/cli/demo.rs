@@ -101,6 +101,7 @@ pub fn run(dir: &Path) -> Result<()> {
         range: (d0, d1),
         frames: SWEEP_FRAMES,
         background: BACKGROUND,
+        tracer: rara::Tracer::Raster,
     };
     let series = plan.run(&mut renderer, &gpu_scene, |_, mut frame| {
         draw_label(&mut frame, "HARD", 8, 8, 2);

@@ -42,6 +42,23 @@ pub fn describe_memory(scene: &GpuScene, frame: &FrameMemory) -> String {
         frame.per_intersection as f64 / pairs as f64,
         mb(frame.per_pixel),
         mb(frame.fixed),
+    ) + &describe_trace_memory(frame)
+}
+
+/// The ray tracer's part of [`describe_memory`], empty before its first frame.
+fn describe_trace_memory(frame: &FrameMemory) -> String {
+    if frame.bvh == 0 {
+        return String::new();
+    }
+    let n = frame.bvh_gaussians.max(1);
+    format!(
+        "; ray tracer: BVH {} ({:.1} B/Gaussian: {} nodes of 32 B, proxies, Morton sort) + per \
+         ray {} ({:.0} B/ray)",
+        mb(frame.bvh),
+        frame.bvh as f64 / n as f64,
+        2 * n - 1,
+        mb(frame.trace_per_ray),
+        frame.trace_per_ray as f64 / frame.trace_rays.max(1) as f64,
     )
 }
 
@@ -58,5 +75,11 @@ pub fn memory_json(scene: &GpuScene, frame: &FrameMemory) -> serde_json::Value {
         "frame_intersection_capacity": frame.intersection_capacity,
         "frame_per_pixel_bytes": frame.per_pixel,
         "frame_fixed_bytes": frame.fixed,
+        "bvh_bytes": frame.bvh,
+        "bvh_bytes_per_gaussian": frame.bvh as f64 / frame.bvh_gaussians.max(1) as f64,
+        "bvh_nodes": (2 * frame.bvh_gaussians).saturating_sub(1),
+        "bvh_node_bytes": 32,
+        "trace_per_ray_bytes": frame.trace_per_ray,
+        "trace_bytes_per_ray": frame.trace_per_ray as f64 / frame.trace_rays.max(1) as f64,
     })
 }

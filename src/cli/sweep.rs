@@ -46,6 +46,9 @@ pub struct SweepArgs {
     /// Output directory: frame_NNNN.png, sweep.gif, sweep.json.
     #[arg(short, long)]
     output: PathBuf,
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7).
+    #[arg(long, value_enum, default_value_t = crate::TracerArg::Raster)]
+    tracer: crate::TracerArg,
 }
 
 /// Frame-to-frame change and cutoff counts of one clip configuration over a sweep.
@@ -169,6 +172,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         range: (d0, d1),
         frames: args.frames,
         background: args.background,
+        tracer: args.tracer.into(),
     };
     let mut series = plan.run(&mut renderer, &gpu_scene, |k, frame_img| {
         save_png(&frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
@@ -241,6 +245,8 @@ pub struct Sweep<'a> {
     pub frames: u32,
     /// Background colour.
     pub background: Vec3,
+    /// The rasterizer or the ray tracer.
+    pub tracer: rara::Tracer,
 }
 
 impl Sweep<'_> {
@@ -275,6 +281,7 @@ impl Sweep<'_> {
                 let options = RenderOptions {
                     background: self.background,
                     clip: with_moving_plane(config, moving),
+                    tracer: self.tracer,
                     ..RenderOptions::default()
                 };
                 let (img, frame) = renderer.render(gpu_scene, self.camera, &options)?;
