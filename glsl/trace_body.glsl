@@ -58,7 +58,9 @@ Gaussian trace_gaussian(Gaussians gaussians, uint i) {
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
 
+#ifndef TRACE_K
 #define TRACE_K 16
+#endif
 #define TRACE_STACK 64
 #define NO_LEAF 0xffffffffu
 #define NO_NODE 0xffffffffu
@@ -80,11 +82,12 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 #define TRACE_VISITS_HI 6
 
 // Per-ray histograms of finished rays (HIST_* bins each; the last bin holds that many or
-// more): hits composited, hits found, traversal passes.
+// more): hits composited, hits found, traversal passes. They follow the counters.
+#define COUNTER_WORDS 8u
 #define HIST_BINS 1024u
-#define HIST_WALKED 0u
-#define HIST_FOUND HIST_BINS
-#define HIST_PASSES (2u * HIST_BINS)
+#define HIST_WALKED COUNTER_WORDS
+#define HIST_FOUND (COUNTER_WORDS + HIST_BINS)
+#define HIST_PASSES (COUNTER_WORDS + 2u * HIST_BINS)
 
 // A ray's state between rounds, three 16-byte words at ray * 48 (GpuRayState): (colour,
 // transmittance); (last hit's index, hits walked, flags, stack pointer | k count << 8 | k
@@ -107,19 +110,21 @@ layout(push_constant) uniform Push {
     Gaussians gaussians;
     ShCoefficients sh;
     BvhTree nodes;
-    U32s rays;          // per ray its state, 12 words
-    U32s stacks;        // TRACE_STACK entries per ray, entry k of ray r at k * rays + r
-    U32s k_t;           // TRACE_K per ray: t (float bits), Gaussian, alpha (float bits)
-    U32s k_index;
-    U32s k_alpha;
+    U32s rays;          // per ray of the batch its state, 12 words
+    U32s stacks;        // TRACE_STACK entries per ray, entry k of ray r at k * stride + r
+    U32s kbuf;          // TRACE_K per ray, three sections of stride * TRACE_K words: t (float
+                        // bits), Gaussian, alpha (float bits)
     Vec4s state;        // out: per pixel (premultiplied colour, transmittance)
-    U32s counters;      // TRACE_* slots
-    U32s lists;         // two lists of live rays, `rays` entries each
-    U32s live;          // per round, the rays it left live (its list's length)
-    U32s histograms;    // HIST_* bins
+    U32s counters;      // TRACE_* slots, then the HIST_* bins from word COUNTER_WORDS
+    U32s lists;         // two lists of the batch's live rays, `stride` entries each
+    U32s live;          // per round, the rays of the batch it left live (its list's length)
     ClipParamsRef clip;
-    uint round;         // 0: every ray, set up; r > 0: the rays round r - 1 left live
+    uint round;         // 0: every ray of the batch, set up; r > 0: those round r - 1 left live
     uint budget;        // steps per ray in this round
+    uint ray_base;      // the batch's first ray (pixel index)
+    uint batch_rays;    // its rays
+    uint stride;        // the per-ray buffers' rays (the largest batch)
+    uint pad;
 } pc;
 
 // The clip weight of hit (t, Gaussian g) on the ray e + t d whose visible intervals are spans
@@ -242,23 +247,29 @@ void add_wide(uint lo, uint v) {
 
 void main() {
     TraceParams f = pc.params.p;
-    uint w = f.size.x, h = f.size.y;
-    uint rays = w * h;
+    uint w = f.size.x;
+    uint stride = pc.stride;
     uint item = linear_index();
-    uint ray;
+    // The ray's index in its batch (`local`, which the per-ray buffers are indexed by) and in
+    // the image (`ray`).
+    uint local;
     if (pc.round == 0u) {
-        if (item >= rays) {
+        if (item >= pc.batch_rays) {
             return;
         }
-        ray = item;
+        local = item;
     } else {
         if (item >= pc.live.v[pc.round - 1u]) {
             return;
         }
-        ray = pc.lists.v[((pc.round - 1u) & 1u) * rays + item];
+        local = pc.lists.v[((pc.round - 1u) & 1u) * stride + item];
     }
-    uint64_t state_at = uint64_t(pc.rays) + 48ul * uint64_t(ray);
-    uint64_t k_at = 64ul * uint64_t(ray);
+    uint ray = pc.ray_base + local;
+    uint64_t state_at = uint64_t(pc.rays) + 48ul * uint64_t(local);
+    uint64_t k_section = 4ul * uint64_t(TRACE_K) * uint64_t(stride);
+    uint64_t k_t = uint64_t(pc.kbuf) + 4ul * uint64_t(TRACE_K) * uint64_t(local);
+    uint64_t k_index = k_t + k_section;
+    uint64_t k_alpha = k_t + 2ul * k_section;
     vec4 colour_t;
     uvec4 info;
     uvec4 more;
@@ -266,7 +277,7 @@ void main() {
         colour_t = vec4(0.0, 0.0, 0.0, 1.0);
         info = uvec4(0u, 0u, 0u, 1u);   // one node on the stack: the root
         more = uvec4(0u);
-        pc.stacks.v[ray] = 0u;
+        pc.stacks.v[local] = 0u;
     } else {
         colour_t = load_vec4(state_at);
         info = load_uvec4(state_at + 16ul);
@@ -323,9 +334,9 @@ void main() {
     float ka[TRACE_K];
     if (pc.round != 0u) {
         [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
-            uvec4 t4 = load_uvec4(uint64_t(pc.k_t) + k_at + 16ul * q);
-            uvec4 i4 = load_uvec4(uint64_t(pc.k_index) + k_at + 16ul * q);
-            uvec4 a4 = load_uvec4(uint64_t(pc.k_alpha) + k_at + 16ul * q);
+            uvec4 t4 = load_uvec4(k_t + 16ul * q);
+            uvec4 i4 = load_uvec4(k_index + 16ul * q);
+            uvec4 a4 = load_uvec4(k_alpha + 16ul * q);
             [[unroll]] for (uint c = 0u; c < 4u; ++c) {
                 kt[4u * q + c] = uintBitsToFloat(t4[c]);
                 ki[4u * q + c] = i4[c];
@@ -357,7 +368,7 @@ void main() {
                 // top (so a descent costs one stack write, for the far child, and no read).
                 if (node == NO_NODE && sp > 0u) {
                     --sp;
-                    node = pc.stacks.v[sp * rays + ray];
+                    node = pc.stacks.v[sp * stride + local];
                 }
                 if (node == NO_NODE) {
                     // The pass is over: composite what it found.
@@ -399,7 +410,7 @@ void main() {
                         uint axis = w1.w >> BVH_AXIS_SHIFT;
                         uint right = w1.w & BVH_CHILD_MASK;
                         bool right_first = axis < 3u && d[min(axis, 2u)] < 0.0;
-                        pc.stacks.v[sp * rays + ray] = right_first ? w0.w : right;
+                        pc.stacks.v[sp * stride + local] = right_first ? w0.w : right;
                         ++sp;
                         node = right_first ? right : w0.w;
                     } else if (enters) {
@@ -498,28 +509,28 @@ void main() {
         if ((flags & RAY_CAPPED) != 0u) {
             atomicAdd(pc.counters.v[TRACE_CAPPED], 1u);
         }
-        atomicAdd(pc.histograms.v[HIST_WALKED + min(walked, HIST_BINS - 1u)], 1u);
-        atomicAdd(pc.histograms.v[HIST_FOUND + min(found, HIST_BINS - 1u)], 1u);
-        atomicAdd(pc.histograms.v[HIST_PASSES + min(passes, HIST_BINS - 1u)], 1u);
+        atomicAdd(pc.counters.v[HIST_WALKED + min(walked, HIST_BINS - 1u)], 1u);
+        atomicAdd(pc.counters.v[HIST_FOUND + min(found, HIST_BINS - 1u)], 1u);
+        atomicAdd(pc.counters.v[HIST_PASSES + min(passes, HIST_BINS - 1u)], 1u);
         return;
     }
     // Still live: onto the next round's list, with its state (the node it was going on to
     // back on its stack).
     if (node != NO_NODE) {
-        pc.stacks.v[sp * rays + ray] = node;
+        pc.stacks.v[sp * stride + local] = node;
         ++sp;
     }
     uint at = atomicAdd(pc.live.v[pc.round], 1u);
-    pc.lists.v[(pc.round & 1u) * rays + at] = ray;
+    pc.lists.v[(pc.round & 1u) * stride + at] = local;
     store_vec4(state_at, vec4(colour, T));
     store_uvec4(state_at + 16ul, uvec4(last_index, walked, flags, sp | (k_count << 8u) | (k_pos << 16u)));
     store_uvec4(state_at + 32ul, uvec4(floatBitsToUint(last_t), found, passes, visits));
     [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
-        store_uvec4(uint64_t(pc.k_t) + k_at + 16ul * q,
+        store_uvec4(k_t + 16ul * q,
                     floatBitsToUint(vec4(kt[4u * q], kt[4u * q + 1u], kt[4u * q + 2u], kt[4u * q + 3u])));
-        store_uvec4(uint64_t(pc.k_index) + k_at + 16ul * q,
+        store_uvec4(k_index + 16ul * q,
                     uvec4(ki[4u * q], ki[4u * q + 1u], ki[4u * q + 2u], ki[4u * q + 3u]));
-        store_uvec4(uint64_t(pc.k_alpha) + k_at + 16ul * q,
+        store_uvec4(k_alpha + 16ul * q,
                     floatBitsToUint(vec4(ka[4u * q], ka[4u * q + 1u], ka[4u * q + 2u], ka[4u * q + 3u])));
     }
 }

@@ -665,4 +665,148 @@ const VARIANTS: &[Variant] = &[
             "trace_body.glsl).",
         ],
     },
+    Variant {
+        name: "trace_deg0_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg0_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg0_sh16_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg0_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 0, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1_sh16_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg1_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 1, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2_sh16_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg2_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 2, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as 32-bit floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3_sh16_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading by address (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_deg3_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64"],
+        about: &[
+            "The ray tracer (issue 32) for scenes of SH degree 3, coefficients as half floats, with a",
+            "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
 ];

@@ -317,7 +317,11 @@ impl FrameSlot {
             // more rounds.
             self.stats()?;
         }
-        if !self.trace.as_ref().is_some_and(|t| t.fits(size, gaussians)) {
+        if !self
+            .trace
+            .as_ref()
+            .is_some_and(|t| t.fits(size, gaussians, tracer.k()))
+        {
             self.trace = None; // free the old buffers first
             self.trace = Some(TraceBuffers::new(tracer, &self.ctx, size, gaussians)?);
         }

@@ -644,6 +644,7 @@ impl Renderer {
             camera,
             &options.clip,
             &trace_options,
+            0..bufs.batches,
             0..rounds,
         )?;
         let mut rec = FrameRecording {

@@ -23,8 +23,6 @@ use crate::timing::PassTimer;
 use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
-/// Hits a traversal pass collects (`TRACE_K`).
-pub const TRACE_K: u64 = 16;
 /// Stack entries per ray (`TRACE_STACK`): the tree's depth is at most 63.
 pub const TRACE_STACK: u64 = 64;
 /// Steps (a node visit or a composited hit) a ray gets per round. Smaller rounds refill the
@@ -39,8 +37,12 @@ pub const MAX_TRACE_ROUNDS: u32 = 4096;
 pub const FIRST_TRACE_ROUNDS: u32 = 64;
 /// Bins of each per-ray histogram (`HIST_BINS`): the last bin holds that many or more.
 pub const TRACE_HIST_BINS: usize = 1024;
-/// Words of the counters (`TRACE_*` slots).
+/// Words of the counters (`TRACE_*` slots); the histograms follow them in the same buffer.
 const COUNTER_WORDS: usize = 8;
+/// Rays traced together at most (a batch): the per-ray buffers (state, stack, k-buffer, live
+/// lists) hold one batch, so their memory is bounded whatever the image size, and the batches
+/// of a frame run one after another.
+pub const TRACE_BATCH_RAYS: u32 = 1 << 18;
 /// Per-ray state: three 16-byte words.
 const RAY_STATE_BYTES: u64 = 48;
 
@@ -65,17 +67,18 @@ struct TracePush {
     nodes: u64,
     rays: u64,
     stacks: u64,
-    k_t: u64,
-    k_index: u64,
-    k_alpha: u64,
+    kbuf: u64,
     state: u64,
     counters: u64,
     lists: u64,
     live: u64,
-    histograms: u64,
     clip: u64,
     round: u32,
     budget: u32,
+    ray_base: u32,
+    batch_rays: u32,
+    stride: u32,
+    pad: u32,
 }
 
 #[repr(C)]
@@ -161,22 +164,29 @@ pub struct TraceBuffers {
     pub height: u32,
     /// See `width`.
     pub gaussians: u32,
+    /// The k-buffer's hits per ray.
+    pub k: u32,
+    /// Rays per batch (the per-ray buffers' size) and batches per frame.
+    pub batch_rays: u32,
+    /// See `batch_rays`.
+    pub batches: u32,
     /// The BVH.
     pub bvh: BvhBuffers,
     params: Buffer,
     clip: Buffer,
     rays: Buffer,
     stacks: Buffer,
-    k_t: Buffer,
-    k_index: Buffer,
-    k_alpha: Buffer,
+    /// The k-buffers: t, Gaussian and alpha sections.
+    kbuf: Buffer,
     /// Per pixel (premultiplied colour, transmittance), as the rasterizer's state.
     pub state: Buffer,
+    /// The counters, then the histograms.
     counters: Buffer,
     lists: Buffer,
+    /// Per batch, per round: rays left live.
     live: Buffer,
+    /// Per batch, per round: the indirect dispatch.
     args: Buffer,
-    histograms: Buffer,
     readback: Buffer,
     /// The texel views of the CPU drivers' kernels, made by the first frame that uses them.
     texels: Option<TraceTexels>,
@@ -213,11 +223,11 @@ impl Drop for TraceBuffers {
     }
 }
 
-/// Where in [`TraceBuffers`]'s host copy each part lies (in words).
+/// Where in [`TraceBuffers`]'s host copy each part lies (in words): the counters and
+/// histograms, then the live counts of every batch.
 const READ_COUNTERS: usize = 0;
-const READ_LIVE: usize = COUNTER_WORDS;
-const READ_HIST: usize = READ_LIVE + MAX_TRACE_ROUNDS as usize;
-const READ_WORDS: usize = READ_HIST + 3 * TRACE_HIST_BINS;
+const READ_HIST: usize = COUNTER_WORDS;
+const READ_LIVE: usize = READ_HIST + 3 * TRACE_HIST_BINS;
 
 impl TraceBuffers {
     /// Buffers for frames of `width` x `height` over `gaussians` Gaussians.
@@ -228,18 +238,25 @@ impl TraceBuffers {
         gaussians: u32,
     ) -> Result<Self> {
         let rays = width as u64 * height as u64;
-        if rays == 0 || rays > u32::MAX as u64 / TRACE_STACK {
+        if rays == 0 || rays > u32::MAX as u64 {
             return Err(Error::InvalidInput(format!(
                 "{width}x{height}: the ray tracer takes at most {} rays a frame",
-                u32::MAX as u64 / TRACE_STACK
+                u32::MAX
             )));
         }
+        let batch = rays.min(TRACE_BATCH_RAYS as u64);
+        let batches = rays.div_ceil(batch);
+        let k = tracer.k as u64;
         let gpu = MemoryLocation::GpuOnly;
-        let hist = 3 * TRACE_HIST_BINS as u64 * 4;
+        let counters = (COUNTER_WORDS + 3 * TRACE_HIST_BINS) as u64 * 4;
+        let live = batches * MAX_TRACE_ROUNDS as u64 * 4;
         Ok(TraceBuffers {
             width,
             height,
             gaussians,
+            k: tracer.k,
+            batch_rays: batch as u32,
+            batches: batches as u32,
             bvh: tracer.bvh.buffers(ctx, gaussians)?,
             params: Buffer::new(
                 ctx,
@@ -253,26 +270,107 @@ impl TraceBuffers {
                 std::mem::size_of::<crate::gpu_types::GpuClipParams>() as u64,
                 gpu,
             )?,
-            rays: Buffer::new(ctx, "trace ray states", rays * RAY_STATE_BYTES, gpu)?,
-            stacks: Buffer::new(ctx, "trace stacks", rays * TRACE_STACK * 4, gpu)?,
-            k_t: Buffer::new(ctx, "trace k-buffer t", rays * TRACE_K * 4, gpu)?,
-            k_index: Buffer::new(ctx, "trace k-buffer index", rays * TRACE_K * 4, gpu)?,
-            k_alpha: Buffer::new(ctx, "trace k-buffer alpha", rays * TRACE_K * 4, gpu)?,
+            rays: Buffer::new(ctx, "trace ray states", batch * RAY_STATE_BYTES, gpu)?,
+            stacks: Buffer::new(ctx, "trace stacks", batch * TRACE_STACK * 4, gpu)?,
+            kbuf: Buffer::new(ctx, "trace k-buffers", 3 * batch * k * 4, gpu)?,
             state: Buffer::new(ctx, "trace pixel state", rays * 16, gpu)?,
-            counters: Buffer::new(ctx, "trace counters", COUNTER_WORDS as u64 * 4, gpu)?,
-            lists: Buffer::new(ctx, "trace live rays", 2 * rays * 4, gpu)?,
-            live: Buffer::new(ctx, "trace live counts", MAX_TRACE_ROUNDS as u64 * 4, gpu)?,
-            args: Buffer::new(ctx, "trace round args", MAX_TRACE_ROUNDS as u64 * 16, gpu)?,
-            histograms: Buffer::new(ctx, "trace histograms", hist, gpu)?,
+            counters: Buffer::new(ctx, "trace counters", counters, gpu)?,
+            lists: Buffer::new(ctx, "trace live rays", 2 * batch * 4, gpu)?,
+            live: Buffer::new(ctx, "trace live counts", live, gpu)?,
+            args: Buffer::new(ctx, "trace round args", 4 * live, gpu)?,
             readback: Buffer::new(
                 ctx,
                 "trace counters (host)",
-                READ_WORDS as u64 * 4,
+                counters + live,
                 MemoryLocation::GpuToCpu,
             )?,
             texels: None,
             ctx: ctx.clone(),
         })
+    }
+
+    /// Whether they fit frames of this size, scene and k.
+    pub fn fits(&self, (width, height): (u32, u32), gaussians: u32, k: u32) -> bool {
+        self.width == width && self.height == height && self.gaussians == gaussians && self.k == k
+    }
+
+    /// Device bytes of the BVH (which scale with the Gaussians).
+    pub fn bvh_bytes(&self) -> u64 {
+        self.bvh.device_bytes()
+    }
+
+    /// Device bytes that scale with the rays: per pixel its state, per ray of a batch its
+    /// state, stack, k-buffer and live-list entries.
+    pub fn per_ray_bytes(&self) -> u64 {
+        [
+            &self.rays,
+            &self.stacks,
+            &self.kbuf,
+            &self.state,
+            &self.lists,
+        ]
+        .iter()
+        .map(|b| b.size)
+        .sum()
+    }
+
+    /// Device bytes of the rest: parameters, counters and histograms, round counts and
+    /// arguments, the host copy.
+    pub fn fixed_bytes(&self) -> u64 {
+        [
+            &self.params,
+            &self.clip,
+            &self.counters,
+            &self.live,
+            &self.args,
+            &self.readback,
+        ]
+        .iter()
+        .map(|b| b.size)
+        .sum()
+    }
+
+    /// The counts of the last frame recorded into these buffers, whose batches each took
+    /// rounds `0..rounds`: call it once that submission completed.
+    pub fn stats(&self, rounds: u32) -> TraceFrameStats {
+        let words: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&self.readback.mapped()[..self.readback.size as usize]);
+        let c = &words[READ_COUNTERS..READ_COUNTERS + COUNTER_WORDS];
+        let hist = &words[READ_HIST..READ_LIVE];
+        let max = MAX_TRACE_ROUNDS as usize;
+        let (mut used, mut unfinished) = (0, 0);
+        for b in 0..self.batches as usize {
+            let live = &words[READ_LIVE + b * max..][..rounds as usize];
+            used = used.max(live.iter().take_while(|&&l| l > 0).count() as u32 + 1);
+            unfinished += live[rounds as usize - 1] as u64;
+        }
+        let b = TRACE_HIST_BINS;
+        TraceFrameStats {
+            rays: self.width as u64 * self.height as u64,
+            hits_walked: c[0] as u64,
+            capped: c[1] as u64,
+            hits_found: c[2] as u64,
+            passes: c[4] as u64,
+            node_visits: c[5] as u64 | (c[6] as u64) << 32,
+            p99_walked: p99(&hist[..b]),
+            p99_found: p99(&hist[b..2 * b]),
+            p99_passes: p99(&hist[2 * b..]),
+            rounds: used.min(rounds),
+            unfinished,
+        }
+    }
+
+    /// Rays of `batch` still live after its rounds `0..rounds` (the last frame's).
+    fn live_after(&self, batch: u32, rounds: u32) -> u32 {
+        let at = (READ_LIVE + (batch * MAX_TRACE_ROUNDS + rounds - 1) as usize) * 4;
+        bytemuck::pod_read_unaligned(&self.readback.mapped()[at..at + 4])
+    }
+
+    /// Stack overflows the last frame counted (never expected: the tree's depth is at most 63).
+    fn overflows(&self) -> u32 {
+        let words: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&self.readback.mapped()[..COUNTER_WORDS * 4]);
+        words[3]
     }
 
     /// The texel set for `scene` with `layout` ([`RayTracer`]'s), made or brought up to date
@@ -338,96 +436,89 @@ impl TraceBuffers {
         t.scene_id = scene_id;
         Ok(Some(t.set))
     }
+}
 
-    /// Whether they fit frames of this size.
-    pub fn fits(&self, (width, height): (u32, u32), gaussians: u32) -> bool {
-        self.width == width && self.height == height && self.gaussians == gaussians
+/// The sizes of the k-closest-hit buffer the tracer is built for (`TRACE_K` of its kernels).
+pub const TRACE_KS: [u32; 2] = [16, 64];
+
+/// The k-buffer size a tracer gets by default: `RARA_TRACE_K` (16 or 64) when set, else 16 on
+/// GPUs (REdiSplats' and 3DGRT's k, and their register budget) and 64 on CPU drivers, where
+/// every array spills anyway and fewer restarts from the root pay (lavapipe, plant at 320x240:
+/// docs/PERFORMANCE.md). The image is the same for any k.
+pub fn default_k(ctx: &Context) -> u32 {
+    match std::env::var("RARA_TRACE_K").as_deref() {
+        Ok("16") => return 16,
+        Ok("64") => return 64,
+        _ => {}
     }
-
-    /// Device bytes of the BVH (which scale with the Gaussians).
-    pub fn bvh_bytes(&self) -> u64 {
-        self.bvh.device_bytes()
-    }
-
-    /// Device bytes that scale with the rays (pixels).
-    pub fn per_ray_bytes(&self) -> u64 {
-        [
-            &self.rays,
-            &self.stacks,
-            &self.k_t,
-            &self.k_index,
-            &self.k_alpha,
-            &self.state,
-            &self.lists,
-        ]
-        .iter()
-        .map(|b| b.size)
-        .sum()
-    }
-
-    /// Device bytes of the rest: parameters, counters, round arguments, histograms.
-    pub fn fixed_bytes(&self) -> u64 {
-        [
-            &self.params,
-            &self.clip,
-            &self.counters,
-            &self.live,
-            &self.args,
-            &self.histograms,
-            &self.readback,
-        ]
-        .iter()
-        .map(|b| b.size)
-        .sum()
-    }
-
-    /// The counts of the last frame recorded into these buffers, which took rounds
-    /// `0..rounds`: call it once that submission completed.
-    pub fn stats(&self, rounds: u32) -> TraceFrameStats {
-        let words: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&self.readback.mapped()[..READ_WORDS * 4]);
-        let c = &words[READ_COUNTERS..READ_COUNTERS + COUNTER_WORDS];
-        let live = &words[READ_LIVE..READ_LIVE + MAX_TRACE_ROUNDS as usize];
-        let hist = &words[READ_HIST..READ_WORDS];
-        let used = live[..rounds as usize]
-            .iter()
-            .take_while(|&&l| l > 0)
-            .count() as u32
-            + 1;
-        let b = TRACE_HIST_BINS;
-        TraceFrameStats {
-            rays: self.width as u64 * self.height as u64,
-            hits_walked: c[0] as u64,
-            capped: c[1] as u64,
-            hits_found: c[2] as u64,
-            passes: c[4] as u64,
-            node_visits: c[5] as u64 | (c[6] as u64) << 32,
-            p99_walked: p99(&hist[..b]),
-            p99_found: p99(&hist[b..2 * b]),
-            p99_passes: p99(&hist[2 * b..]),
-            rounds: used.min(rounds),
-            unfinished: live[rounds as usize - 1] as u64,
-        }
-    }
-
-    /// Stack overflows the last frame counted (never expected: the tree's depth is at most 63).
-    fn overflows(&self) -> u32 {
-        let words: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&self.readback.mapped()[..COUNTER_WORDS * 4]);
-        words[3]
+    if cpu_driver(ctx) {
+        64
+    } else {
+        16
     }
 }
 
-/// The ray tracer's kernels.
+/// Whether the device is a CPU driver, where the kernels read through texel views.
+fn cpu_driver(ctx: &Context) -> bool {
+    crate::stages::rasterize::RasterLayout::for_device(ctx)
+        == crate::stages::rasterize::RasterLayout::Strips
+}
+
+/// The SPIR-V of the tracer's kernel for SH `degree`, half-float coefficients or not, reading
+/// through texel views or not, with a `k`-hit buffer.
+fn trace_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> &'static [u32] {
+    use shaders::*;
+    let table: [[[&'static [u32]; 2]; 2]; 4] = if k == 64 {
+        [
+            [
+                [TRACE_DEG0_K64, TRACE_DEG0_SH16_K64],
+                [TRACE_DEG0_TEXELS_K64, TRACE_DEG0_SH16_TEXELS_K64],
+            ],
+            [
+                [TRACE_DEG1_K64, TRACE_DEG1_SH16_K64],
+                [TRACE_DEG1_TEXELS_K64, TRACE_DEG1_SH16_TEXELS_K64],
+            ],
+            [
+                [TRACE_DEG2_K64, TRACE_DEG2_SH16_K64],
+                [TRACE_DEG2_TEXELS_K64, TRACE_DEG2_SH16_TEXELS_K64],
+            ],
+            [
+                [TRACE_DEG3_K64, TRACE_DEG3_SH16_K64],
+                [TRACE_DEG3_TEXELS_K64, TRACE_DEG3_SH16_TEXELS_K64],
+            ],
+        ]
+    } else {
+        [
+            [
+                [TRACE_DEG0, TRACE_DEG0_SH16],
+                [TRACE_DEG0_TEXELS, TRACE_DEG0_SH16_TEXELS],
+            ],
+            [
+                [TRACE_DEG1, TRACE_DEG1_SH16],
+                [TRACE_DEG1_TEXELS, TRACE_DEG1_SH16_TEXELS],
+            ],
+            [
+                [TRACE_DEG2, TRACE_DEG2_SH16],
+                [TRACE_DEG2_TEXELS, TRACE_DEG2_SH16_TEXELS],
+            ],
+            [
+                [TRACE_DEG3, TRACE_DEG3_SH16],
+                [TRACE_DEG3_TEXELS, TRACE_DEG3_SH16_TEXELS],
+            ],
+        ]
+    };
+    table[degree][texels as usize][f16 as usize]
+}
+
+/// The ray tracer's kernels, each built by the first frame that needs it (a scene's SH degree
+/// and precision pick one of eight).
 pub struct RayTracer {
-    /// Per SH degree: f32, f16 coefficients.
-    kernels: Vec<(ComputePipeline, ComputePipeline)>,
-    /// On CPU drivers: the layout of the texel set ([`TraceTexels`]) and the kernels that read
-    /// through it, per SH degree as `kernels`.
-    texels: Option<(
-        vk::DescriptorSetLayout,
-        Vec<(ComputePipeline, ComputePipeline)>,
-    )>,
+    /// The k-buffer size, one of [`TRACE_KS`].
+    k: u32,
+    /// Per (texel views, SH degree, half-float coefficients): the kernel, once built.
+    kernels: [[[std::sync::OnceLock<ComputePipeline>; 2]; 4]; 2],
+    /// On CPU drivers: the layout of the texel set ([`TraceTexels`]) of the texel kernels.
+    texel_layout: Option<vk::DescriptorSetLayout>,
     args: ComputePipeline,
     bvh: BvhBuild,
     ctx: Context,
@@ -435,8 +526,9 @@ pub struct RayTracer {
 
 impl Drop for RayTracer {
     fn drop(&mut self) {
-        if let Some((layout, kernels)) = self.texels.take() {
-            drop(kernels);
+        // The kernels go before the layout they were made with.
+        self.kernels = Default::default();
+        if let Some(layout) = self.texel_layout.take() {
             unsafe {
                 self.ctx
                     .device()
@@ -464,72 +556,85 @@ fn texel_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
 }
 
 impl RayTracer {
-    /// Builds the kernels: on CPU drivers ([`crate::stages::rasterize::RasterLayout::Strips`]) those that read
-    /// through texel views too.
+    /// A tracer with the device's default k-buffer ([`default_k`]).
     pub fn new(ctx: &Context) -> Result<Self> {
-        let variants = [
-            (shaders::TRACE_DEG0, shaders::TRACE_DEG0_SH16),
-            (shaders::TRACE_DEG1, shaders::TRACE_DEG1_SH16),
-            (shaders::TRACE_DEG2, shaders::TRACE_DEG2_SH16),
-            (shaders::TRACE_DEG3, shaders::TRACE_DEG3_SH16),
-        ];
-        let kernels = variants
-            .iter()
-            .map(|(f32, f16)| {
-                Ok((
-                    ComputePipeline::new::<TracePush>(ctx, c"trace", f32)?,
-                    ComputePipeline::new::<TracePush>(ctx, c"trace", f16)?,
-                ))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let cpu = crate::stages::rasterize::RasterLayout::for_device(ctx)
-            == crate::stages::rasterize::RasterLayout::Strips;
-        let texels = if cpu {
-            let layout = texel_set_layout(ctx)?;
-            let variants = [
-                (shaders::TRACE_DEG0_TEXELS, shaders::TRACE_DEG0_SH16_TEXELS),
-                (shaders::TRACE_DEG1_TEXELS, shaders::TRACE_DEG1_SH16_TEXELS),
-                (shaders::TRACE_DEG2_TEXELS, shaders::TRACE_DEG2_SH16_TEXELS),
-                (shaders::TRACE_DEG3_TEXELS, shaders::TRACE_DEG3_SH16_TEXELS),
-            ];
-            let built = variants
-                .iter()
-                .map(|(f32, f16)| {
-                    let build = |spirv| {
-                        ComputePipeline::with_set_layouts::<TracePush>(
-                            ctx,
-                            c"trace",
-                            spirv,
-                            &[layout],
-                        )
-                    };
-                    Ok((build(f32)?, build(f16)?))
-                })
-                .collect::<Result<Vec<_>>>();
-            match built {
-                Ok(k) => Some((layout, k)),
-                Err(e) => {
-                    unsafe { ctx.device().destroy_descriptor_set_layout(layout, None) };
-                    return Err(e);
-                }
-            }
+        Self::with_k(ctx, default_k(ctx))
+    }
+
+    /// A tracer whose rays collect `k` hits per traversal pass, one of [`TRACE_KS`]. The
+    /// kernels are built when first used; on CPU drivers
+    /// ([`crate::stages::rasterize::RasterLayout::Strips`]) they read through texel views.
+    pub fn with_k(ctx: &Context, k: u32) -> Result<Self> {
+        if !TRACE_KS.contains(&k) {
+            return Err(Error::InvalidInput(format!(
+                "a k-buffer of {k} hits: the ray tracer is built for {TRACE_KS:?}"
+            )));
+        }
+        let texel_layout = if cpu_driver(ctx) {
+            Some(texel_set_layout(ctx)?)
         } else {
             None
         };
+        let args = ComputePipeline::new::<ArgsPush>(ctx, c"trace_args", shaders::TRACE_ARGS);
+        let bvh = BvhBuild::new(ctx);
+        let (args, bvh) = match (args, bvh) {
+            (Ok(a), Ok(b)) => (a, b),
+            (a, b) => {
+                if let Some(layout) = texel_layout {
+                    unsafe { ctx.device().destroy_descriptor_set_layout(layout, None) };
+                }
+                return Err(a.err().or(b.err()).expect("one failed"));
+            }
+        };
         Ok(RayTracer {
-            kernels,
-            texels,
-            args: ComputePipeline::new::<ArgsPush>(ctx, c"trace_args", shaders::TRACE_ARGS)?,
-            bvh: BvhBuild::new(ctx)?,
+            k,
+            kernels: Default::default(),
+            texel_layout,
+            args,
+            bvh,
             ctx: ctx.clone(),
         })
     }
 
-    /// Records a ray-traced frame of `scene` from `camera` into `cmd`, rounds `first..end` of
-    /// it: with `first == 0` the frame's set-up (parameters, counters) and the BVH build (pass
-    /// "bvh build") first, then the rounds (pass "trace"), then the copy of the counters for
-    /// [`TraceBuffers::stats`]. A later call with `first > 0` goes on with the rays the earlier
-    /// rounds left live. The per-pixel state is in `bufs.state` afterwards.
+    /// Hits a traversal pass collects per ray.
+    pub fn k(&self) -> u32 {
+        self.k
+    }
+
+    /// The kernel for a scene of SH `degree` and `precision`, through texel views or not,
+    /// built now if it was not yet.
+    fn kernel(
+        &self,
+        degree: usize,
+        precision: ShPrecision,
+        texels: bool,
+    ) -> Result<&ComputePipeline> {
+        let f16 = precision == ShPrecision::F16;
+        let cell = &self.kernels[texels as usize][degree][f16 as usize];
+        if let Some(k) = cell.get() {
+            return Ok(k);
+        }
+        let spirv = trace_spirv(degree, f16, texels, self.k);
+        let built = match (texels, self.texel_layout) {
+            (true, Some(layout)) => ComputePipeline::with_set_layouts::<TracePush>(
+                &self.ctx,
+                c"trace",
+                spirv,
+                &[layout],
+            )?,
+            _ => ComputePipeline::new::<TracePush>(&self.ctx, c"trace", spirv)?,
+        };
+        Ok(cell.get_or_init(|| built))
+    }
+
+    /// Records a ray-traced frame of `scene` from `camera` into `cmd`: for each batch of rays
+    /// in `batches` (of [`TraceBuffers::batches`]), rounds `rounds` of it. The frame's set-up
+    /// (parameters, counters) and the BVH build (pass "bvh build") come first when the call
+    /// starts the frame (batch 0, round 0); then the rounds (pass "trace"), then the copy of
+    /// the counters for [`TraceBuffers::stats`]. A later call for the same batch from a later
+    /// round goes on with the rays its earlier rounds left live (the per-ray buffers hold one
+    /// batch: a batch must be finished before the next is started). The per-pixel state is in
+    /// `bufs.state` afterwards.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -541,14 +646,15 @@ impl RayTracer {
         camera: &Camera,
         clip: &crate::clip::Clip,
         options: &RayTraceOptions,
+        batches: std::ops::Range<u32>,
         rounds: std::ops::Range<u32>,
     ) -> Result<()> {
         let n = scene.len();
         let (w, h) = (camera.width, camera.height);
-        if !bufs.fits((w, h), n) {
+        if !bufs.fits((w, h), n, self.k) {
             return Err(Error::InvalidInput(format!(
-                "trace buffers for {}x{} and {} Gaussians, not {w}x{h} and {n}",
-                bufs.width, bufs.height, bufs.gaussians
+                "trace buffers for {}x{}, {} Gaussians and k = {}, not {w}x{h}, {n} and {}",
+                bufs.width, bufs.height, bufs.gaussians, bufs.k, self.k
             )));
         }
         if rounds.end > MAX_TRACE_ROUNDS || rounds.start >= rounds.end {
@@ -556,9 +662,15 @@ impl RayTracer {
                 "ray tracer rounds {rounds:?}: at most {MAX_TRACE_ROUNDS}"
             )));
         }
+        if batches.end > bufs.batches || batches.start >= batches.end {
+            return Err(Error::InvalidInput(format!(
+                "ray tracer batches {batches:?} of {}",
+                bufs.batches
+            )));
+        }
         let device = ctx.device();
         let rays = w * h;
-        if rounds.start == 0 {
+        if rounds.start == 0 && batches.start == 0 {
             let rot = camera.rotation;
             let (cx, cy) = camera.principal_point();
             let col = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
@@ -580,7 +692,7 @@ impl RayTracer {
             unsafe {
                 device.cmd_update_buffer(cmd, bufs.params.raw, 0, bytemuck::bytes_of(&p));
                 device.cmd_update_buffer(cmd, bufs.clip.raw, 0, bytemuck::bytes_of(&clip_params));
-                for b in [&bufs.counters, &bufs.live, &bufs.histograms] {
+                for b in [&bufs.counters, &bufs.live] {
                     device.cmd_fill_buffer(cmd, b.raw, 0, vk::WHOLE_SIZE, 0);
                 }
             }
@@ -596,18 +708,12 @@ impl RayTracer {
             timer.end_pass(cmd, c"bvh build");
         }
         let degree = scene.sh_degree().min(3) as usize;
-        let set = match &self.texels {
-            Some((layout, kernels)) => bufs
-                .texel_set(*layout, scene)?
-                .map(|set| (set, &kernels[degree])),
+        let set = match self.texel_layout {
+            Some(layout) => bufs.texel_set(layout, scene)?,
             None => None,
         };
-        let (f32_kernel, f16_kernel) = set.map_or(&self.kernels[degree], |(_, k)| k);
-        let kernel = match scene.sh_precision() {
-            ShPrecision::F32 => f32_kernel,
-            ShPrecision::F16 => f16_kernel,
-        };
-        let sets: Vec<vk::DescriptorSet> = set.map(|(s, _)| s).into_iter().collect();
+        let kernel = self.kernel(degree, scene.sh_precision(), set.is_some())?;
+        let sets: Vec<vk::DescriptorSet> = set.into_iter().collect();
         let (gaussians, sh, _) = scene.buffers();
         let mut push = TracePush {
             params: bufs.params.address,
@@ -616,41 +722,45 @@ impl RayTracer {
             nodes: bufs.bvh.nodes.address,
             rays: bufs.rays.address,
             stacks: bufs.stacks.address,
-            k_t: bufs.k_t.address,
-            k_index: bufs.k_index.address,
-            k_alpha: bufs.k_alpha.address,
+            kbuf: bufs.kbuf.address,
             state: bufs.state.address,
             counters: bufs.counters.address,
             lists: bufs.lists.address,
-            live: bufs.live.address,
-            histograms: bufs.histograms.address,
+            live: 0,
             clip: bufs.clip.address,
             round: 0,
             budget: TRACE_BUDGET,
+            ray_base: 0,
+            batch_rays: 0,
+            stride: bufs.batch_rays,
+            pad: 0,
         };
+        let max = MAX_TRACE_ROUNDS as u64;
         timer.begin_pass(cmd, c"trace");
-        for round in rounds.clone() {
-            push.round = round;
-            if round == 0 {
-                kernel.dispatch_with_sets(cmd, &push, &sets, linear_grid(rays));
-            } else {
-                let args = ArgsPush {
-                    live: bufs.live.address,
-                    args: bufs.args.address,
-                    round,
-                    pad: 0,
-                };
-                self.args.dispatch(cmd, &args, [1, 1, 1]);
+        for batch in batches {
+            // Each batch's rays go through all of their rounds before the next batch reuses
+            // the per-ray buffers.
+            push.ray_base = batch * bufs.batch_rays;
+            push.batch_rays = bufs.batch_rays.min(rays - push.ray_base);
+            push.live = bufs.live.address + 4 * batch as u64 * max;
+            for round in rounds.clone() {
+                push.round = round;
+                if round == 0 {
+                    kernel.dispatch_with_sets(cmd, &push, &sets, linear_grid(push.batch_rays));
+                } else {
+                    let slot = batch as u64 * max + round as u64;
+                    let args = ArgsPush {
+                        live: push.live,
+                        args: bufs.args.address + 16 * (slot - round as u64),
+                        round,
+                        pad: 0,
+                    };
+                    self.args.dispatch(cmd, &args, [1, 1, 1]);
+                    compute_barrier(ctx, cmd);
+                    kernel.dispatch_indirect_with_sets(cmd, &push, &sets, bufs.args.raw, 16 * slot);
+                }
                 compute_barrier(ctx, cmd);
-                kernel.dispatch_indirect_with_sets(
-                    cmd,
-                    &push,
-                    &sets,
-                    bufs.args.raw,
-                    round as u64 * 16,
-                );
             }
-            compute_barrier(ctx, cmd);
         }
         timer.end_pass(cmd, c"trace");
         crate::renderer::copy_parts_to_host(
@@ -659,7 +769,6 @@ impl RayTracer {
             &[
                 (&bufs.counters, READ_COUNTERS as u64 * 4),
                 (&bufs.live, READ_LIVE as u64 * 4),
-                (&bufs.histograms, READ_HIST as u64 * 4),
             ],
             &bufs.readback,
         );
@@ -682,39 +791,36 @@ impl RayTracer {
         let (w, h) = (camera.width, camera.height);
         let mut bufs = TraceBuffers::new(self, ctx, (w, h), scene.len())?;
         let mut timer = PassTimer::labels_only(ctx);
-        let mut end = FIRST_TRACE_ROUNDS;
-        ctx.run_commands(|cmd| {
-            self.record(
-                ctx,
-                cmd,
-                &mut timer,
-                &mut bufs,
-                scene,
-                camera,
-                &render.clip,
-                options,
-                0..end,
-            )
-        })??;
-        let mut stats = bufs.stats(end);
-        while stats.unfinished > 0 && end < MAX_TRACE_ROUNDS {
-            let next = (end * 2).min(MAX_TRACE_ROUNDS);
-            ctx.run_commands(|cmd| {
-                self.record(
-                    ctx,
-                    cmd,
-                    &mut timer,
-                    &mut bufs,
-                    scene,
-                    camera,
-                    &render.clip,
-                    options,
-                    end..next,
-                )
-            })??;
-            end = next;
-            stats = bufs.stats(end);
+        // Batch by batch: each runs its first rounds, then more (from the host) while it has
+        // live rays, before the next batch takes over the per-ray buffers.
+        let mut most = 1;
+        for batch in 0..bufs.batches {
+            let mut end = 0;
+            let mut next = FIRST_TRACE_ROUNDS;
+            loop {
+                ctx.run_commands(|cmd| {
+                    self.record(
+                        ctx,
+                        cmd,
+                        &mut timer,
+                        &mut bufs,
+                        scene,
+                        camera,
+                        &render.clip,
+                        options,
+                        batch..batch + 1,
+                        end..next,
+                    )
+                })??;
+                end = next;
+                if bufs.live_after(batch, end) == 0 || end == MAX_TRACE_ROUNDS {
+                    break;
+                }
+                next = (end * 2).min(MAX_TRACE_ROUNDS);
+            }
+            most = most.max(end);
         }
+        let stats = bufs.stats(most);
         if bufs.overflows() > 0 {
             return Err(Error::InvalidInput(format!(
                 "ray tracer: {} traversal stack overflows (the BVH is deeper than 63)",
