@@ -151,7 +151,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     repeat: usize,
     /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7, a BVH built per
-    /// frame; slow on CPU drivers so far).
+    /// frame).
     #[arg(long, value_enum, default_value_t = TracerArg::Raster)]
     tracer: TracerArg,
     #[command(flatten)]
@@ -360,39 +360,8 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             t.rounds,
             stats.wall_ms
         );
-        println!(
-            "{}",
-            cli::describe_memory(&gpu_scene, &renderer.headless_memory())
-        );
-        return Ok(());
-    }
-    warn_oversized(stats.oversized as usize, gpu_scene.len() as usize);
-    println!(
-        "wrote {} ({}x{}) on {}: {} visible Gaussians ({} cutoff), {} tile intersections",
-        args.output.display(),
-        camera.width,
-        camera.height,
-        ctx.info().name,
-        stats.visible,
-        stats.cutoff,
-        stats.intersections
-    );
-    if stats.cutoff_pairs > 0 {
-        println!(
-            "cutoff pairs by tile: {} in all, {} weight 1 (drawn plain), {} empty (left out), {} partial",
-            stats.cutoff_pairs,
-            stats.cutoff_pairs_weight_one,
-            stats.cutoff_pairs_empty,
-            stats.cutoff_pairs_partial()
-        );
-    }
-    if stats.weighted_tiles > 0 {
-        let (gx, gy) = rara::camera::tile_grid(camera.width, camera.height);
-        println!(
-            "tiles by rasterize kernel: {} of {} weighted (hold a partial pair), the rest plain",
-            stats.weighted_tiles,
-            gx * gy
-        );
+    } else {
+        print_raster_counts(&args.output, &camera, &ctx, &gpu_scene, &stats);
     }
     println!(
         "{}",
@@ -430,6 +399,44 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// What `render` prints of a rasterized frame: its counts, and warnings.
+fn print_raster_counts(
+    output: &Path,
+    camera: &rara::Camera,
+    ctx: &Context,
+    gpu_scene: &rara::GpuScene,
+    stats: &rara::FrameStats,
+) {
+    warn_oversized(stats.oversized as usize, gpu_scene.len() as usize);
+    println!(
+        "wrote {} ({}x{}) on {}: {} visible Gaussians ({} cutoff), {} tile intersections",
+        output.display(),
+        camera.width,
+        camera.height,
+        ctx.info().name,
+        stats.visible,
+        stats.cutoff,
+        stats.intersections
+    );
+    if stats.cutoff_pairs > 0 {
+        println!(
+            "cutoff pairs by tile: {} in all, {} weight 1 (drawn plain), {} empty (left out), {} partial",
+            stats.cutoff_pairs,
+            stats.cutoff_pairs_weight_one,
+            stats.cutoff_pairs_empty,
+            stats.cutoff_pairs_partial()
+        );
+    }
+    if stats.weighted_tiles > 0 {
+        let (gx, gy) = rara::camera::tile_grid(camera.width, camera.height);
+        println!(
+            "tiles by rasterize kernel: {} of {} weighted (hold a partial pair), the rest plain",
+            stats.weighted_tiles,
+            gx * gy
+        );
+    }
 }
 
 fn cmd_info(path: &Path, json: bool) -> Result<()> {

@@ -240,6 +240,14 @@ impl Renderer {
         result
     }
 
+    /// Sets the ray tracer's k-buffer (hits collected per traversal pass, one of
+    /// [`crate::stages::trace::TRACE_KS`]; the default is [`crate::stages::trace::default_k`]).
+    /// It changes no pixel, only speed and the per-ray memory.
+    pub fn set_trace_k(&mut self, k: u32) -> Result<()> {
+        self.ray_tracer = std::sync::OnceLock::from(RayTracer::with_k(&self.ctx, k)?);
+        Ok(())
+    }
+
     /// The ray tracer's kernels, built by the first frame that asks for them.
     fn ray_tracer(&self) -> Result<&RayTracer> {
         if let Some(t) = self.ray_tracer.get() {
