@@ -1168,7 +1168,9 @@ fn render_with_the_ray_tracer() {
     assert_success(&o);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
-        stdout.contains("ray traced") && stdout.contains("hits walked per ray"),
+        stdout.contains("ray traced")
+            && stdout.contains("hits composited")
+            && stdout.contains("ray tracer: BVH"),
         "{stdout}"
     );
     assert!(out.is_file());

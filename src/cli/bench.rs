@@ -320,8 +320,10 @@ fn print_table(
             }
         }
     }
+    // The mode column as wide as its longest name ("ray original" with --tracer ray).
+    let name_width = results.iter().map(|r| r.name().len()).max().unwrap_or(0).max(8);
     print!(
-        "| {:<12} | {:>10} | {:>10} | {:>10} | {:>6} | {:>9} |",
+        "| {:<name_width$} | {:>10} | {:>10} | {:>10} | {:>6} | {:>9} |",
         "mode", "median ms", "mean ms", "wall ms", "FPS", "cutoff"
     );
     for g in &groups {
@@ -345,7 +347,7 @@ fn print_table(
         let wall = median(&mut r.wall());
         let cutoff = mean(&r.frames.iter().map(|f| f.cutoff as f64).collect::<Vec<_>>());
         print!(
-            "| {:<12} | {:>10.1} | {:>10.1} | {:>10.1} | {:>6.2} | {:>9.0} |",
+            "| {:<name_width$} | {:>10.1} | {:>10.1} | {:>10.1} | {:>6.2} | {:>9.0} |",
             r.name(),
             med,
             mean(&r.gpu()),

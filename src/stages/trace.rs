@@ -27,9 +27,10 @@ use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocatio
 pub const TRACE_STACK: u64 = 64;
 /// Steps (a node visit or a composited hit) a ray gets per round. Smaller rounds refill the
 /// SIMD lanes with live rays more often, at the cost of saving and loading the ray's state
-/// (lavapipe, plant at 320x240: see docs/PERFORMANCE.md).
-pub const TRACE_BUDGET: u32 = 1024;
-/// Rounds a frame may take at most (4M steps per ray); a frame with rays still live after
+/// (lavapipe, plant at 320x240: see docs/PERFORMANCE.md). An invocation's loops run at most
+/// about three times this many iterations, far inside lavapipe's 65,535.
+pub const TRACE_BUDGET: u32 = 4096;
+/// Rounds a frame may take at most (16M steps per ray); a frame with rays still live after
 /// them is an error of [`RayTracer::render`], and an incomplete frame of
 /// [`crate::Renderer::record`].
 pub const MAX_TRACE_ROUNDS: u32 = 4096;
