@@ -63,6 +63,16 @@ ProjectedSplat texel_splat(uint i) {
     return p;
 }
 
+// The scene's Gaussian i (load_gaussian in common.glsl, from its three texels).
+Gaussian texel_gaussian(uint i) {
+    int t = int(i) * 3;
+    Gaussian g;
+    g.pos_opacity = uintBitsToFloat(texelFetch(gaussian_texels, t));
+    g.rot = uintBitsToFloat(texelFetch(gaussian_texels, t + 1));
+    g.scale = uintBitsToFloat(texelFetch(gaussian_texels, t + 2));
+    return g;
+}
+
 // Cutoff record k (load_cutoff_record in clip.glsl, from its three texels).
 CutoffRecord texel_cutoff_record(uint k) {
     int t = int(k) * 3;

@@ -31,12 +31,7 @@ layout(push_constant) uniform Push {
 #include "frame_texels.glsl"
 
 Gaussian fetch_gaussian(uint i) {
-    int t = int(i) * 3;
-    Gaussian g;
-    g.pos_opacity = uintBitsToFloat(texelFetch(gaussian_texels, t));
-    g.rot = uintBitsToFloat(texelFetch(gaussian_texels, t + 1));
-    g.scale = uintBitsToFloat(texelFetch(gaussian_texels, t + 2));
-    return g;
+    return texel_gaussian(i);
 }
 #else
 Gaussian fetch_gaussian(uint i) {

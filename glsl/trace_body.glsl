@@ -45,12 +45,7 @@ void load_node(BvhTree nodes, uint i, out uvec4 w0, out uvec4 w1) {
 // Gaussian i of the scene.
 Gaussian trace_gaussian(Gaussians gaussians, uint i) {
 #ifdef SCENE_TEXELS
-    int t = int(i) * 3;
-    Gaussian g;
-    g.pos_opacity = uintBitsToFloat(texelFetch(gaussian_texels, t));
-    g.rot = uintBitsToFloat(texelFetch(gaussian_texels, t + 1));
-    g.scale = uintBitsToFloat(texelFetch(gaussian_texels, t + 2));
-    return g;
+    return texel_gaussian(i);
 #else
     return load_gaussian(gaussians, i);
 #endif
