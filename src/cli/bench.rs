@@ -321,7 +321,12 @@ fn print_table(
         }
     }
     // The mode column as wide as its longest name ("ray original" with --tracer ray).
-    let name_width = results.iter().map(|r| r.name().len()).max().unwrap_or(0).max(8);
+    let name_width = results
+        .iter()
+        .map(|r| r.name().len())
+        .max()
+        .unwrap_or(0)
+        .max(8);
     print!(
         "| {:<name_width$} | {:>10} | {:>10} | {:>10} | {:>6} | {:>9} |",
         "mode", "median ms", "mean ms", "wall ms", "FPS", "cutoff"
