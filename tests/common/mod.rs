@@ -209,8 +209,8 @@ pub fn tracer_clips(lo: glam::Vec3, hi: glam::Vec3) -> Vec<(&'static str, rara::
     ]
 }
 
-/// Checks a ray-traced GPU image against the CPU reference tracer's (SPEC section 7):
-/// >= `min_psnr` dB, and every pixel off by more than `max_diff` levels must be one that f32
+/// Checks a ray-traced GPU image against the CPU reference tracer's (SPEC section 7): at
+/// least `min_psnr` dB, and every pixel off by more than `max_diff` levels must be one that f32
 /// cannot decide, which the reference shows along the pixel's ray: two hits whose t agree to
 /// 1e-6 (the GPU may order them by index where the reference's f64 t orders them the other
 /// way), or a flat hit whose crossing point lies within 1e-5 (1 + t) of the clip boundary (the
