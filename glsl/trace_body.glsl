@@ -56,7 +56,6 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 #ifndef TRACE_K
 #define TRACE_K 16
 #endif
-#define TRACE_STACK 64
 #define NO_LEAF 0xffffffffu
 #define NO_NODE 0xffffffffu
 
@@ -66,23 +65,13 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 #define RAY_COMPOSITING 4u
 #define RAY_HAS_LAST 8u
 
-// Counter slots (GpuTraceCounters on the host). Sums of counts that can pass 2^32 on a large
-// frame (node visits) are a low word and a carry word.
-#define TRACE_WALKED 0
-#define TRACE_CAPPED 1
-#define TRACE_FOUND 2
-#define TRACE_OVERFLOW 3
-#define TRACE_PASSES 4
-#define TRACE_VISITS_LO 5
-#define TRACE_VISITS_HI 6
-
-// Per-ray histograms of finished rays (HIST_* bins each; the last bin holds that many or
-// more): hits composited, hits found, traversal passes. They follow the counters.
-#define COUNTER_WORDS 8u
-#define HIST_BINS 1024u
-#define HIST_WALKED COUNTER_WORDS
-#define HIST_FOUND (COUNTER_WORDS + HIST_BINS)
-#define HIST_PASSES (COUNTER_WORDS + 2u * HIST_BINS)
+// Counter slots: TRACE_COUNTER_* (src/constants.rs). Sums of counts that can pass 2^32 on a
+// large frame (node visits) are a low word and a carry word. Per-ray histograms of finished
+// rays follow the counters, TRACE_HIST_BINS bins each (the last bin holds that many or more):
+// hits composited, hits found, traversal passes.
+#define HIST_WALKED uint(TRACE_COUNTER_WORDS)
+#define HIST_FOUND (HIST_WALKED + uint(TRACE_HIST_BINS))
+#define HIST_PASSES (HIST_FOUND + uint(TRACE_HIST_BINS))
 
 // A ray's state between rounds, three 16-byte words at ray * 48 (GpuRayState): (colour,
 // transmittance); (last hit's index, hits walked, flags, stack pointer | k count << 8 | k
@@ -110,7 +99,7 @@ layout(push_constant) uniform Push {
     U32s kbuf;          // TRACE_K per ray, three sections of stride * TRACE_K words: t (float
                         // bits), Gaussian, alpha (float bits)
     Vec4s state;        // out: per pixel (premultiplied colour, transmittance)
-    U32s counters;      // TRACE_* slots, then the HIST_* bins from word COUNTER_WORDS
+    U32s counters;      // TRACE_* slots, then the HIST_* bins from word TRACE_COUNTER_WORDS
     U32s lists;         // two lists of the batch's live rays, `stride` entries each
     U32s live;          // per round, the rays of the batch it left live (its list's length)
     ClipParamsRef clip;
@@ -411,7 +400,7 @@ void main() {
                     } else if (enters) {
                         // Cannot happen (depth <= 63 keeps at most 63 entries): counted, never
                         // silent.
-                        atomicAdd(pc.counters.v[TRACE_OVERFLOW], 1u);
+                        atomicAdd(pc.counters.v[TRACE_COUNTER_OVERFLOW], 1u);
                     }
                 }
             }
@@ -492,21 +481,21 @@ void main() {
     found += found_now;
     visits += visits_now;
     if (found_now > 0u) {
-        atomicAdd(pc.counters.v[TRACE_FOUND], found_now);
+        atomicAdd(pc.counters.v[TRACE_COUNTER_FOUND], found_now);
     }
-    add_wide(TRACE_VISITS_LO, visits_now);
+    add_wide(TRACE_COUNTER_VISITS_LO, visits_now);
     // The pixel's (C, T) after every round, so that a frame cut short by its rounds still
     // shows what its rays composited so far.
     store_vec4_item(pc.state, ray, vec4(colour, T));
     if ((flags & RAY_DONE) != 0u) {
-        atomicAdd(pc.counters.v[TRACE_WALKED], walked);
-        atomicAdd(pc.counters.v[TRACE_PASSES], passes);
+        atomicAdd(pc.counters.v[TRACE_COUNTER_WALKED], walked);
+        atomicAdd(pc.counters.v[TRACE_COUNTER_PASSES], passes);
         if ((flags & RAY_CAPPED) != 0u) {
-            atomicAdd(pc.counters.v[TRACE_CAPPED], 1u);
+            atomicAdd(pc.counters.v[TRACE_COUNTER_CAPPED], 1u);
         }
-        atomicAdd(pc.counters.v[HIST_WALKED + min(walked, HIST_BINS - 1u)], 1u);
-        atomicAdd(pc.counters.v[HIST_FOUND + min(found, HIST_BINS - 1u)], 1u);
-        atomicAdd(pc.counters.v[HIST_PASSES + min(passes, HIST_BINS - 1u)], 1u);
+        atomicAdd(pc.counters.v[HIST_WALKED + min(walked, uint(TRACE_HIST_BINS) - 1u)], 1u);
+        atomicAdd(pc.counters.v[HIST_FOUND + min(found, uint(TRACE_HIST_BINS) - 1u)], 1u);
+        atomicAdd(pc.counters.v[HIST_PASSES + min(passes, uint(TRACE_HIST_BINS) - 1u)], 1u);
         return;
     }
     // Still live: onto the next round's list, with its state (the node it was going on to

@@ -190,6 +190,28 @@ pub const CLIP_FLAG_TRACE_ALL: u32 = 2;
 /// Clip flag: the region is a sphere, not an intersection of half-spaces.
 pub const CLIP_FLAG_SPHERE: u32 = 4;
 
+/// Ray tracer stack entries per ray (`glsl/trace_body.glsl`): the BVH's depth is at most 63.
+pub const TRACE_STACK: u32 = 64;
+/// Ray tracer counter slot: hits composited (or skipped for alpha), over all rays.
+pub const TRACE_COUNTER_WALKED: u32 = 0;
+/// Ray tracer counter slot: rays the hit cap cut short.
+pub const TRACE_COUNTER_CAPPED: u32 = 1;
+/// Ray tracer counter slot: hits put in the k-buffers.
+pub const TRACE_COUNTER_FOUND: u32 = 2;
+/// Ray tracer counter slot: traversal stack overflows (never expected).
+pub const TRACE_COUNTER_OVERFLOW: u32 = 3;
+/// Ray tracer counter slot: traversal passes over all rays.
+pub const TRACE_COUNTER_PASSES: u32 = 4;
+/// Ray tracer counter slots: node visits over all rays, a low word and its carry word.
+pub const TRACE_COUNTER_VISITS_LO: u32 = 5;
+/// See [`TRACE_COUNTER_VISITS_LO`].
+pub const TRACE_COUNTER_VISITS_HI: u32 = 6;
+/// Words of the ray tracer's counters; its per-ray histograms follow them.
+pub const TRACE_COUNTER_WORDS: u32 = 8;
+/// Bins of each of the ray tracer's per-ray histograms (hits composited, hits found, passes);
+/// the last bin holds that many or more.
+pub const TRACE_HIST_BINS: u32 = 1024;
+
 /// Every constant above, by the macro name the kernels see.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TILE_SIZE", TILE_SIZE),
@@ -239,4 +261,14 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("CLIP_FLAG_INVERT", CLIP_FLAG_INVERT),
     ("CLIP_FLAG_TRACE_ALL", CLIP_FLAG_TRACE_ALL),
     ("CLIP_FLAG_SPHERE", CLIP_FLAG_SPHERE),
+    ("TRACE_STACK", TRACE_STACK),
+    ("TRACE_COUNTER_WALKED", TRACE_COUNTER_WALKED),
+    ("TRACE_COUNTER_CAPPED", TRACE_COUNTER_CAPPED),
+    ("TRACE_COUNTER_FOUND", TRACE_COUNTER_FOUND),
+    ("TRACE_COUNTER_OVERFLOW", TRACE_COUNTER_OVERFLOW),
+    ("TRACE_COUNTER_PASSES", TRACE_COUNTER_PASSES),
+    ("TRACE_COUNTER_VISITS_LO", TRACE_COUNTER_VISITS_LO),
+    ("TRACE_COUNTER_VISITS_HI", TRACE_COUNTER_VISITS_HI),
+    ("TRACE_COUNTER_WORDS", TRACE_COUNTER_WORDS),
+    ("TRACE_HIST_BINS", TRACE_HIST_BINS),
 ];

@@ -87,10 +87,13 @@ pub struct FrameMemory {
     /// (32 B), Morton sort (16 B and histograms) and leaf node (32 B), per inner node 32 B,
     /// per node its parent (4 B), per inner node an arrival count (4 B).
     pub bvh: u64,
-    /// The ray tracer's per-ray buffers: state (48 B), stack (256 B), k-buffer (192 B),
-    /// pixel state (16 B) and live lists (8 B), 520 B per ray.
+    /// The ray tracer's per-ray buffers: per ray of a batch (at most
+    /// [`crate::stages::trace::TRACE_BATCH_RAYS`]) its state (48 B), stack (256 B), k-buffer
+    /// (12 B per entry: 192 B with k = 16, 768 B with k = 64) and live-list entries (8 B), and
+    /// per pixel its state (16 B).
     pub trace_per_ray: u64,
-    /// The rays (pixels) `trace_per_ray` holds, and the Gaussians the BVH is over.
+    /// The rays (pixels) of the frame `trace_per_ray` is for, and the Gaussians the BVH is
+    /// over.
     pub trace_rays: u64,
     /// See `trace_rays`.
     pub bvh_gaussians: u64,

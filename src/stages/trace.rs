@@ -13,6 +13,11 @@ use bytemuck::{Pod, Zeroable};
 use super::bvh::{BvhBuffers, BvhBuild};
 use super::linear_grid;
 use crate::camera::Camera;
+use crate::constants::{
+    TRACE_COUNTER_CAPPED, TRACE_COUNTER_FOUND, TRACE_COUNTER_OVERFLOW, TRACE_COUNTER_PASSES,
+    TRACE_COUNTER_VISITS_HI, TRACE_COUNTER_VISITS_LO, TRACE_COUNTER_WALKED, TRACE_COUNTER_WORDS,
+    TRACE_HIST_BINS, TRACE_STACK,
+};
 use crate::error::VkContext;
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
@@ -23,8 +28,6 @@ use crate::timing::PassTimer;
 use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
-/// Stack entries per ray (`TRACE_STACK`): the tree's depth is at most 63.
-pub const TRACE_STACK: u64 = 64;
 /// Steps (a node visit or a composited hit) a ray gets per round. Smaller rounds refill the
 /// SIMD lanes with live rays more often, at the cost of saving and loading the ray's state
 /// (lavapipe, plant at 320x240: see docs/PERFORMANCE.md). An invocation's loops run at most
@@ -36,10 +39,11 @@ pub const TRACE_BUDGET: u32 = 4096;
 pub const MAX_TRACE_ROUNDS: u32 = 4096;
 /// Rounds a frame slot records at first; it grows after a frame that needed more.
 pub const FIRST_TRACE_ROUNDS: u32 = 64;
-/// Bins of each per-ray histogram (`HIST_BINS`): the last bin holds that many or more.
-pub const TRACE_HIST_BINS: usize = 1024;
-/// Words of the counters (`TRACE_*` slots); the histograms follow them in the same buffer.
-const COUNTER_WORDS: usize = 8;
+/// Words of the counters (`TRACE_COUNTER_*` slots); the histograms follow them in the same
+/// buffer, [`TRACE_HIST_BINS`] bins each.
+const COUNTER_WORDS: usize = TRACE_COUNTER_WORDS as usize;
+/// Bins of each histogram.
+const HIST_BINS: usize = TRACE_HIST_BINS as usize;
 /// Rays traced together at most (a batch): the per-ray buffers (state, stack, k-buffer, live
 /// lists) hold one batch, so their memory is bounded whatever the image size, and the batches
 /// of a frame run one after another.
@@ -228,7 +232,7 @@ impl Drop for TraceBuffers {
 /// histograms, then the live counts of every batch.
 const READ_COUNTERS: usize = 0;
 const READ_HIST: usize = COUNTER_WORDS;
-const READ_LIVE: usize = READ_HIST + 3 * TRACE_HIST_BINS;
+const READ_LIVE: usize = READ_HIST + 3 * HIST_BINS;
 
 impl TraceBuffers {
     /// Buffers for frames of `width` x `height` over `gaussians` Gaussians.
@@ -249,7 +253,7 @@ impl TraceBuffers {
         let batches = rays.div_ceil(batch);
         let k = tracer.k as u64;
         let gpu = MemoryLocation::GpuOnly;
-        let counters = (COUNTER_WORDS + 3 * TRACE_HIST_BINS) as u64 * 4;
+        let counters = (COUNTER_WORDS + 3 * HIST_BINS) as u64 * 4;
         let live = batches * MAX_TRACE_ROUNDS as u64 * 4;
         Ok(TraceBuffers {
             width,
@@ -272,7 +276,7 @@ impl TraceBuffers {
                 gpu,
             )?,
             rays: Buffer::new(ctx, "trace ray states", batch * RAY_STATE_BYTES, gpu)?,
-            stacks: Buffer::new(ctx, "trace stacks", batch * TRACE_STACK * 4, gpu)?,
+            stacks: Buffer::new(ctx, "trace stacks", batch * TRACE_STACK as u64 * 4, gpu)?,
             kbuf: Buffer::new(ctx, "trace k-buffers", 3 * batch * k * 4, gpu)?,
             state: Buffer::new(ctx, "trace pixel state", rays * 16, gpu)?,
             counters: Buffer::new(ctx, "trace counters", counters, gpu)?,
@@ -345,14 +349,15 @@ impl TraceBuffers {
             used = used.max(live.iter().take_while(|&&l| l > 0).count() as u32 + 1);
             unfinished += live[rounds as usize - 1] as u64;
         }
-        let b = TRACE_HIST_BINS;
+        let b = HIST_BINS;
+        let slot = |s: u32| c[s as usize] as u64;
         TraceFrameStats {
             rays: self.width as u64 * self.height as u64,
-            hits_walked: c[0] as u64,
-            capped: c[1] as u64,
-            hits_found: c[2] as u64,
-            passes: c[4] as u64,
-            node_visits: c[5] as u64 | (c[6] as u64) << 32,
+            hits_walked: slot(TRACE_COUNTER_WALKED),
+            capped: slot(TRACE_COUNTER_CAPPED),
+            hits_found: slot(TRACE_COUNTER_FOUND),
+            passes: slot(TRACE_COUNTER_PASSES),
+            node_visits: slot(TRACE_COUNTER_VISITS_LO) | slot(TRACE_COUNTER_VISITS_HI) << 32,
             p99_walked: p99(&hist[..b]),
             p99_found: p99(&hist[b..2 * b]),
             p99_passes: p99(&hist[2 * b..]),
@@ -371,7 +376,7 @@ impl TraceBuffers {
     fn overflows(&self) -> u32 {
         let words: Vec<u32> =
             bytemuck::pod_collect_to_vec(&self.readback.mapped()[..COUNTER_WORDS * 4]);
-        words[3]
+        words[TRACE_COUNTER_OVERFLOW as usize]
     }
 
     /// The texel set for `scene` with `layout` ([`RayTracer`]'s), made or brought up to date

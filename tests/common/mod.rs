@@ -211,7 +211,8 @@ pub fn tracer_clips(lo: glam::Vec3, hi: glam::Vec3) -> Vec<(&'static str, rara::
 
 /// Checks a ray-traced GPU image against the CPU reference tracer's (SPEC section 7): at
 /// least `min_psnr` dB, and every pixel off by more than `max_diff` levels must be one that f32
-/// cannot decide, which the reference shows along the pixel's ray: two hits whose t agree to
+/// cannot decide, which the reference shows along the pixel's ray (among the hits the ray
+/// reaches before its transmittance runs out): two hits whose t agree to
 /// 1e-6 (the GPU may order them by index where the reference's f64 t orders them the other
 /// way), or a flat hit whose crossing point lies within 1e-5 (1 + t) of the clip boundary (the
 /// step weight of SPEC section 5 for flat Gaussians flips). At most one pixel in a thousand
@@ -242,6 +243,20 @@ pub fn check_traced(
             .filter_map(|i| raytrace::gaussian_hit(scene, i, o, dir, q))
             .collect();
         hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.index.cmp(&b.index)));
+        // Only the hits the ray reaches count: up to where its transmittance falls under
+        // 1e-4 (SPEC section 4's stop), and one past, whose order against the last matters.
+        let mut transmittance = 1.0;
+        let reached = hits
+            .iter()
+            .position(|h| {
+                let alpha = h.alpha * raytrace::clip_weight(scene, h, o, dir, clip);
+                if alpha >= 1.0 / 255.0 {
+                    transmittance *= 1.0 - alpha;
+                }
+                transmittance < 1e-4
+            })
+            .map_or(hits.len(), |last| (last + 2).min(hits.len()));
+        hits.truncate(reached);
         let tie = hits
             .windows(2)
             .find(|w| w[1].t - w[0].t <= 1e-6 * w[0].t)
