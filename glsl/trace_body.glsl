@@ -29,6 +29,13 @@
 #ifdef SCENE_TEXELS
 layout(set = 0, binding = 12) uniform utextureBuffer bvh_texels;
 #endif
+// With MIXED (mixed scenes, SPEC section 8): each pixel's ray of this generation comes from
+// the ray tree (mixed_spawn.comp) with its origin, direction, the t range of its Gaussians and
+// the (colour, T) it starts from; a hit's clip is its splat object's; a composited Gaussian is
+// darkened where a mesh shadows it; a ray that its Gaussians end stores its T negated.
+#ifdef MIXED
+#include "mixed_common.glsl"
+#endif
 
 // Node i as its two 16-byte words.
 void load_node(BvhTree nodes, uint i, out uvec4 w0, out uvec4 w1) {
@@ -64,6 +71,7 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 #define RAY_CAPPED 2u
 #define RAY_COMPOSITING 4u
 #define RAY_HAS_LAST 8u
+#define RAY_ENDED 16u   // its Gaussians ended it (opacity, or the hit cap)
 
 // Counter slots: TRACE_COUNTER_* (src/constants.rs). Sums of counts that can pass 2^32 on a
 // large frame (node visits) are a low word and a carry word. Per-ray histograms of finished
@@ -86,6 +94,7 @@ struct TraceParams {
     vec4 focal;         // fx, fy, cx, cy
     uvec4 size;         // W, H, Gaussians, SH floats per Gaussian
     vec4 options;       // Q, max hits (as float), unused, unused
+    uvec4 mixed;        // MIXED: the MixedParams' address (lo, hi), unused, unused
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer TraceParamsRef { TraceParams p; };
 
@@ -155,13 +164,31 @@ float clip_weight(ClipParams clip, vec4 spans, uint g, float t, vec3 e, vec3 d) 
     return clamp(w, 0.0, 1.0);
 }
 
-// Gaussian i's hit on the ray e + t d (unit d): (t, alpha), alpha 0 for none (SPEC section 7).
-vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d) {
+// The visible intervals of the ray e + t d under `clip` (clip.glsl).
+vec4 ray_spans(ClipParams clip, vec3 e, vec3 d) {
+    float span_lo = -UNBOUNDED;
+    float span_hi = UNBOUNDED;
+    if ((clip.config.z & CLIP_FLAG_SPHERE) != 0u) {
+        vec2 chord = clip_span_in_sphere(clip.sphere, e, d);
+        span_lo = chord.x;
+        span_hi = chord.y;
+    } else {
+        [[unroll]] for (uint k = 0u; k < MAX_CLIP_PLANES; ++k) {
+            if (k < clip.config.w) {
+                clip_span_cut_by_plane(clip.planes[k], e, d, span_lo, span_hi);
+            }
+        }
+    }
+    return clip_visible_spans(clip.config.z, span_lo, span_hi);
+}
+
+// Gaussian i's hit on the ray e + t d (unit d) with t in [t_lo, t_hi): (t, alpha), alpha 0
+// for none (SPEC section 7). `cull`: a camera ray, which skips what section 3 culls.
+vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d, bool cull, float t_lo, float t_hi) {
     Gaussian g = trace_gaussian(pc.gaussians, i);
     vec3 mu = g.pos_opacity.xyz;
     float o = g.pos_opacity.w;
-    // Primary rays skip what section 3 culls.
-    if (dot(f.forward.xyz, mu - e) <= 0.2) {
+    if (cull && dot(f.forward.xyz, mu - f.eye.xyz) <= 0.2) {
         return vec2(0.0);
     }
     vec3 s = g.scale.xyz;
@@ -182,7 +209,7 @@ vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d) {
             return vec2(0.0);
         }
         float t = dot(n, mu - e) / nd;
-        if (!(t > 0.0)) {
+        if (!(t > 0.0) || !(t >= t_lo && t < t_hi)) {
             return vec2(0.0);
         }
         vec3 p = e + t * d - mu;
@@ -210,7 +237,7 @@ vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d) {
     vec3 cr = cross(mo, md);
     float q = dot(cr, cr) / aa;
     float q_max = 2.0 * log(255.0 * o);
-    if (!(t > 0.0) || !(q <= q_max)) {
+    if (!(t > 0.0) || !(q <= q_max) || !(t >= t_lo && t < t_hi)) {
         return vec2(0.0);
     }
     return vec2(t, min(0.99, o * exp(-0.5 * q)));
@@ -272,24 +299,38 @@ void main() {
     vec3 e = f.eye.xyz;
     vec3 d = normalize(f.right.xyz * ((float(px.x) - f.focal.z) / f.focal.x)
                      + f.down.xyz * ((float(px.y) - f.focal.w) / f.focal.y) + f.forward.xyz);
+    // The Gaussians' stretch of the ray, and whether it culls as a camera ray does.
+    float t_lo = 0.0;
+    float t_hi = UNBOUNDED;
+    bool cull = true;
+    bool shade = false;
+#ifdef MIXED
+    MixedParams mixed = MixedParamsRef(mixed_address(f.mixed.xy)).p;
+    uint64_t ray_at = mixed_address(mixed.refs2.xy) + 64ul * uint64_t(ray);
+    {
+        vec4 r0 = load_vec4(ray_at);
+        vec4 r1 = load_vec4(ray_at + 16ul);
+        uint ray_flags = load_uvec4(ray_at + 48ul).x;
+        e = r0.xyz;
+        t_lo = r0.w;
+        d = r1.xyz;
+        t_hi = r1.w;
+        cull = (ray_flags & MIXED_RAY_CULL) != 0u;
+        shade = (ray_flags & MIXED_RAY_SHADOW) == 0u && mixed.counts.x > 0u && mixed.counts.z > 0u;
+        if (pc.round == 0u) {
+            colour_t = load_vec4(ray_at + 32ul);
+        }
+        if ((ray_flags & MIXED_RAY_NONE) != 0u) {
+            info.z |= RAY_DONE;
+        }
+    }
+#endif
     // No zero component: 0 * inf in the slab test would be NaN and lose the box.
     vec3 inv_d = 1.0 / (sign(d) * max(abs(d), vec3(1e-20)) + vec3(equal(d, vec3(0.0))) * 1e-20);
     // The ray's visible intervals, once (clip.glsl).
+    // (With MIXED, pc.clip is splat object 0's; the others' follow it.)
     ClipParams clip = load_clip_params(pc.clip);
-    float span_lo = -UNBOUNDED;
-    float span_hi = UNBOUNDED;
-    if ((clip.config.z & CLIP_FLAG_SPHERE) != 0u) {
-        vec2 chord = clip_span_in_sphere(clip.sphere, e, d);
-        span_lo = chord.x;
-        span_hi = chord.y;
-    } else {
-        [[unroll]] for (uint k = 0u; k < MAX_CLIP_PLANES; ++k) {
-            if (k < clip.config.w) {
-                clip_span_cut_by_plane(clip.planes[k], e, d, span_lo, span_hi);
-            }
-        }
-    }
-    vec4 spans = clip_visible_spans(clip.config.z, span_lo, span_hi);
+    vec4 spans = ray_spans(clip, e, d);
     uint max_hits = uint(f.options.y);
     uint leaves = f.size.z - 1u;
 
@@ -383,6 +424,9 @@ void main() {
                     if (k_count == uint(TRACE_K) && t_in - slack > kt[TRACE_K - 1]) {
                         enters = false;
                     }
+                    if (t_in - slack > t_hi || t_out + slack < t_lo) {
+                        enters = false;
+                    }
                     bool inner = node < leaves;
                     node = NO_NODE;
                     if (enters && !inner) {
@@ -406,7 +450,7 @@ void main() {
             }
             if (subgroupAny(leaf != NO_LEAF) && leaf != NO_LEAF) {
                 uint g = leaf;
-                vec2 hit = gaussian_hit(f, g, e, d);
+                vec2 hit = gaussian_hit(f, g, e, d, cull, t_lo, t_hi);
                 bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
                 bool room = k_count < uint(TRACE_K) || before(hit.x, g, kt[TRACE_K - 1], ki[TRACE_K - 1]);
                 if (hit.y > 0.0 && after && room) {
@@ -446,7 +490,7 @@ void main() {
                     node = 0u;
                 }
             } else if (walked == max_hits) {
-                flags |= RAY_DONE | RAY_CAPPED;
+                flags |= RAY_DONE | RAY_CAPPED | RAY_ENDED;
             } else {
                 ++walked;
                 // Entry k_pos by fixed indices (selects), not a dynamic index into the arrays.
@@ -459,7 +503,20 @@ void main() {
                     hit_t = at ? kt[k] : hit_t;
                     hit_alpha = at ? ka[k] : hit_alpha;
                 }
+#ifdef MIXED
+                float weight;
+                uint object = object_of(mixed, g);
+                if (object == 0u) {
+                    weight = clip_weight(clip, spans, g, hit_t, e, d);
+                } else {
+                    ClipParams own = load_clip_params(ClipParamsRef(
+                        mixed_address(mixed.refs2.zw) + uint64_t(object) * uint64_t(CLIP_PARAMS_BYTES)));
+                    weight = clip_weight(own, ray_spans(own, e, d), g, hit_t, e, d);
+                }
+                float alpha = hit_alpha * weight;
+#else
                 float alpha = hit_alpha * clip_weight(clip, spans, g, hit_t, e, d);
+#endif
                 last_t = hit_t;
                 last_index = g;
                 flags |= RAY_HAS_LAST;
@@ -467,10 +524,20 @@ void main() {
                 if (alpha >= 1.0 / 255.0) {
                     float next_t = T * (1.0 - alpha);
                     if (next_t < 1e-4) {
-                        flags |= RAY_DONE;
+                        flags |= RAY_DONE | RAY_ENDED;
                     } else {
                         vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
+#ifdef MIXED
+                        float factor = 1.0;
+                        if (shade) {
+                            uint mesh_visits = 0u;
+                            factor = shadow_factor(mixed, e + hit_t * d, mesh_visits);
+                            steps += mesh_visits;
+                        }
+                        colour += alpha * T * (factor * eval_sh(pc.sh, g * f.size.w, normalize(mu - e)));
+#else
                         colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
+#endif
                         T = next_t;
                     }
                 }
@@ -486,7 +553,11 @@ void main() {
     add_wide(TRACE_COUNTER_VISITS_LO, visits_now);
     // The pixel's (C, T) after every round, so that a frame cut short by its rounds still
     // shows what its rays composited so far.
+#ifdef MIXED
+    store_vec4_item(pc.state, ray, vec4(colour, (flags & RAY_ENDED) != 0u ? -T : T));
+#else
     store_vec4_item(pc.state, ray, vec4(colour, T));
+#endif
     if ((flags & RAY_DONE) != 0u) {
         atomicAdd(pc.counters.v[TRACE_COUNTER_WALKED], walked);
         atomicAdd(pc.counters.v[TRACE_COUNTER_PASSES], passes);

@@ -809,4 +809,148 @@ const VARIANTS: &[Variant] = &[
             "buffer of 64 hits per ray, reading the BVH, the Gaussians and the coefficients through texel views (CPU drivers) (see trace_body.glsl).",
         ],
     },
+    Variant {
+        name: "trace_mixed_deg0",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 0, coefficients as 32-bit floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg0_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 0, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg0_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 0, coefficients as half floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg0_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 0, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg1",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 1, coefficients as 32-bit floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg1_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 1, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg1_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 1, coefficients as half floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg1_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 1, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg2",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 2, coefficients as 32-bit floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg2_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 2, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg2_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 2, coefficients as half floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg2_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 2, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg3",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 3, coefficients as 32-bit floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg3_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 3, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg3_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 3, coefficients as half floats",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_mixed_deg3_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "MIXED"],
+        about: &[
+            "The ray tracer of mixed scenes (issue 33) for scenes of SH degree 3, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
 ];

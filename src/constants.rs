@@ -212,6 +212,35 @@ pub const TRACE_COUNTER_WORDS: u32 = 8;
 /// the last bin holds that many or more.
 pub const TRACE_HIST_BINS: u32 = 1024;
 
+/// Bytes of a `ClipParams` (`GpuClipParams`): the mixed tracer reads splat object k's at k
+/// times this.
+pub const CLIP_PARAMS_BYTES: u32 = 48 + 16 * MAX_CLIP_PLANES;
+
+/// Mixed scenes (SPEC section 8): lights a scene holds at most.
+pub const MIXED_MAX_LIGHTS: u32 = 4;
+/// Mixed scenes: splat objects a scene holds at most.
+pub const MIXED_MAX_OBJECTS: u32 = 8;
+/// Mixed scenes: pending rays per pixel (`glsl/mixed_spawn.comp`): a depth-first ray tree of
+/// depth 8 leaves at most one sibling per level and the shadow rays of one diffuse hit.
+pub const MIXED_STACK: u32 = 12;
+/// Mixed scenes: entries of a BVH traversal stack over the triangles (the tree of at most
+/// 16,384 triangles is 13 levels deep).
+pub const MIXED_MESH_STACK: u32 = 32;
+/// Mixed counter slot: rays the next generation traces.
+pub const MIXED_COUNTER_LIVE: u32 = 0;
+/// Mixed counter slot: camera rays.
+pub const MIXED_COUNTER_PRIMARY: u32 = 1;
+/// Mixed counter slot: reflected and refracted rays.
+pub const MIXED_COUNTER_SECONDARY: u32 = 2;
+/// Mixed counter slot: shadow rays.
+pub const MIXED_COUNTER_SHADOW: u32 = 3;
+/// Mixed counter slot: branches the depth or weight limit cut.
+pub const MIXED_COUNTER_CUT: u32 = 4;
+/// Mixed counter slot: rays a full pixel stack dropped (never expected).
+pub const MIXED_COUNTER_OVERFLOW: u32 = 5;
+/// Mixed counter words.
+pub const MIXED_COUNTER_WORDS: u32 = 8;
+
 /// Every constant above, by the macro name the kernels see.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TILE_SIZE", TILE_SIZE),
@@ -271,4 +300,16 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TRACE_COUNTER_VISITS_HI", TRACE_COUNTER_VISITS_HI),
     ("TRACE_COUNTER_WORDS", TRACE_COUNTER_WORDS),
     ("TRACE_HIST_BINS", TRACE_HIST_BINS),
+    ("CLIP_PARAMS_BYTES", CLIP_PARAMS_BYTES),
+    ("MIXED_MAX_LIGHTS", MIXED_MAX_LIGHTS),
+    ("MIXED_MAX_OBJECTS", MIXED_MAX_OBJECTS),
+    ("MIXED_STACK", MIXED_STACK),
+    ("MIXED_MESH_STACK", MIXED_MESH_STACK),
+    ("MIXED_COUNTER_LIVE", MIXED_COUNTER_LIVE),
+    ("MIXED_COUNTER_PRIMARY", MIXED_COUNTER_PRIMARY),
+    ("MIXED_COUNTER_SECONDARY", MIXED_COUNTER_SECONDARY),
+    ("MIXED_COUNTER_SHADOW", MIXED_COUNTER_SHADOW),
+    ("MIXED_COUNTER_CUT", MIXED_COUNTER_CUT),
+    ("MIXED_COUNTER_OVERFLOW", MIXED_COUNTER_OVERFLOW),
+    ("MIXED_COUNTER_WORDS", MIXED_COUNTER_WORDS),
 ];

@@ -123,6 +123,8 @@ pub struct GpuCutoffRecord {
 }
 
 const _: () = assert!(std::mem::size_of::<GpuGaussian>() == 48);
+const _: () =
+    assert!(std::mem::size_of::<GpuClipParams>() == crate::constants::CLIP_PARAMS_BYTES as usize);
 const _: () = assert!(std::mem::size_of::<GpuClipParams>() == 48 + 16 * MAX_CLIP_PLANES as usize);
 const _: () = assert!(std::mem::size_of::<GpuCutoffRecord>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuProjectedSplat>() == 64);

@@ -45,6 +45,7 @@ pub mod gpu_types;
 pub mod input;
 pub mod mesh;
 pub mod metrics;
+pub mod mixed;
 pub mod ply;
 pub mod precision;
 pub mod reference;

@@ -654,6 +654,7 @@ impl Renderer {
             &trace_options,
             0..bufs.batches,
             0..rounds,
+            None,
         )?;
         let mut rec = FrameRecording {
             ctx,

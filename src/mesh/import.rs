@@ -62,6 +62,8 @@ pub struct MeshData {
     pub corner_ids: Option<Vec<u32>>,
     /// Faces as vertex indices.
     pub faces: Vec<Vec<u32>>,
+    /// Per vertex, its normal, where the file has one for every vertex (not normalised).
+    pub normals: Option<Vec<DVec3>>,
 }
 
 fn mesh_err(path: &Path, message: impl std::fmt::Display) -> Error {
@@ -88,6 +90,8 @@ fn open(path: &Path) -> Result<std::fs::File> {
 #[derive(Default)]
 struct PlyVertex {
     xyz: [f64; 3],
+    /// `nx, ny, nz`, where the file has them.
+    normal: Option<[f64; 3]>,
     primitive_id: Option<u32>,
     corner_id: Option<u32>,
 }
@@ -128,6 +132,10 @@ impl ply_rs::ply::PropertyAccess for PlyVertex {
             "x" => self.xyz[0] = property_f64(&p).unwrap_or(f64::NAN),
             "y" => self.xyz[1] = property_f64(&p).unwrap_or(f64::NAN),
             "z" => self.xyz[2] = property_f64(&p).unwrap_or(f64::NAN),
+            "nx" | "ny" | "nz" => {
+                let n = self.normal.get_or_insert([f64::NAN; 3]);
+                n[(name.as_bytes()[1] - b'x') as usize] = property_f64(&p).unwrap_or(f64::NAN);
+            }
             "primitive_id" => self.primitive_id = Some(property_id(&p)),
             "corner_id" => self.corner_id = Some(property_id(&p)),
             _ => {}
@@ -171,6 +179,7 @@ fn read_ply_mesh(path: &Path) -> Result<MeshData> {
     let mut mesh = MeshData::default();
     let face_parser = ply_rs::parser::Parser::<PlyFace>::new();
     let mut ids = (Vec::new(), Vec::new(), true, true);
+    let (mut normals, mut all_normals) = (Vec::new(), true);
     for (name, element) in &header.elements {
         // Every row takes at least a byte: a count beyond the file is refused before reading.
         if element.count as u64 > size {
@@ -189,6 +198,10 @@ fn read_ply_mesh(path: &Path) -> Result<MeshData> {
                     .map_err(|e| mesh_err(path, format!("vertex data: {}", first_line(&e))))?;
                 for v in rows {
                     mesh.positions.push(DVec3::from_array(v.xyz));
+                    match v.normal {
+                        Some(n) => normals.push(DVec3::from_array(n)),
+                        None => all_normals = false,
+                    }
                     match v.primitive_id {
                         Some(id) => ids.0.push(id),
                         None => ids.2 = false,
@@ -220,6 +233,9 @@ fn read_ply_mesh(path: &Path) -> Result<MeshData> {
         mesh.primitive_ids = Some(ids.0);
         mesh.corner_ids = Some(ids.1);
     }
+    if all_normals && !mesh.positions.is_empty() {
+        mesh.normals = Some(normals);
+    }
     Ok(mesh)
 }
 
@@ -240,9 +256,20 @@ fn read_obj_mesh(path: &Path) -> Result<MeshData> {
     })
     .map_err(|e| mesh_err(path, format!("OBJ: {e}")))?;
     let mut mesh = MeshData::default();
+    let (mut normals, mut all_normals) = (Vec::new(), true);
     for model in models {
         let m = model.mesh;
         let base = mesh.positions.len() as u32;
+        // (single_index: a normal per position, where the file gives them.)
+        if m.normals.len() == m.positions.len() {
+            normals.extend(
+                m.normals
+                    .chunks_exact(3)
+                    .map(|n| DVec3::new(n[0], n[1], n[2])),
+            );
+        } else {
+            all_normals = false;
+        }
         mesh.positions.extend(
             m.positions
                 .chunks_exact(3)
@@ -264,6 +291,9 @@ fn read_obj_mesh(path: &Path) -> Result<MeshData> {
             next += n;
         }
     }
+    if all_normals && !mesh.positions.is_empty() {
+        mesh.normals = Some(normals);
+    }
     Ok(mesh)
 }
 
@@ -283,6 +313,7 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
     };
     let mut mesh = MeshData::default();
     let mut all_ids = true;
+    let (mut normals, mut all_normals) = (Vec::new(), true);
     let (mut primitive_ids, mut corner_ids) = (Vec::new(), Vec::new());
     // Every mesh where the scene places it: a glb another tool wrote (Blender's exporter
     // among them) may put its mesh under a node transform. A file without scenes is read
@@ -321,6 +352,18 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
                 world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
             }));
             let count = mesh.positions.len() - base as usize;
+            // Normals turn with the inverse transpose of the node's matrix.
+            let normal_matrix = glam::DMat3::from_mat4(world).inverse().transpose();
+            match reader.read_normals() {
+                Some(n) => {
+                    let before = normals.len();
+                    normals.extend(n.map(|n| {
+                        normal_matrix * DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64)
+                    }));
+                    all_normals &= normals.len() - before == count;
+                }
+                None => all_normals = false,
+            }
             let read_ids = |name: &str, out: &mut Vec<u32>| -> bool {
                 let semantic = gltf::Semantic::Extras(name.to_string());
                 let Some(accessor) = primitive.get(&semantic) else {
@@ -371,6 +414,9 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
     if all_ids && !mesh.positions.is_empty() {
         mesh.primitive_ids = Some(primitive_ids);
         mesh.corner_ids = Some(corner_ids);
+    }
+    if all_normals && !mesh.positions.is_empty() {
+        mesh.normals = Some(normals);
     }
     Ok(mesh)
 }

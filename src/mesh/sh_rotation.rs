@@ -114,26 +114,52 @@ fn pseudo_inverses() -> &'static [Vec<f64>; 3] {
 /// Gaussian turned by `rotation`, in place: afterwards its colour towards `d` is the colour it
 /// had towards `rotation^T d`.
 pub fn rotate_sh(sh: &mut [f32], degree: u32, rotation: DMat3) {
-    let dirs = sample_directions();
-    let inverse = rotation.transpose();
-    let p = pseudo_inverses();
-    for l in 1..=degree.min(3) as usize {
-        let n = 2 * l + 1;
-        let first = l * l; // coefficients before band l
-        let b_rot: Vec<[f64; 7]> = dirs.iter().map(|&d| band_basis(l, inverse * d)).collect();
-        // M = P B_R (n x n): M[i][j] = sum_s P[i][s] B_R[s][j].
-        let mut m = [[0.0f64; 7]; 7];
-        for (i, row) in m.iter_mut().enumerate().take(n) {
-            for (j, v) in row.iter_mut().enumerate().take(n) {
-                *v = (0..SAMPLES)
-                    .map(|s| p[l - 1][i * SAMPLES + s] * b_rot[s][j])
-                    .sum();
+    ShRotation::new(degree, rotation).apply(sh);
+}
+
+/// The per-band matrices that turn SH coefficients by one rotation ([`rotate_sh`]), made once
+/// for every Gaussian an object turns by the same rotation.
+pub struct ShRotation {
+    degree: u32,
+    /// Band l's `(2l + 1) x (2l + 1)` matrix at `bands[l - 1]`.
+    bands: Vec<[[f64; 7]; 7]>,
+}
+
+impl ShRotation {
+    /// The matrices of `rotation` for SH of degree `degree` (bands above 3 are not turned).
+    pub fn new(degree: u32, rotation: DMat3) -> ShRotation {
+        let dirs = sample_directions();
+        let inverse = rotation.transpose();
+        let p = pseudo_inverses();
+        let mut bands = Vec::new();
+        for l in 1..=degree.min(3) as usize {
+            let n = 2 * l + 1;
+            let b_rot: Vec<[f64; 7]> = dirs.iter().map(|&d| band_basis(l, inverse * d)).collect();
+            // M = P B_R (n x n): M[i][j] = sum_s P[i][s] B_R[s][j].
+            let mut m = [[0.0f64; 7]; 7];
+            for (i, row) in m.iter_mut().enumerate().take(n) {
+                for (j, v) in row.iter_mut().enumerate().take(n) {
+                    *v = (0..SAMPLES)
+                        .map(|s| p[l - 1][i * SAMPLES + s] * b_rot[s][j])
+                        .sum();
+                }
             }
+            bands.push(m);
         }
-        for c in 0..3 {
-            let x: Vec<f64> = (0..n).map(|j| sh[3 * (first + j) + c] as f64).collect();
-            for (i, row) in m.iter().enumerate().take(n) {
-                sh[3 * (first + i) + c] = (0..n).map(|j| row[j] * x[j]).sum::<f64>() as f32;
+        ShRotation { degree, bands }
+    }
+
+    /// Turns one Gaussian's coefficients in place.
+    pub fn apply(&self, sh: &mut [f32]) {
+        for l in 1..=self.degree.min(3) as usize {
+            let n = 2 * l + 1;
+            let first = l * l; // coefficients before band l
+            let m = &self.bands[l - 1];
+            for c in 0..3 {
+                let x: Vec<f64> = (0..n).map(|j| sh[3 * (first + j) + c] as f64).collect();
+                for (i, row) in m.iter().enumerate().take(n) {
+                    sh[3 * (first + i) + c] = (0..n).map(|j| row[j] * x[j]).sum::<f64>() as f32;
+                }
             }
         }
     }

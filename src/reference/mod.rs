@@ -3,6 +3,7 @@
 //! It mirrors the GPU pipeline's stages and names (`project`, then per-tile lists sorted by
 //! depth, then `rasterize`) and is the oracle of the test suite.
 
+pub mod mixed;
 pub mod project;
 pub mod rasterize;
 pub mod raytrace;

@@ -84,6 +84,7 @@ pub mod bvh;
 pub mod cutoff_tiles;
 pub mod depth_order;
 pub mod emit;
+pub mod mixed;
 pub mod prefix_sum;
 pub mod project;
 pub mod rasterize;

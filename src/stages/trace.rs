@@ -61,6 +61,59 @@ struct GpuTraceParams {
     focal: [f32; 4],
     size: [u32; 4],
     options: [f32; 4],
+    /// The mixed scene's parameters' address (lo, hi) for the MIXED kernels, else 0.
+    mixed: [u32; 4],
+}
+
+impl GpuTraceParams {
+    /// The parameters of a frame of `camera` over `scene`.
+    fn new(camera: &Camera, scene: &GpuScene, options: &RayTraceOptions, mixed: u64) -> Self {
+        let rot = camera.rotation;
+        let (cx, cy) = camera.principal_point();
+        let col = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
+        GpuTraceParams {
+            eye: col(camera.position),
+            right: col(rot.col(0)),
+            down: col(rot.col(1)),
+            forward: col(rot.col(2)),
+            focal: [camera.fx, camera.fy, cx, cy],
+            size: [
+                camera.width,
+                camera.height,
+                scene.len(),
+                3 * crate::scene::sh_coeffs(scene.sh_degree()) as u32,
+            ],
+            options: [options.q as f32, options.max_hits as f32, 0.0, 0.0],
+            mixed: [mixed as u32, (mixed >> 32) as u32, 0, 0],
+        }
+    }
+}
+
+/// The bytes of the tracer's parameters of a frame of `camera` over `scene` (no mixed scene):
+/// the mixed scenes' ray tree reads its camera from them.
+pub(crate) fn camera_params(
+    camera: &Camera,
+    scene: &GpuScene,
+    options: &RayTraceOptions,
+) -> Vec<u8> {
+    bytemuck::bytes_of(&GpuTraceParams::new(camera, scene, options, 0)).to_vec()
+}
+
+/// Bytes of the tracer's per-frame parameters (the camera first: `glsl/mixed_spawn.comp` reads
+/// the same buffer's first words).
+pub const TRACE_PARAMS_BYTES: u64 = std::mem::size_of::<GpuTraceParams>() as u64;
+
+/// What a mixed scene's generation hands the tracer ([`RayTracer::record`]): the MIXED
+/// kernels' parameters (whose rays replace the camera's) and the splat objects' clips, and
+/// whether this generation builds the BVH (the first of the frame) or reuses it.
+#[derive(Clone, Copy, Debug)]
+pub struct MixedRays {
+    /// Address of the `MixedParams`.
+    pub params: u64,
+    /// Address of the objects' `ClipParams`, object 0 first.
+    pub clips: u64,
+    /// Build the BVH in this call.
+    pub build_bvh: bool,
 }
 
 #[repr(C)]
@@ -367,7 +420,7 @@ impl TraceBuffers {
     }
 
     /// Rays of `batch` still live after its rounds `0..rounds` (the last frame's).
-    fn live_after(&self, batch: u32, rounds: u32) -> u32 {
+    pub(crate) fn live_after(&self, batch: u32, rounds: u32) -> u32 {
         let at = (READ_LIVE + (batch * MAX_TRACE_ROUNDS + rounds - 1) as usize) * 4;
         bytemuck::pod_read_unaligned(&self.readback.mapped()[at..at + 4])
     }
@@ -470,6 +523,40 @@ fn cpu_driver(ctx: &Context) -> bool {
         == crate::stages::rasterize::RasterLayout::Strips
 }
 
+/// The SPIR-V of the mixed scenes' tracer for SH `degree` and half-float coefficients or not:
+/// with texel views and k = 64 (CPU drivers) or neither (GPUs); `None` for another pairing.
+fn trace_mixed_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> Option<&'static [u32]> {
+    use shaders::*;
+    let table: [[&'static [u32]; 2]; 4] = match (texels, k) {
+        (true, 64) => [
+            [
+                TRACE_MIXED_DEG0_TEXELS_K64,
+                TRACE_MIXED_DEG0_SH16_TEXELS_K64,
+            ],
+            [
+                TRACE_MIXED_DEG1_TEXELS_K64,
+                TRACE_MIXED_DEG1_SH16_TEXELS_K64,
+            ],
+            [
+                TRACE_MIXED_DEG2_TEXELS_K64,
+                TRACE_MIXED_DEG2_SH16_TEXELS_K64,
+            ],
+            [
+                TRACE_MIXED_DEG3_TEXELS_K64,
+                TRACE_MIXED_DEG3_SH16_TEXELS_K64,
+            ],
+        ],
+        (false, 16) => [
+            [TRACE_MIXED_DEG0, TRACE_MIXED_DEG0_SH16],
+            [TRACE_MIXED_DEG1, TRACE_MIXED_DEG1_SH16],
+            [TRACE_MIXED_DEG2, TRACE_MIXED_DEG2_SH16],
+            [TRACE_MIXED_DEG3, TRACE_MIXED_DEG3_SH16],
+        ],
+        _ => return None,
+    };
+    Some(table[degree][f16 as usize])
+}
+
 /// The SPIR-V of the tracer's kernel for SH `degree`, half-float coefficients or not, reading
 /// through texel views or not, with a `k`-hit buffer.
 fn trace_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> &'static [u32] {
@@ -521,8 +608,9 @@ fn trace_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> &'static [u32]
 pub struct RayTracer {
     /// The k-buffer size, one of [`TRACE_KS`].
     k: u32,
-    /// Per (texel views, SH degree, half-float coefficients): the kernel, once built.
-    kernels: [[[std::sync::OnceLock<ComputePipeline>; 2]; 4]; 2],
+    /// Per (mixed scenes, texel views, SH degree, half-float coefficients): the kernel, once
+    /// built.
+    kernels: [[[[std::sync::OnceLock<ComputePipeline>; 2]; 4]; 2]; 2],
     /// On CPU drivers: the layout of the texel set ([`TraceTexels`]) of the texel kernels.
     texel_layout: Option<vk::DescriptorSetLayout>,
     args: ComputePipeline,
@@ -607,20 +695,33 @@ impl RayTracer {
         self.k
     }
 
-    /// The kernel for a scene of SH `degree` and `precision`, through texel views or not,
-    /// built now if it was not yet.
+    /// The kernel for a scene of SH `degree` and `precision`, through texel views or not, for
+    /// mixed scenes or not, built now if it was not yet.
     fn kernel(
         &self,
         degree: usize,
         precision: ShPrecision,
         texels: bool,
+        mixed: bool,
     ) -> Result<&ComputePipeline> {
         let f16 = precision == ShPrecision::F16;
-        let cell = &self.kernels[texels as usize][degree][f16 as usize];
+        let cell = &self.kernels[mixed as usize][texels as usize][degree][f16 as usize];
         if let Some(k) = cell.get() {
             return Ok(k);
         }
-        let spirv = trace_spirv(degree, f16, texels, self.k);
+        let spirv =
+            if mixed {
+                trace_mixed_spirv(degree, f16, texels, self.k).ok_or_else(|| {
+                    Error::InvalidInput(format!(
+                    "mixed scenes are traced with k = 64 through texel views on CPU drivers and \
+                     k = 16 by address on GPUs, not k = {} {}",
+                    self.k,
+                    if texels { "through texel views" } else { "by address" }
+                ))
+                })?
+            } else {
+                trace_spirv(degree, f16, texels, self.k)
+            };
         let built = match (texels, self.texel_layout) {
             (true, Some(layout)) => ComputePipeline::with_set_layouts::<TracePush>(
                 &self.ctx,
@@ -640,7 +741,8 @@ impl RayTracer {
     /// the counters for [`TraceBuffers::stats`]. A later call for the same batch from a later
     /// round goes on with the rays its earlier rounds left live (the per-ray buffers hold one
     /// batch: a batch must be finished before the next is started). The per-pixel state is in
-    /// `bufs.state` afterwards.
+    /// `bufs.state` afterwards. With `mixed`, the rays are a mixed scene's generation
+    /// ([`MixedRays`]; the camera then only culls).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -654,6 +756,7 @@ impl RayTracer {
         options: &RayTraceOptions,
         batches: std::ops::Range<u32>,
         rounds: std::ops::Range<u32>,
+        mixed: Option<MixedRays>,
     ) -> Result<()> {
         let n = scene.len();
         let (w, h) = (camera.width, camera.height);
@@ -677,23 +780,7 @@ impl RayTracer {
         let device = ctx.device();
         let rays = w * h;
         if rounds.start == 0 && batches.start == 0 {
-            let rot = camera.rotation;
-            let (cx, cy) = camera.principal_point();
-            let col = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
-            let p = GpuTraceParams {
-                eye: col(camera.position),
-                right: col(rot.col(0)),
-                down: col(rot.col(1)),
-                forward: col(rot.col(2)),
-                focal: [camera.fx, camera.fy, cx, cy],
-                size: [
-                    w,
-                    h,
-                    n,
-                    3 * crate::scene::sh_coeffs(scene.sh_degree()) as u32,
-                ],
-                options: [options.q as f32, options.max_hits as f32, 0.0, 0.0],
-            };
+            let p = GpuTraceParams::new(camera, scene, options, mixed.map_or(0, |m| m.params));
             let clip_params = clip.to_gpu();
             unsafe {
                 device.cmd_update_buffer(cmd, bufs.params.raw, 0, bytemuck::bytes_of(&p));
@@ -703,22 +790,24 @@ impl RayTracer {
                 }
             }
             compute_barrier(ctx, cmd);
-            timer.begin_pass(cmd, c"bvh build");
-            self.bvh.record(
-                ctx,
-                cmd,
-                scene.gaussians.address,
-                &bufs.bvh,
-                options.q as f32,
-            );
-            timer.end_pass(cmd, c"bvh build");
+            if mixed.map_or(true, |m| m.build_bvh) {
+                timer.begin_pass(cmd, c"bvh build");
+                self.bvh.record(
+                    ctx,
+                    cmd,
+                    scene.gaussians.address,
+                    &bufs.bvh,
+                    options.q as f32,
+                );
+                timer.end_pass(cmd, c"bvh build");
+            }
         }
         let degree = scene.sh_degree().min(3) as usize;
         let set = match self.texel_layout {
             Some(layout) => bufs.texel_set(layout, scene)?,
             None => None,
         };
-        let kernel = self.kernel(degree, scene.sh_precision(), set.is_some())?;
+        let kernel = self.kernel(degree, scene.sh_precision(), set.is_some(), mixed.is_some())?;
         let sets: Vec<vk::DescriptorSet> = set.into_iter().collect();
         let (gaussians, sh, _) = scene.buffers();
         let mut push = TracePush {
@@ -733,7 +822,7 @@ impl RayTracer {
             counters: bufs.counters.address,
             lists: bufs.lists.address,
             live: 0,
-            clip: bufs.clip.address,
+            clip: mixed.map_or(bufs.clip.address, |m| m.clips),
             round: 0,
             budget: TRACE_BUDGET,
             ray_base: 0,
@@ -816,6 +905,7 @@ impl RayTracer {
                         options,
                         batch..batch + 1,
                         end..next,
+                        None,
                     )
                 })??;
                 end = next;

@@ -1,0 +1,382 @@
+//! The CPU reference of mixed scenes (SPEC section 8), the oracle of the GPU's
+//! ([`crate::stages::mixed`]): per pixel a ray tree, each ray compositing the Gaussians
+//! (section 7) up to its nearest mesh hit, which ends it (diffuse, with shadow rays toward the
+//! lights) or spawns rays (mirror, glass).
+//!
+//! The rules both implementations follow, where section 8 leaves a choice
+//! (docs/ARCHITECTURE.md, "Mixed scenes"):
+//! - A ray's weight is its transmittance: a child ray starts with the parent's remaining
+//!   `T` times the mirror's reflectance or the Fresnel term, and composites on into the same
+//!   pixel colour, stopping when its `T` would fall below 1e-4 (section 4's rule).
+//! - A secondary ray is parametrised from its *virtual* origin (the parent's origin mirrored
+//!   or refracted through the hit point, `p - s d'` with `s` the path length so far), so that
+//!   the SH direction `normalize(mu - origin)` and the clip weights are those the mirrored
+//!   camera sees. Its Gaussians are taken from the hit point on (`t >= s`), its meshes from
+//!   1e-4 beyond it; a ray that goes straight on (glass of IOR 1) keeps its parent's origin.
+//!   Together these keep section 8's identities exact.
+//! - Shading normals face the incoming ray for diffuse and mirror meshes (two-sided); glass
+//!   uses the file's orientation to tell entering from leaving.
+//! - Diffuse and mirror meshes are opaque to shadow rays; glass lets light through (no
+//!   caustics). With several lights a Gaussian's shadow factor is the mean of the per-light
+//!   factors `1 - strength (1 - T_mesh)`.
+//! - Shadow rays composite the Gaussians between the hit point (from 1e-4) and the light by
+//!   section 4's rule, colour ignored: `T_shadow` is the transmittance that rule leaves.
+
+use glam::{DVec3, Vec3};
+
+use super::project::eval_sh;
+use super::rasterize::{pixel_ray, to_rgba8};
+use super::raytrace::{clip_weight, gaussian_hit, Bvh, Hit, RayTraceOptions};
+use super::Rgba8Image;
+use crate::camera::Camera;
+use crate::mixed::triangles::TriangleHit;
+use crate::mixed::{Light, Material, MixedScene};
+
+/// Where a secondary ray's meshes start beyond its origin point.
+pub const SECONDARY_OFFSET: f64 = 1e-4;
+
+/// What a frame's rays were.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MixedStats {
+    /// Camera rays.
+    pub primary: u64,
+    /// Reflected and refracted rays traced.
+    pub secondary: u64,
+    /// Shadow rays traced (or found blocked by a mesh).
+    pub shadow: u64,
+    /// Branches cut by the depth or weight limit (they took the background).
+    pub cut: u64,
+}
+
+/// The kinds of ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    /// From the camera: drops what section 3 culls.
+    Camera,
+    /// Reflected or refracted.
+    Secondary,
+    /// Toward a light, carrying the light it brings if nothing blocks it.
+    Shadow(Vec3),
+}
+
+/// A ray of the tree: `o + t d`, Gaussians with `t` from `t_start`, meshes beyond
+/// `t_start + offset` (0 for camera rays, [`SECONDARY_OFFSET`] else).
+#[derive(Clone, Copy, Debug)]
+struct Ray {
+    o: DVec3,
+    d: DVec3,
+    t_start: f64,
+    /// Shadow rays: where the light is (infinity for a directional one).
+    t_end: f64,
+    weight: f32,
+    depth: u32,
+    kind: Kind,
+    /// Drops what section 3 culls (camera rays, and their straight continuations).
+    cull: bool,
+}
+
+/// What one frame shares.
+struct Frame<'a> {
+    scene: &'a MixedScene,
+    bvh: Bvh,
+    camera: &'a Camera,
+    rt: &'a RayTraceOptions,
+}
+
+/// The direction toward light `l` from `p` and its distance (infinity for a directional
+/// light), and the light arriving there unshadowed (intensity over the squared distance).
+pub fn toward_light(l: &Light, p: DVec3) -> (DVec3, f64, Vec3) {
+    match *l {
+        Light::Point {
+            position,
+            intensity,
+        } => {
+            let v = position.as_dvec3() - p;
+            let dist = v.length();
+            (v / dist, dist, intensity / (dist * dist) as f32)
+        }
+        Light::Directional {
+            direction,
+            intensity,
+        } => (-direction.as_dvec3(), f64::INFINITY, intensity),
+    }
+}
+
+impl Frame<'_> {
+    /// Whether an opaque (diffuse or mirror) triangle lies on `p + t d`, `t` in
+    /// `(SECONDARY_OFFSET, t_end)`.
+    fn blocked(&self, p: DVec3, d: DVec3, t_end: f64) -> bool {
+        let m = &self.scene.meshes;
+        // The nearest hit would do, but any opaque one ends the search: walk them in t order.
+        let mut from = SECONDARY_OFFSET;
+        while let Some(h) = m.hit(p, d, from, t_end, false) {
+            let mat = self.scene.materials[m.triangles[h.triangle as usize].material as usize];
+            if !matches!(mat, Material::Glass(_)) {
+                return true;
+            }
+            from = h.t;
+        }
+        false
+    }
+
+    /// A Gaussian's shadow factor at `p` (section 8): per light `1 - strength (1 - T_mesh)`,
+    /// their mean; 1 without lights or meshes.
+    fn shadow_factor(&self, p: DVec3) -> f32 {
+        let s = self.scene;
+        if s.lights.is_empty() || s.meshes.triangles.is_empty() {
+            return 1.0;
+        }
+        let mut sum = 0.0f32;
+        for l in &s.lights {
+            let (d, dist, _) = toward_light(l, p);
+            let t_mesh = if self.blocked(p, d, dist) { 0.0 } else { 1.0 };
+            sum += 1.0 - s.shadow_strength * (1.0 - t_mesh);
+        }
+        sum / s.lights.len() as f32
+    }
+
+    /// Composites the Gaussians of `ray` with `t` in `[t_lo, t_hi)` on top of `(colour, T)`
+    /// (section 4's rule; shaded by the meshes' shadows unless it is a shadow ray). Returns
+    /// the new colour and transmittance and whether the ray ended (opacity or the hit cap).
+    fn segment(&self, ray: &Ray, t_lo: f64, t_hi: f64, colour: Vec3, t0: f32) -> (Vec3, f32, bool) {
+        let g = &self.scene.gaussians;
+        let forward = self.camera.rotation.col(2);
+        let mut hits: Vec<Hit> = Vec::new();
+        self.bvh.candidates(ray.o, ray.d, |i| {
+            if ray.cull && forward.dot(g.means[i as usize] - self.camera.position) <= 0.2 {
+                return;
+            }
+            if let Some(h) = gaussian_hit(g, i as usize, ray.o, ray.d, self.rt.q) {
+                if h.t >= t_lo && h.t < t_hi {
+                    hits.push(h);
+                }
+            }
+        });
+        hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.index.cmp(&b.index)));
+        let shade = !matches!(ray.kind, Kind::Shadow(_));
+        let (mut colour, mut t) = (colour, t0);
+        for (walked, hit) in hits.iter().enumerate() {
+            if walked == self.rt.max_hits {
+                return (colour, t, true);
+            }
+            let clip = &self.scene.object_of(hit.index).clip;
+            let alpha = (hit.alpha * clip_weight(g, hit, ray.o, ray.d, clip)) as f32;
+            if alpha < 1.0 / 255.0 {
+                continue;
+            }
+            let next = t * (1.0 - alpha);
+            if next < 1e-4 {
+                return (colour, t, true);
+            }
+            let i = hit.index as usize;
+            let dir = (g.means[i].as_dvec3() - ray.o).normalize().as_vec3();
+            let factor = if shade {
+                self.shadow_factor(ray.o + hit.t * ray.d)
+            } else {
+                1.0
+            };
+            colour += alpha * t * (factor * eval_sh(g.sh_of(i), g.sh_degree, dir));
+            t = next;
+        }
+        (colour, t, false)
+    }
+
+    /// The pixel's colour: its ray tree, depth first.
+    fn pixel(&self, i: u32, j: u32, stats: &mut MixedStats) -> Vec3 {
+        let s = self.scene;
+        let bg = s.background;
+        let (e, d) = pixel_ray(self.camera, i, j);
+        let mut stack = vec![Ray {
+            o: e,
+            d,
+            t_start: 0.0,
+            t_end: f64::INFINITY,
+            weight: 1.0,
+            depth: 0,
+            kind: Kind::Camera,
+            cull: true,
+        }];
+        let mut acc = Vec3::ZERO;
+        while let Some(ray) = stack.pop() {
+            match ray.kind {
+                Kind::Camera => stats.primary += 1,
+                Kind::Secondary => stats.secondary += 1,
+                Kind::Shadow(_) => stats.shadow += 1,
+            }
+            if let Kind::Shadow(light) = ray.kind {
+                if self.blocked(ray.o, ray.d, ray.t_end) {
+                    continue;
+                }
+                let (_, t, _) = self.segment(&ray, SECONDARY_OFFSET, ray.t_end, Vec3::ZERO, 1.0);
+                acc += light * t;
+                continue;
+            }
+            let offset = if ray.kind == Kind::Camera {
+                0.0
+            } else {
+                SECONDARY_OFFSET
+            };
+            let hit = s
+                .meshes
+                .hit(ray.o, ray.d, ray.t_start + offset, f64::INFINITY, false);
+            let t_mesh = hit.map_or(f64::INFINITY, |h| h.t);
+            let (colour, t, ended) = self.segment(&ray, ray.t_start, t_mesh, acc, ray.weight);
+            acc = colour;
+            let Some(hit) = hit.filter(|_| !ended) else {
+                acc += t * bg;
+                continue;
+            };
+            self.shade(&ray, &hit, t, &mut acc, &mut stack, stats);
+        }
+        acc
+    }
+
+    /// The mesh hit of `ray` with the transmittance `w` that reaches it: its light, or its
+    /// children onto `stack`.
+    fn shade(
+        &self,
+        ray: &Ray,
+        hit: &TriangleHit,
+        w: f32,
+        acc: &mut Vec3,
+        stack: &mut Vec<Ray>,
+        stats: &mut MixedStats,
+    ) {
+        let s = self.scene;
+        let p = ray.o + hit.t * ray.d;
+        let n = s.meshes.normal(hit);
+        let material = s.materials[s.meshes.triangles[hit.triangle as usize].material as usize];
+        let facing = if n.dot(ray.d) > 0.0 { -n } else { n };
+        let mut child = |d: DVec3, weight: f32, straight: bool, acc: &mut Vec3| {
+            if ray.depth + 1 > s.max_depth || weight < 1.0 / 255.0 {
+                stats.cut += 1;
+                *acc += weight * s.background;
+                return;
+            }
+            let (o, cull) = if straight {
+                (ray.o, ray.cull)
+            } else {
+                (p - hit.t * d, false)
+            };
+            stack.push(Ray {
+                o,
+                d,
+                t_start: hit.t,
+                t_end: f64::INFINITY,
+                weight,
+                depth: ray.depth + 1,
+                kind: Kind::Secondary,
+                cull,
+            });
+        };
+        match material {
+            Material::Diffuse(c) => {
+                *acc += w * (c * s.ambient);
+                for l in &s.lights {
+                    let (dl, dist, light) = toward_light(l, p);
+                    let ndl = facing.dot(dl);
+                    if ndl > 0.0 {
+                        stack.push(Ray {
+                            o: p,
+                            d: dl,
+                            t_start: 0.0,
+                            t_end: dist,
+                            weight: 1.0,
+                            depth: ray.depth,
+                            kind: Kind::Shadow(w * (c * (ndl as f32 * light))),
+                            cull: false,
+                        });
+                    }
+                }
+            }
+            Material::Mirror(rho) => {
+                let r = ray.d - 2.0 * facing.dot(ray.d) * facing;
+                child(r, w * rho, false, acc);
+            }
+            Material::Glass(eta) => {
+                let (n1, n2, nn) = if n.dot(ray.d) < 0.0 {
+                    (1.0, eta as f64, n)
+                } else {
+                    (eta as f64, 1.0, -n)
+                };
+                let (f, refracted) = fresnel(ray.d, nn, n1, n2);
+                let r = ray.d - 2.0 * nn.dot(ray.d) * nn;
+                child(r, w * f as f32, false, acc);
+                if let Some(dt) = refracted {
+                    child(dt, w * (1.0 - f as f32), n1 == n2, acc);
+                }
+            }
+        }
+    }
+}
+
+/// The exact unpolarised Fresnel reflectance at a surface of normal `nn` facing the incoming
+/// unit direction `d` (`nn.d < 0`), from index `n1` into `n2`, and the refracted direction
+/// (Snell; `None` at total internal reflection, where the reflectance is 1). Equal indices give
+/// exactly 0 and `d` itself.
+pub fn fresnel(d: DVec3, nn: DVec3, n1: f64, n2: f64) -> (f64, Option<DVec3>) {
+    let cosi = -nn.dot(d);
+    let eta = n1 / n2;
+    let sin2t = eta * eta * (1.0 - cosi * cosi);
+    if sin2t >= 1.0 {
+        return (1.0, None);
+    }
+    if n1 == n2 {
+        return (0.0, Some(d));
+    }
+    let cost = (1.0 - sin2t).sqrt();
+    let rs = (n1 * cosi - n2 * cost) / (n1 * cosi + n2 * cost);
+    let rp = (n2 * cosi - n1 * cost) / (n2 * cosi + n1 * cost);
+    let f = 0.5 * (rs * rs + rp * rp);
+    (f, Some(eta * d + (eta * cosi - cost) * nn))
+}
+
+/// Ray traces the mixed `scene` from `camera` (SPEC section 8), rows shared among the host's
+/// threads.
+pub fn render(
+    scene: &MixedScene,
+    camera: &Camera,
+    rt: &RayTraceOptions,
+) -> (Rgba8Image, MixedStats) {
+    let frame = Frame {
+        scene,
+        bvh: Bvh::build(&scene.gaussians, rt.q),
+        camera,
+        rt,
+    };
+    let (w, h) = (camera.width, camera.height);
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(h as usize)
+        .max(1);
+    let rows_per = (h as usize).div_ceil(threads);
+    let mut pixels = vec![[0u8; 4]; (w * h) as usize];
+    let mut stats = MixedStats::default();
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = pixels
+            .chunks_mut(rows_per * w as usize)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let frame = &frame;
+                scope.spawn(move || {
+                    let mut s = MixedStats::default();
+                    for (k, px) in chunk.iter_mut().enumerate() {
+                        let idx = c * rows_per * w as usize + k;
+                        let (i, j) = ((idx % w as usize) as u32, (idx / w as usize) as u32);
+                        *px = to_rgba8(frame.pixel(i, j, &mut s));
+                    }
+                    s
+                })
+            })
+            .collect();
+        for handle in handles {
+            let s = handle.join().expect("a ray tracing thread panicked");
+            stats.primary += s.primary;
+            stats.secondary += s.secondary;
+            stats.shadow += s.shadow;
+            stats.cut += s.cut;
+        }
+    });
+    let img = image::RgbaImage::from_fn(w, h, |i, j| image::Rgba(pixels[(j * w + i) as usize]));
+    (img, stats)
+}

@@ -1,0 +1,422 @@
+//! Mixed scenes on the GPU (SPEC section 8, issue 33): per pixel a ray tree, walked one ray
+//! per generation. A generation is `glsl/mixed_spawn.comp` (take in the last ray's result,
+//! shade its mesh hit, pop the next ray, find its mesh hit) then the ray tracer's MIXED kernels
+//! ([`super::trace`]) over every pixel's ray, compositing its Gaussians up to the mesh. The
+//! host runs generations until no pixel has a ray left (one wait per generation: this path is
+//! headless, [`MixedTracer::render`]). The Gaussians' BVH is built once per frame, in the
+//! first generation; the triangles' BVH is built on the host when the scene is uploaded
+//! ([`crate::mixed::triangles::MeshBvh`]). CPU twin: [`crate::reference::mixed`].
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+use super::linear_grid;
+use super::trace::{
+    MixedRays, RayTracer, TraceBuffers, FIRST_TRACE_ROUNDS, MAX_TRACE_ROUNDS, TRACE_PARAMS_BYTES,
+};
+use crate::camera::Camera;
+use crate::constants::{
+    MIXED_COUNTER_CUT, MIXED_COUNTER_LIVE, MIXED_COUNTER_OVERFLOW, MIXED_COUNTER_PRIMARY,
+    MIXED_COUNTER_SECONDARY, MIXED_COUNTER_SHADOW, MIXED_COUNTER_WORDS, MIXED_MAX_LIGHTS,
+    MIXED_MAX_OBJECTS, MIXED_STACK,
+};
+use crate::error::{Error, Result};
+use crate::gpu_scene::GpuScene;
+use crate::gpu_types::GpuClipParams;
+use crate::mixed::triangles::GpuTriangle;
+use crate::mixed::{Light, Material, MixedScene};
+use crate::precision::ShPrecision;
+use crate::reference::raytrace::RayTraceOptions;
+use crate::shaders;
+use crate::timing::PassTimer;
+use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
+
+/// Generations a frame may take at most (a pixel's tree: its rays and its shadow rays).
+pub const MAX_GENERATIONS: u32 = 512;
+
+/// `MixedParams` of `glsl/mixed_common.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuMixedParams {
+    counts: [u32; 4],
+    ambient: [f32; 4],
+    background: [f32; 4],
+    object_first: [u32; 8],
+    light_at: [[f32; 4]; MIXED_MAX_LIGHTS as usize],
+    light_intensity: [[f32; 4]; MIXED_MAX_LIGHTS as usize],
+    refs: [u32; 4],
+    refs2: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SpawnPush {
+    mixed: u64,
+    camera: u64,
+    state: u64,
+    acc: u64,
+    cur: u64,
+    cur_hit: u64,
+    cur_tri: u64,
+    stack: u64,
+    sp: u64,
+    counters: u64,
+    generation: u32,
+    pixels: u32,
+}
+
+fn lo_hi(a: u64) -> [u32; 2] {
+    [a as u32, (a >> 32) as u32]
+}
+
+/// A mixed scene on the device: the merged Gaussians, the triangles and their BVH, the splat
+/// objects' clips, and the scene's parameters (without the per-frame addresses).
+pub struct GpuMixedScene {
+    /// The Gaussians of every splat object.
+    pub gaussians: GpuScene,
+    triangles: Buffer,
+    nodes: Buffer,
+    clips: Buffer,
+    params: GpuMixedParams,
+    /// The first object's clip (the tracer's `clip`, for its validation and upload).
+    clip0: crate::clip::Clip,
+}
+
+impl GpuMixedScene {
+    /// Uploads `scene` (validated first), the coefficients at `precision`.
+    pub fn new(ctx: &Context, scene: &MixedScene, precision: ShPrecision) -> Result<Self> {
+        scene.validate()?;
+        let gaussians = GpuScene::with_sh_precision(ctx, &scene.gaussians, precision)?;
+        let tris: Vec<GpuTriangle> = scene
+            .meshes
+            .triangles
+            .iter()
+            .map(|t| {
+                let (kind, p) = match scene.materials[t.material as usize] {
+                    Material::Diffuse(c) => (0.0, c.to_array()),
+                    Material::Mirror(r) => (1.0, [r, 0.0, 0.0]),
+                    Material::Glass(eta) => (2.0, [eta, 0.0, 0.0]),
+                };
+                let v = |k: usize, w: f32| [t.v[k].x, t.v[k].y, t.v[k].z, w];
+                let n = |k: usize| [t.n[k].x, t.n[k].y, t.n[k].z, p[k]];
+                GpuTriangle {
+                    v0: v(0, kind),
+                    v1: v(1, 0.0),
+                    v2: v(2, 0.0),
+                    n0: n(0),
+                    n1: n(1),
+                    n2: n(2),
+                }
+            })
+            .collect();
+        // (A buffer is never empty: a scene without meshes gets one unused entry.)
+        let tris = if tris.is_empty() {
+            vec![GpuTriangle::zeroed()]
+        } else {
+            tris
+        };
+        let triangles = Buffer::from_slice(ctx, "mixed triangles", &tris)?;
+        let node_data = if scene.meshes.nodes.is_empty() {
+            vec![Default::default()]
+        } else {
+            scene.meshes.nodes.clone()
+        };
+        let nodes = Buffer::from_slice(ctx, "mixed mesh nodes", &node_data)?;
+        let clip_data: Vec<GpuClipParams> = scene.objects.iter().map(|o| o.clip.to_gpu()).collect();
+        let clips = Buffer::from_slice(ctx, "mixed object clips", &clip_data)?;
+        let mut params = GpuMixedParams::zeroed();
+        params.counts = [
+            scene.meshes.triangles.len() as u32,
+            scene.meshes.nodes.len() as u32,
+            scene.lights.len() as u32,
+            scene.objects.len() as u32,
+        ];
+        params.ambient = [
+            scene.ambient.x,
+            scene.ambient.y,
+            scene.ambient.z,
+            scene.shadow_strength,
+        ];
+        params.background = [
+            scene.background.x,
+            scene.background.y,
+            scene.background.z,
+            scene.max_depth as f32,
+        ];
+        for (k, o) in scene
+            .objects
+            .iter()
+            .enumerate()
+            .take(MIXED_MAX_OBJECTS as usize)
+        {
+            params.object_first[k] = o.first;
+        }
+        for (k, l) in scene.lights.iter().enumerate() {
+            let (at, i) = match *l {
+                Light::Point {
+                    position,
+                    intensity,
+                } => ([position.x, position.y, position.z, 0.0], intensity),
+                Light::Directional {
+                    direction,
+                    intensity,
+                } => ([direction.x, direction.y, direction.z, 1.0], intensity),
+            };
+            params.light_at[k] = at;
+            params.light_intensity[k] = [i.x, i.y, i.z, 0.0];
+        }
+        let [a, b] = lo_hi(triangles.address);
+        let [c, d] = lo_hi(nodes.address);
+        params.refs = [a, b, c, d];
+        Ok(GpuMixedScene {
+            gaussians,
+            triangles,
+            nodes,
+            clips,
+            params,
+            clip0: scene.objects[0].clip.clone(),
+        })
+    }
+
+    /// Device bytes of the meshes and the clips (the Gaussians' are [`GpuScene`]'s).
+    pub fn mesh_bytes(&self) -> u64 {
+        self.triangles.size + self.nodes.size + self.clips.size
+    }
+}
+
+/// What a mixed frame did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MixedFrameStats {
+    /// Camera rays.
+    pub primary: u64,
+    /// Reflected and refracted rays.
+    pub secondary: u64,
+    /// Shadow rays (those a mesh blocks included).
+    pub shadow: u64,
+    /// Branches the depth or weight limit cut.
+    pub cut: u64,
+    /// Generations the frame took.
+    pub generations: u32,
+    /// Per pass, its GPU milliseconds summed over the generations.
+    pub passes: Vec<(&'static str, f64)>,
+}
+
+/// The per-pixel buffers of the ray tree.
+struct TreeBuffers {
+    camera: Buffer,
+    params: Buffer,
+    rays: Buffer,
+    acc: Buffer,
+    cur: Buffer,
+    cur_hit: Buffer,
+    cur_tri: Buffer,
+    stack: Buffer,
+    sp: Buffer,
+    counters: Buffer,
+    readback: Buffer,
+}
+
+impl TreeBuffers {
+    fn new(ctx: &Context, pixels: u64) -> Result<Self> {
+        let gpu = MemoryLocation::GpuOnly;
+        let counters = MIXED_COUNTER_WORDS as u64 * 4;
+        Ok(TreeBuffers {
+            camera: Buffer::new(ctx, "mixed camera", TRACE_PARAMS_BYTES, gpu)?,
+            params: Buffer::new(
+                ctx,
+                "mixed params",
+                std::mem::size_of::<GpuMixedParams>() as u64,
+                gpu,
+            )?,
+            rays: Buffer::new(ctx, "mixed rays", pixels * 64, gpu)?,
+            acc: Buffer::new(ctx, "mixed colours", pixels * 16, gpu)?,
+            cur: Buffer::new(ctx, "mixed current rays", pixels * 48, gpu)?,
+            cur_hit: Buffer::new(ctx, "mixed mesh hits", pixels * 16, gpu)?,
+            cur_tri: Buffer::new(ctx, "mixed hit triangles", pixels * 4, gpu)?,
+            stack: Buffer::new(
+                ctx,
+                "mixed ray stacks",
+                pixels * 48 * MIXED_STACK as u64,
+                gpu,
+            )?,
+            sp: Buffer::new(ctx, "mixed stack sizes", pixels * 4, gpu)?,
+            counters: Buffer::new(ctx, "mixed counters", counters, gpu)?,
+            readback: Buffer::new(
+                ctx,
+                "mixed counters (host)",
+                counters,
+                MemoryLocation::GpuToCpu,
+            )?,
+        })
+    }
+
+    fn counter(&self, slot: u32) -> u32 {
+        let at = slot as usize * 4;
+        bytemuck::pod_read_unaligned(&self.readback.mapped()[at..at + 4])
+    }
+}
+
+/// The mixed scenes' kernels: the ray tree's and a ray tracer (k = 64 through texel views on
+/// CPU drivers, 16 by address on GPUs: the pairings the MIXED kernels are built for).
+pub struct MixedTracer {
+    tracer: RayTracer,
+    spawn: ComputePipeline,
+    ctx: Context,
+}
+
+impl MixedTracer {
+    /// The kernels for `ctx`'s device.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let cpu = crate::stages::rasterize::RasterLayout::for_device(ctx)
+            == crate::stages::rasterize::RasterLayout::Strips;
+        Ok(MixedTracer {
+            tracer: RayTracer::with_k(ctx, if cpu { 64 } else { 16 })?,
+            spawn: ComputePipeline::new::<SpawnPush>(ctx, c"mixed_spawn", shaders::MIXED_SPAWN)?,
+            ctx: ctx.clone(),
+        })
+    }
+
+    /// Renders `scene` from `camera` with the tracer options `options`, headless: generation
+    /// after generation until every pixel's ray tree is done, then reads the image back.
+    pub fn render(
+        &self,
+        scene: &GpuMixedScene,
+        camera: &Camera,
+        options: &RayTraceOptions,
+    ) -> Result<(image::RgbaImage, MixedFrameStats)> {
+        camera.validate()?;
+        let ctx = &self.ctx;
+        let device = ctx.device();
+        let (w, h) = (camera.width, camera.height);
+        let pixels = w as u64 * h as u64;
+        let mut bufs = TraceBuffers::new(&self.tracer, ctx, (w, h), scene.gaussians.len())?;
+        let tree = TreeBuffers::new(ctx, pixels)?;
+        let mut params = scene.params;
+        let [a, b] = lo_hi(tree.rays.address);
+        let [c, d] = lo_hi(scene.clips.address);
+        params.refs2 = [a, b, c, d];
+        let mut timer = PassTimer::new(ctx)?;
+        let mut stats = MixedFrameStats::default();
+        let add_times = |timer: &PassTimer, stats: &mut MixedFrameStats| -> Result<()> {
+            for p in timer.read()? {
+                match stats.passes.iter_mut().find(|(n, _)| *n == p.name) {
+                    Some(slot) => slot.1 += p.ms,
+                    None => stats.passes.push((p.name, p.ms)),
+                }
+            }
+            Ok(())
+        };
+        let camera_params = super::trace::camera_params(camera, &scene.gaussians, options);
+        for generation in 0..MAX_GENERATIONS {
+            // The ray tree's step: the next ray of every pixel, and how many there are.
+            let push = SpawnPush {
+                mixed: tree.params.address,
+                camera: tree.camera.address,
+                state: bufs.state.address,
+                acc: tree.acc.address,
+                cur: tree.cur.address,
+                cur_hit: tree.cur_hit.address,
+                cur_tri: tree.cur_tri.address,
+                stack: tree.stack.address,
+                sp: tree.sp.address,
+                counters: tree.counters.address,
+                generation,
+                pixels: pixels as u32,
+            };
+            ctx.run_commands(|cmd| {
+                timer.begin_frame(cmd);
+                unsafe {
+                    if generation == 0 {
+                        device.cmd_update_buffer(
+                            cmd,
+                            tree.params.raw,
+                            0,
+                            bytemuck::bytes_of(&params),
+                        );
+                        device.cmd_update_buffer(cmd, tree.camera.raw, 0, &camera_params);
+                        device.cmd_fill_buffer(cmd, tree.counters.raw, 0, vk::WHOLE_SIZE, 0);
+                    } else {
+                        device.cmd_fill_buffer(cmd, tree.counters.raw, 0, 4, 0);
+                    }
+                }
+                compute_barrier(ctx, cmd);
+                timer.begin_pass(cmd, c"ray tree");
+                self.spawn.dispatch(cmd, &push, linear_grid(pixels as u32));
+                timer.end_pass(cmd, c"ray tree");
+                crate::renderer::copy_parts_to_host(
+                    ctx,
+                    cmd,
+                    &[(&tree.counters, 0)],
+                    &tree.readback,
+                );
+            })?;
+            add_times(&timer, &mut stats)?;
+            if tree.counter(MIXED_COUNTER_OVERFLOW) > 0 {
+                return Err(Error::InvalidInput(format!(
+                    "mixed scene: {} rays did not fit a pixel's stack of {MIXED_STACK}",
+                    tree.counter(MIXED_COUNTER_OVERFLOW)
+                )));
+            }
+            if tree.counter(MIXED_COUNTER_LIVE) == 0 {
+                stats.generations = generation;
+                break;
+            }
+            if generation + 1 == MAX_GENERATIONS {
+                return Err(Error::InvalidInput(format!(
+                    "mixed scene: ray trees still live after {MAX_GENERATIONS} generations"
+                )));
+            }
+            // The Gaussians along every pixel's ray, batch by batch, rounds until done.
+            let mixed = MixedRays {
+                params: tree.params.address,
+                clips: scene.clips.address,
+                build_bvh: generation == 0,
+            };
+            for batch in 0..bufs.batches {
+                let mut end = 0;
+                let mut next = FIRST_TRACE_ROUNDS;
+                loop {
+                    ctx.run_commands(|cmd| {
+                        timer.begin_frame(cmd);
+                        self.tracer.record(
+                            ctx,
+                            cmd,
+                            &mut timer,
+                            &mut bufs,
+                            &scene.gaussians,
+                            camera,
+                            &scene.clip0,
+                            options,
+                            batch..batch + 1,
+                            end..next,
+                            Some(mixed),
+                        )
+                    })??;
+                    add_times(&timer, &mut stats)?;
+                    end = next;
+                    if bufs.live_after(batch, end) == 0 {
+                        break;
+                    }
+                    if end == MAX_TRACE_ROUNDS {
+                        return Err(Error::InvalidInput(format!(
+                            "mixed scene: rays still live after {MAX_TRACE_ROUNDS} rounds"
+                        )));
+                    }
+                    next = (end * 2).min(MAX_TRACE_ROUNDS);
+                }
+            }
+        }
+        stats.primary = tree.counter(MIXED_COUNTER_PRIMARY) as u64;
+        stats.secondary = tree.counter(MIXED_COUNTER_SECONDARY) as u64;
+        stats.shadow = tree.counter(MIXED_COUNTER_SHADOW) as u64;
+        stats.cut = tree.counter(MIXED_COUNTER_CUT) as u64;
+        let acc: Vec<[f32; 4]> = tree.acc.download_as(pixels as usize)?;
+        let img = image::RgbaImage::from_fn(w, h, |i, j| {
+            let s = acc[(j * w + i) as usize];
+            image::Rgba(crate::reference::rasterize::to_rgba8(glam::Vec3::new(
+                s[0], s[1], s[2],
+            )))
+        });
+        Ok((img, stats))
+    }
+}
