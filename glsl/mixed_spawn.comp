@@ -100,7 +100,10 @@ void push(TreeRay r) {
 // A child of `ray` at its hit t along `dir` with `weight`: pushed, or cut by the depth or
 // weight limit (it takes the background).
 void child(MixedParams m, TreeRay ray, float t, vec3 p, vec3 dir, float weight, bool straight) {
-    if (ray.depth + 1u > uint(m.background.w) || weight < 1.0 / 255.0) {
+    // A ray that goes straight on (glass of IOR 1) is the same ray going on, not a branch:
+    // same depth, and no weight limit (section 4's rule stops it).
+    uint depth = straight ? ray.depth : ray.depth + 1u;
+    if (!straight && (depth > uint(m.background.w) || weight < 1.0 / 255.0)) {
         atomicAdd(pc.counters.v[MIXED_COUNTER_CUT], 1u);
         g_acc += weight * m.background.rgb;
         return;
@@ -112,7 +115,7 @@ void child(MixedParams m, TreeRay ray, float t, vec3 p, vec3 dir, float weight, 
     c.t_end = UNBOUNDED;
     c.carry = vec3(weight, 0.0, 0.0);
     c.kind = KIND_SECONDARY;
-    c.depth = ray.depth + 1u;
+    c.depth = depth;
     c.cull = straight ? ray.cull : false;
     push(c);
 }

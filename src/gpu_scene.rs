@@ -23,9 +23,10 @@ fn gpu_gaussian(scene: &Scene, i: usize) -> GpuGaussian {
 /// Bytes of the two scene buffers: Gaussians and SH coefficients.
 fn scene_buffer_sizes(scene: &Scene, precision: ShPrecision) -> (u64, u64) {
     let n = scene.len() as u64;
+    // An empty scene still gets a 16-byte texel's worth, so that a texel view of it is valid.
     (
-        n * std::mem::size_of::<GpuGaussian>() as u64,
-        scene.sh.len() as u64 * precision.bytes() + GpuScene::SH_TAIL_BYTES,
+        (n * std::mem::size_of::<GpuGaussian>() as u64).max(16),
+        (scene.sh.len() as u64 * precision.bytes() + GpuScene::SH_TAIL_BYTES).max(16),
     )
 }
 

@@ -78,3 +78,478 @@ fn gpu_matches_the_cpu_reference_on_a_generated_showcase() {
         .unwrap();
     common::check_images("mixed showcase", &gpu, &cpu, 45.0, 255);
 }
+
+/// The GPU's render of `scene`.
+fn gpu_render(
+    ctx: &rara::Context,
+    tracer: &MixedTracer,
+    scene: &MixedScene,
+    camera: &rara::Camera,
+) -> image::RgbaImage {
+    let gpu = GpuMixedScene::new(ctx, scene, ShPrecision::F32).unwrap();
+    tracer
+        .render(&gpu, camera, &RayTraceOptions::default())
+        .unwrap()
+        .0
+}
+
+fn cpu_render(scene: &MixedScene, camera: &rara::Camera) -> image::RgbaImage {
+    rara::reference::mixed::render(scene, camera, &RayTraceOptions::default()).0
+}
+
+/// Pixels that differ between two images, and the largest channel difference.
+fn differences(a: &image::RgbaImage, b: &image::RgbaImage) -> (usize, u8) {
+    let mut n = 0;
+    let mut max = 0u8;
+    for (p, q) in a.pixels().zip(b.pixels()) {
+        let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap();
+        n += (d > 0) as usize;
+        max = max.max(d);
+    }
+    (n, max)
+}
+
+/// Section 8: a scene without meshes renders as section 7 alone, on the GPU (against the
+/// section 7 tracer) and on the CPU (against the section 7 reference), bit for bit, clipped
+/// or not.
+#[test]
+fn a_scene_without_meshes_is_section_7() {
+    let ctx = common::context();
+    let tracer = MixedTracer::new(&ctx).unwrap();
+    let ray = rara::stages::trace::RayTracer::with_k(&ctx, tracer.k()).unwrap();
+    let splats = common::mixed_scene(800, 3);
+    let camera = common::tracer_camera(160);
+    let (lo, hi) = common::percentile_box(&splats);
+    for (name, clip) in common::tracer_clips(lo, hi) {
+        let scene = MixedScene::splats_only(splats.clone(), clip.clone(), Vec3::new(0.2, 0.1, 0.0));
+        let options = rara::RenderOptions {
+            background: scene.background,
+            clip: clip.clone(),
+            ..Default::default()
+        };
+        let rt = RayTraceOptions::default();
+        let gpu_scene = rara::GpuScene::new(&ctx, &splats).unwrap();
+        let (section7, _) = ray
+            .render(&ctx, &gpu_scene, &camera, &options, &rt)
+            .unwrap();
+        let mixed = gpu_render(&ctx, &tracer, &scene, &camera);
+        let (n, max) = differences(&mixed, &section7);
+        eprintln!("{name}: GPU mixed vs section 7: {n} pixels differ (max {max})");
+        assert_eq!(n, 0, "{name}: the GPU's mixed render is not section 7's");
+        let cpu7 = rara::reference::raytrace::render(&splats, &camera, &options, &rt).0;
+        let cpu = cpu_render(&scene, &camera);
+        assert_eq!(
+            differences(&cpu, &cpu7).0,
+            0,
+            "{name}: the CPU's mixed render is not section 7's"
+        );
+    }
+    drop(tracer);
+    drop(ray);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Section 8: glass of IOR 1 changes no pixel (a ball and a slab in front of the showcase,
+/// clipped and not), on the GPU and on the CPU.
+#[test]
+fn glass_of_ior_1_changes_no_pixel() {
+    let ctx = common::context();
+    let tracer = MixedTracer::new(&ctx).unwrap();
+    let camera = common::tracer_camera(160);
+    let (lo, hi) = common::percentile_box(&common::mixed_scene(600, 7));
+    for (name, clip) in common::tracer_clips(lo, hi)
+        .into_iter()
+        .filter(|(n, _)| ["none", "plane_mass", "cutaway_mass"].contains(n))
+    {
+        let without = showcase(clip.clone());
+        let mut with = without.clone();
+        with.add_mesh(
+            placed(
+                &Shape::sphere(10, 20),
+                Vec3::splat(0.6),
+                Quat::IDENTITY,
+                Vec3::new(0.3, -0.2, -0.2),
+            ),
+            Material::Glass(1.0),
+        );
+        with.add_mesh(
+            placed(
+                &Shape::cube(),
+                Vec3::new(0.4, 0.3, 0.05),
+                Quat::from_rotation_y(0.5),
+                Vec3::new(-0.3, 0.2, -2.0),
+            ),
+            Material::Glass(1.0),
+        );
+        let (n, max) = differences(
+            &gpu_render(&ctx, &tracer, &with, &camera),
+            &gpu_render(&ctx, &tracer, &without, &camera),
+        );
+        eprintln!("{name}: GPU, IOR 1 glass: {n} pixels differ (max {max})");
+        assert_eq!(n, 0, "{name}: IOR-1 glass changed the GPU's image");
+        let (n, max) = differences(&cpu_render(&with, &camera), &cpu_render(&without, &camera));
+        eprintln!("{name}: CPU, IOR 1 glass: {n} pixels differ (max {max})");
+        assert_eq!(n, 0, "{name}: IOR-1 glass changed the CPU's image");
+    }
+    drop(tracer);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Section 8: a reflectance-1 mirror that fills the view shows the scene behind the camera as
+/// the mirrored camera sees it, flipped left to right; with a rara clip the cut is seen in the
+/// mirror the same way. The mirrored rays start from the mirror (their origin is the mirrored
+/// eye only up to rounding), so a pixel may differ by a level.
+#[test]
+fn a_full_view_mirror_shows_what_the_mirrored_camera_sees() {
+    let ctx = common::context();
+    let tracer = MixedTracer::new(&ctx).unwrap();
+    // The scene lies behind the camera (z < -2.5); the camera at z = -1.5 looks at a mirror in
+    // the plane z = 0, tilted a little so that the mirror is not square to the view.
+    let mut splats = common::mixed_scene(700, 11);
+    for m in &mut splats.means {
+        *m = Vec3::new(m.x, m.y, m.z - 4.0);
+    }
+    let mirror_normal = Vec3::new(0.15, -0.1, -1.0).normalize();
+    let mirror_rotation = Quat::from_rotation_arc(Vec3::Z, mirror_normal);
+    let camera = rara::Camera::look_at(
+        Vec3::new(0.2, -0.1, -1.5),
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::NEG_Y,
+        50.0,
+        160,
+        120,
+    )
+    .unwrap();
+    // The mirrored camera: eye and axes reflected in the mirror's plane (through the origin),
+    // then its x axis turned back so that its frame is right-handed; its image is the
+    // mirror's flipped left to right.
+    let reflect = |v: Vec3| v - 2.0 * v.dot(mirror_normal) * mirror_normal;
+    let r = camera.rotation;
+    let mirrored = rara::Camera {
+        position: reflect(camera.position),
+        rotation: glam::Mat3::from_cols(-reflect(r.x_axis), reflect(r.y_axis), reflect(r.z_axis)),
+        ..camera
+    };
+    let (lo, hi) = common::percentile_box(&splats);
+    for (name, clip) in common::tracer_clips(lo, hi)
+        .into_iter()
+        .filter(|(n, _)| ["none", "plane_mass", "cutaway_mass"].contains(n))
+    {
+        let mut with =
+            MixedScene::splats_only(splats.clone(), clip.clone(), Vec3::new(0.0, 0.1, 0.2));
+        with.add_mesh(
+            placed(
+                &Shape::quad(),
+                Vec3::splat(40.0),
+                mirror_rotation,
+                Vec3::ZERO,
+            ),
+            Material::Mirror(1.0),
+        );
+        let alone = MixedScene::splats_only(splats.clone(), clip.clone(), with.background);
+        let gpu_mirror = gpu_render(&ctx, &tracer, &with, &camera);
+        let gpu_direct =
+            image::imageops::flip_horizontal(&gpu_render(&ctx, &tracer, &alone, &mirrored));
+        if name == "plane_mass" {
+            gpu_mirror
+                .save(common::artifacts_dir().join("mixed_mirror_identity.png"))
+                .unwrap();
+        }
+        let d = common::check_images(
+            &format!("mirror identity, GPU, {name}"),
+            &gpu_mirror,
+            &gpu_direct,
+            60.0,
+            2,
+        );
+        assert!(d.differing_pixels * 200 <= (camera.width * camera.height) as usize);
+        let cpu_mirror = cpu_render(&with, &camera);
+        let cpu_direct = image::imageops::flip_horizontal(&cpu_render(&alone, &mirrored));
+        let d = common::check_images(
+            &format!("mirror identity, CPU, {name}"),
+            &cpu_mirror,
+            &cpu_direct,
+            60.0,
+            1,
+        );
+        assert!(d.differing_pixels * 200 <= (camera.width * camera.height) as usize);
+    }
+    drop(tracer);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The colour of a channel in [0, 1].
+fn level(p: &image::Rgba<u8>, c: usize) -> f64 {
+    p[c] as f64 / 255.0
+}
+
+/// Section 8's shadows, against closed forms. (1) Gaussians darken the mesh behind them: a
+/// white quad at z = 0 lit by a directional light along (-1, 0, 1)/sqrt 2, with a sheet (one
+/// flat Gaussian of opacity 0.6 at z = -1, out of the camera's view) in the light's way; each
+/// pixel of the quad, over its unshadowed value, must be 1 - alpha of the sheet where the
+/// pixel's shadow ray crosses it. (2) Meshes darken the Gaussians: a flat Gaussian seen
+/// straight on, an opaque quad between it and the light (out of view): its colour is 1 - 0.75
+/// of the unshadowed one.
+#[test]
+fn shadows_match_their_closed_forms() {
+    let ctx = common::context();
+    let tracer = MixedTracer::new(&ctx).unwrap();
+    let camera = rara::Camera::look_at(
+        Vec3::new(0.5, 0.0, -3.0),
+        Vec3::new(0.5, 0.0, 0.0),
+        Vec3::NEG_Y,
+        30.0,
+        96,
+        72,
+    )
+    .unwrap();
+    let sheet_mu = Vec3::new(2.4, 0.1, -1.0);
+    let (sheet_s, sheet_o) = (0.35f32, 0.6f32);
+    let mut sheet = rara::Scene {
+        sh_degree: 0,
+        ..Default::default()
+    };
+    sheet.push(
+        sheet_mu,
+        sheet_o,
+        Vec3::new(sheet_s, sheet_s, 0.0),
+        Quat::IDENTITY,
+        &[0.5, 0.5, 0.5],
+    );
+    let build = |with_sheet: bool| {
+        let splats = if with_sheet {
+            sheet.clone()
+        } else {
+            rara::Scene {
+                sh_degree: 0,
+                ..Default::default()
+            }
+        };
+        let mut s = MixedScene::splats_only(splats, Clip::default(), Vec3::ZERO);
+        s.add_mesh(
+            placed(&Shape::quad(), Vec3::splat(6.0), Quat::IDENTITY, Vec3::ZERO),
+            Material::Diffuse(Vec3::ONE),
+        );
+        s.lights.push(Light::Directional {
+            direction: Vec3::new(-1.0, 0.0, 1.0).normalize(),
+            intensity: Vec3::splat(1.2),
+        });
+        s
+    };
+    let light_dir = Vec3::new(1.0, 0.0, -1.0).normalize();
+    for (who, lit, shadowed) in [
+        (
+            "GPU",
+            gpu_render(&ctx, &tracer, &build(false), &camera),
+            gpu_render(&ctx, &tracer, &build(true), &camera),
+        ),
+        (
+            "CPU",
+            cpu_render(&build(false), &camera),
+            cpu_render(&build(true), &camera),
+        ),
+    ] {
+        let (mut checked, mut worst) = (0, 0.0f64);
+        for (i, j, p) in shadowed.enumerate_pixels() {
+            // The quad point of the pixel and where its shadow ray crosses z = -1.
+            let (e, d) = rara::reference::rasterize::pixel_ray(&camera, i, j);
+            let q = e + (-e.z / d.z) * d;
+            let c = q.as_vec3() + light_dir * (1.0 / -light_dir.z);
+            let (a, b) = ((c.x - sheet_mu.x) / sheet_s, (c.y - sheet_mu.y) / sheet_s);
+            let alpha = (sheet_o as f64 * (-(a * a + b * b) as f64 / 2.0).exp()).min(0.99);
+            if alpha < 0.05 || (a * a + b * b) > 9.0 {
+                continue; // skipped hits (alpha < 1/255) and the octagon's rim stay out
+            }
+            let unlit = level(lit.get_pixel(i, j), 0);
+            let got = level(p, 0) / unlit;
+            worst = worst.max((got - (1.0 - alpha)).abs());
+            checked += 1;
+        }
+        eprintln!("{who}: shadow of the sheet on the quad: {checked} pixels, worst |ratio - (1 - alpha)| {worst:.4}");
+        assert!(checked > 500, "{who}: too few shadowed pixels ({checked})");
+        assert!(
+            worst <= 2.0 / 255.0 / 0.8,
+            "{who}: the sheet's shadow is off by {worst}"
+        );
+    }
+    // (2) A flat Gaussian at z = 0 facing the camera, lit from -z; a blocker at z = -1 where
+    // the light's rays to it pass (out of view, x > 1.4).
+    let mut g = rara::Scene {
+        sh_degree: 0,
+        ..Default::default()
+    };
+    g.push(
+        Vec3::new(0.5, 0.0, 0.0),
+        0.9,
+        Vec3::new(0.6, 0.6, 0.0),
+        Quat::IDENTITY,
+        &[1.0, 0.6, 0.3],
+    );
+    let build = |blocked: bool| {
+        let mut s = MixedScene::splats_only(g.clone(), Clip::default(), Vec3::ZERO);
+        // An opaque quad far off to the side either way, so both scenes have a mesh.
+        let x = if blocked { 2.5 } else { 40.0 };
+        s.add_mesh(
+            placed(
+                &Shape::quad(),
+                Vec3::splat(1.1),
+                Quat::IDENTITY,
+                Vec3::new(x, 0.0, -1.0),
+            ),
+            Material::Diffuse(Vec3::ONE),
+        );
+        s.lights.push(Light::Directional {
+            direction: Vec3::new(-1.0, 0.0, 1.0).normalize(),
+            intensity: Vec3::ONE,
+        });
+        s.shadow_strength = 0.75;
+        s
+    };
+    for (who, lit, shadowed) in [
+        (
+            "GPU",
+            gpu_render(&ctx, &tracer, &build(false), &camera),
+            gpu_render(&ctx, &tracer, &build(true), &camera),
+        ),
+        (
+            "CPU",
+            cpu_render(&build(false), &camera),
+            cpu_render(&build(true), &camera),
+        ),
+    ] {
+        let (i, j) = (camera.width / 2, camera.height / 2);
+        let (l, s) = (
+            level(lit.get_pixel(i, j), 0),
+            level(shadowed.get_pixel(i, j), 0),
+        );
+        eprintln!("{who}: a mesh's shadow on a Gaussian: {s:.4} of {l:.4} (expected x0.25)");
+        assert!(l > 0.3);
+        assert!(
+            (s - 0.25 * l).abs() <= 1.0 / 255.0,
+            "{who}: {s} is not 0.25 x {l}"
+        );
+    }
+    drop(tracer);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Several splat objects, each placed by a similarity (the SH turned with it) and clipped in
+/// its own frame, in mirrors and glass: GPU vs CPU.
+#[test]
+fn several_clipped_objects_match_the_cpu_reference() {
+    use rara::mixed::Transform;
+    let mut scene = showcase(Clip::default());
+    let second = common::mixed_scene(400, 21);
+    let t = Transform {
+        rotation: Quat::from_rotation_y(0.7) * Quat::from_rotation_x(0.3),
+        translation: Vec3::new(-1.2, -0.9, -1.0),
+        scale: Vec3::splat(0.6),
+    };
+    let (lo, hi) = common::percentile_box(&second);
+    let clip_local = common::tracer_clips(lo, hi)
+        .into_iter()
+        .find(|(n, _)| *n == "plane_mass")
+        .unwrap()
+        .1;
+    let mut clip = clip_local.clone();
+    clip.region = Some(t.region(clip_local.region.as_ref().unwrap()).unwrap());
+    scene.add_splats(&second, &t, clip);
+    let camera = common::tracer_camera(160);
+    let (gpu, cpu) = both(&scene, &camera);
+    gpu.save(common::artifacts_dir().join("mixed_two_objects_gpu.png"))
+        .unwrap();
+    common::check_images("mixed, two objects, one clipped", &gpu, &cpu, 45.0, 255);
+}
+
+fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A scene file read end to end (a PLY splat scene, an OBJ with normals, a PLY mesh), and its
+/// errors: each names its JSON path.
+#[test]
+fn scene_files_load_and_name_the_path_of_each_error() {
+    let dir = common::tempdir("mixed_files");
+    let splats = common::mixed_scene(50, 5);
+    rara::ply::write_ply(
+        &splats,
+        dir.join("s.ply"),
+        rara::ply::PlyEncoding::BinaryLittleEndian,
+    )
+    .unwrap();
+    write(
+        &dir,
+        "ball.obj",
+        &Shape::sphere(6, 12).to_obj("a test ball"),
+    );
+    let load = |text: &str| {
+        let p = write(&dir, "scene.json", text);
+        rara::mixed::MixedScene::load(&p, |f| Ok(rara::ply::load_ply(f)?.0))
+    };
+    let ok = load(
+        r#"{ "splats": [{ "path": "s.ply", "transform": { "translation": [1, 0, 0], "rotation_deg": [0, 90, 0], "scale": 2 },
+                          "clip": { "planes": [[1, 0, 0, 0]] } }],
+             "meshes": [{ "path": "ball.obj", "material": { "glass": { "ior": 1.5 } } },
+                        { "path": "ball.obj", "transform": { "scale": [1, 2, 3] }, "material": { "diffuse": { "color": [1, 0.5, 0] } } }],
+             "lights": [{ "point": { "position": [0, -3, 0], "intensity": [5, 5, 5] } }],
+             "ambient": [0.1, 0.1, 0.1], "max_depth": 5 }"#,
+    )
+    .unwrap();
+    assert_eq!(ok.gaussians.len(), 50);
+    assert_eq!(ok.meshes.triangles.len(), 2 * 6 * 12 * 2 - 2 * 2 * 12);
+    assert_eq!(ok.materials.len(), 2);
+    // The splat scene moved: centre i is 2 R mu_i + (1, 0, 0).
+    let r = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
+    assert!((ok.gaussians.means[3] - (r * (2.0 * splats.means[3]) + Vec3::X)).length() < 1e-5);
+    // The clip plane x >= 0 of the scene's own frame is, in the world, R x . (y - t) >= 0.
+    let region = ok.objects[0].clip.region.as_ref().unwrap();
+    let probe = Vec3::new(1.0, 0.0, 0.0) + r * Vec3::new(0.3, 0.0, 0.0);
+    assert!(region.signed_distance(probe) > 0.0);
+    // The OBJ's normals are read and turned: the ball's normals point out.
+    let t = &ok.meshes.triangles[0];
+    assert!(t.n[0].dot(t.v[0]) > 0.0 || t.material == 1);
+    for (text, wanted) in [
+        (
+            r#"{ "splats": [{ "path": "s.ply", "transfrom": {} }] }"#,
+            "splats[0].transfrom: unknown field `transfrom`",
+        ),
+        (
+            r#"{ "meshes": [{ "path": "nope.obj", "material": { "mirror": { "reflectance": 1 } } }] }"#,
+            "meshes[0].path: no such file",
+        ),
+        (
+            r#"{ "meshes": [{ "path": "ball.obj", "material": { "glass": { "ior": 0.5 } } }] }"#,
+            "meshes[0].material.glass.ior: must be finite and >= 1",
+        ),
+        (
+            r#"{ "meshes": [{ "path": "ball.obj", "material": { "metal": {} } }] }"#,
+            "meshes[0].material: unknown variant `metal`",
+        ),
+        (
+            r#"{ "lights": [{ "point": { "position": [0, 0], "intensity": [1, 1, 1] } }] }"#,
+            "lights[0].point.position",
+        ),
+        (
+            r#"{ "splats": [{ "path": "s.ply", "transform": { "scale": [1, 2, 1] } }] }"#,
+            "splats[0].transform.scale: a splat scene takes one uniform scale",
+        ),
+        (
+            r#"{ "splats": [{ "path": "s.ply", "clip": { "planes": [[0, 0, 0, 1]] } }] }"#,
+            "splats[0].clip",
+        ),
+        (r#"{ "max_depth": 9 }"#, "max_depth: at most 8"),
+        (
+            r#"{ "background": [2, 0, 0] }"#,
+            "background: each channel must lie in [0, 1]",
+        ),
+    ] {
+        let err = load(text)
+            .err()
+            .unwrap_or_else(|| panic!("{text} loaded"))
+            .to_string();
+        eprintln!("{err}");
+        assert!(err.contains(wanted), "'{err}' does not name '{wanted}'");
+    }
+}

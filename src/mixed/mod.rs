@@ -390,28 +390,21 @@ impl MixedScene {
                 }
             };
             let scene = load_splats(&file).map_err(|e| at_error(path, &format!("{at}.path"), e))?;
-            parts.push((moved(&scene, &t), clip));
+            parts.push((scene, t, clip));
         }
-        let degree = parts.iter().map(|(s, _)| s.sh_degree).max().unwrap_or(0);
-        let mut gaussians = Scene {
-            sh_degree: degree,
-            ..Scene::default()
+        let mut out = MixedScene {
+            gaussians: Scene::default(),
+            objects: Vec::new(),
+            meshes: MeshBvh::default(),
+            materials: Vec::new(),
+            lights,
+            ambient,
+            background,
+            max_depth,
+            shadow_strength,
         };
-        let mut objects = Vec::new();
-        for (s, clip) in parts {
-            let first = gaussians.len() as u32;
-            let stride = gaussians.sh_stride();
-            for g in 0..s.len() {
-                let mut sh = vec![0.0f32; stride];
-                let own = s.sh_of(g);
-                sh[..own.len()].copy_from_slice(own);
-                gaussians.push(s.means[g], s.opacities[g], s.scales[g], s.rotations[g], &sh);
-            }
-            objects.push(SplatObject {
-                first,
-                count: s.len() as u32,
-                clip,
-            });
+        for (scene, t, clip) in parts {
+            out.add_splats(&scene, &t, clip);
         }
         // Meshes.
         let mut materials = Vec::new();
@@ -460,17 +453,31 @@ impl MixedScene {
                 ));
             }
         }
-        Ok(MixedScene {
-            gaussians,
-            objects,
-            meshes: MeshBvh::build(all),
-            materials,
-            lights,
-            ambient,
-            background,
-            max_depth,
-            shadow_strength,
-        })
+        out.meshes = MeshBvh::build(all);
+        out.materials = materials;
+        Ok(out)
+    }
+
+    /// Adds a splat object: `scene` moved by `t` (a similarity), clipped by `clip` (given in
+    /// the world). The merged Gaussians take the higher of the two SH degrees.
+    pub fn add_splats(&mut self, scene: &Scene, t: &Transform, clip: Clip) {
+        let s = moved(scene, t);
+        let degree = self.gaussians.sh_degree.max(s.sh_degree);
+        if degree != self.gaussians.sh_degree {
+            self.gaussians = padded(&self.gaussians, degree);
+        }
+        let first = self.gaussians.len() as u32;
+        let s = padded(&s, degree);
+        self.gaussians.means.extend_from_slice(&s.means);
+        self.gaussians.opacities.extend_from_slice(&s.opacities);
+        self.gaussians.scales.extend_from_slice(&s.scales);
+        self.gaussians.rotations.extend_from_slice(&s.rotations);
+        self.gaussians.sh.extend_from_slice(&s.sh);
+        self.objects.push(SplatObject {
+            first,
+            count: s.len() as u32,
+            clip,
+        });
     }
 
     /// Checks what the GPU kernels and the CPU reference assume.
@@ -498,6 +505,23 @@ impl MixedScene {
         let k = self.objects.partition_point(|o| o.first <= g).max(1) - 1;
         &self.objects[k]
     }
+}
+
+/// `scene` with its SH at `degree` (>= its own), the new coefficients 0.
+fn padded(scene: &Scene, degree: u32) -> Scene {
+    if scene.sh_degree == degree {
+        return scene.clone();
+    }
+    let mut out = Scene {
+        sh_degree: degree,
+        ..scene.clone()
+    };
+    let (from, to) = (scene.sh_stride(), out.sh_stride());
+    out.sh = vec![0.0; scene.len() * to];
+    for g in 0..scene.len() {
+        out.sh[g * to..g * to + from].copy_from_slice(scene.sh_of(g));
+    }
+    out
 }
 
 /// `scene` moved by `t` (a similarity): centres `s R mu + t`, rotations `R q`, scales `s`

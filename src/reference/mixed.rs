@@ -12,8 +12,10 @@
 //!   or refracted through the hit point, `p - s d'` with `s` the path length so far), so that
 //!   the SH direction `normalize(mu - origin)` and the clip weights are those the mirrored
 //!   camera sees. Its Gaussians are taken from the hit point on (`t >= s`), its meshes from
-//!   1e-4 beyond it; a ray that goes straight on (glass of IOR 1) keeps its parent's origin.
-//!   Together these keep section 8's identities exact.
+//!   1e-4 beyond it; a ray that goes straight on (glass of IOR 1) keeps its parent's origin
+//!   and its depth, and no weight limit cuts it (it is the same ray going on, not a branch; the
+//!   depth counts the turns of a ray's path). Together these keep section 8's identities
+//!   exact.
 //! - Shading normals face the incoming ray for diffuse and mirror meshes (two-sided); glass
 //!   uses the file's orientation to tell entering from leaving.
 //! - Diffuse and mirror meshes are opaque to shadow rays; glass lets light through (no
@@ -248,7 +250,10 @@ impl Frame<'_> {
         let material = s.materials[s.meshes.triangles[hit.triangle as usize].material as usize];
         let facing = if n.dot(ray.d) > 0.0 { -n } else { n };
         let mut child = |d: DVec3, weight: f32, straight: bool, acc: &mut Vec3| {
-            if ray.depth + 1 > s.max_depth || weight < 1.0 / 255.0 {
+            // A ray that goes straight on (glass of IOR 1) is the same ray going on, not a
+            // branch: same depth, and no weight limit (section 4's rule stops it).
+            let depth = if straight { ray.depth } else { ray.depth + 1 };
+            if !straight && (depth > s.max_depth || weight < 1.0 / 255.0) {
                 stats.cut += 1;
                 *acc += weight * s.background;
                 return;
@@ -264,7 +269,7 @@ impl Frame<'_> {
                 t_start: hit.t,
                 t_end: f64::INFINITY,
                 weight,
-                depth: ray.depth + 1,
+                depth,
                 kind: Kind::Secondary,
                 cull,
             });

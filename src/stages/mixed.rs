@@ -276,6 +276,11 @@ impl MixedTracer {
         })
     }
 
+    /// The tracer's k-buffer size.
+    pub fn k(&self) -> u32 {
+        self.tracer.k()
+    }
+
     /// Renders `scene` from `camera` with the tracer options `options`, headless: generation
     /// after generation until every pixel's ray tree is done, then reads the image back.
     pub fn render(
