@@ -130,13 +130,18 @@ pub struct CameraArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// The scene (.ply).
-    scene: PathBuf,
+    /// The scene (.ply); or give --scene.
+    #[arg(required_unless_present = "scene_file", conflicts_with = "scene_file")]
+    scene: Option<PathBuf>,
+    /// A mixed scene (SPEC section 8, JSON: splat scenes, meshes, lights; docs/CLI.md), ray
+    /// traced; its splat entries carry their clips.
+    #[arg(long = "scene", value_name = "SCENE.json")]
+    scene_file: Option<PathBuf>,
     #[command(flatten)]
     camera: CameraArgs,
-    /// Background colour R,G,B in [0, 1].
-    #[arg(long, allow_hyphen_values = true, value_parser = parse_color, default_value = "0,0,0")]
-    background: Vec3,
+    /// Background colour R,G,B in [0, 1] (default black, or a scene file's).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_color)]
+    background: Option<Vec3>,
     /// Output PNG.
     #[arg(short, long)]
     output: PathBuf,
@@ -289,8 +294,25 @@ pub fn warn_oversized(oversized: usize, total: usize) {
 fn cmd_render(args: &RenderArgs) -> Result<()> {
     // Everything that can be checked before the (possibly long) load and render is.
     let camera = resolve_camera(&args.camera)?;
+    if let Some(file) = &args.scene_file {
+        if !args.clip.is_empty() {
+            return Err(cli::scene::no_clip_options("clip options"));
+        }
+        let output = Output::prepare(&args.output, &["png"])?;
+        return cli::scene::render(
+            file,
+            &camera,
+            args.background,
+            output,
+            &args.output,
+            args.reference,
+            args.sh_half,
+            args.repeat,
+        );
+    }
+    let scene_path = args.scene.as_ref().expect("clap requires a scene");
     let options = RenderOptions {
-        background: args.background,
+        background: args.background.unwrap_or(Vec3::ZERO),
         clip: args.clip.build(&[])?,
         tracer: args.tracer.into(),
         ..RenderOptions::default()
@@ -303,7 +325,7 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         ));
     }
     let output = Output::prepare(&args.output, &["png"])?;
-    let scene = load_scene(&args.scene)?;
+    let scene = load_scene(scene_path)?;
     if options.clip.region.is_some() {
         eprintln!("{}", describe(&options.clip));
     }

@@ -553,3 +553,162 @@ fn scene_files_load_and_name_the_path_of_each_error() {
         assert!(err.contains(wanted), "'{err}' does not name '{wanted}'");
     }
 }
+
+/// The example scenes' meshes (`examples/scenes/meshes/`) are the crate's own shapes, written
+/// by this test (`RARA_UPDATE_DOCS=1` rewrites them).
+#[test]
+fn example_meshes_are_current() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/meshes");
+    for (name, shape) in [
+        ("quad.obj", Shape::quad()),
+        ("cube.obj", Shape::cube()),
+        ("sphere.obj", Shape::sphere(24, 48)),
+    ] {
+        let text = shape.to_obj(&format!(
+            "{name}: made by rara::mixed::shapes (tests/mixed.rs, example_meshes_are_current)"
+        ));
+        let path = dir.join(name);
+        if std::env::var_os("RARA_UPDATE_DOCS").is_some() {
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(&path, &text).unwrap();
+        }
+        let on_disk = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            on_disk == text,
+            "{} is stale: run with RARA_UPDATE_DOCS=1",
+            path.display()
+        );
+    }
+}
+
+/// The examples of `examples/scenes/` (real scenes, where they are present): GPU vs CPU at
+/// 320 px wide, the orbit's first camera.
+#[test]
+fn examples_match_the_cpu_reference() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
+    let ctx = common::context();
+    let tracer = MixedTracer::new(&ctx).unwrap();
+    for (name, stem) in [
+        ("mirror_plant", "plant_capture_sh0"),
+        ("glass_biker", "biker_capture_sh0"),
+        ("shadow_skull", "skull_mesh2splat_100k_sh0"),
+        ("clipped_mirror", "plant_capture_sh0"),
+    ] {
+        let Some((_, Some(cameras))) = common::real_scene(stem) else {
+            continue;
+        };
+        let scene = MixedScene::load(&dir.join(format!("{name}.json")), |f| {
+            Ok(rara::ply::load_ply(f)?.0)
+        })
+        .unwrap();
+        let camera = rara::Camera::load_one(&cameras, 0)
+            .unwrap()
+            .resized(320, None)
+            .unwrap();
+        let gpu = gpu_render(&ctx, &tracer, &scene, &camera);
+        let cpu = cpu_render(&scene, &camera);
+        eprintln!("real-scene case 'example {name}' ran");
+        common::check_images(
+            &format!("example {name}, GPU vs CPU"),
+            &gpu,
+            &cpu,
+            45.0,
+            255,
+        );
+    }
+    drop(tracer);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// `render --scene` and `bench --scene` from the command line, on a scene file of the crate's
+/// own (a generated PLY, an OBJ), and a bad file's error on stderr with its JSON path.
+#[test]
+fn the_cli_renders_and_benches_a_scene_file() {
+    let dir = common::tempdir("mixed_cli");
+    rara::ply::write_ply(
+        &common::mixed_scene(300, 9),
+        dir.join("s.ply"),
+        rara::ply::PlyEncoding::BinaryLittleEndian,
+    )
+    .unwrap();
+    write(&dir, "quad.obj", &Shape::quad().to_obj("a quad"));
+    let scene = write(
+        &dir,
+        "scene.json",
+        r#"{ "splats": [{ "path": "s.ply" }],
+             "meshes": [{ "path": "quad.obj", "transform": { "translation": [0, 0, 1.5], "scale": 3 },
+                          "material": { "mirror": { "reflectance": 0.8 } } }] }"#,
+    );
+    let rara = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = dir.join("out.png");
+    let cam = [
+        "--eye",
+        "0.4,-0.9,-3.5",
+        "--target",
+        "0,0,0",
+        "--width",
+        "96",
+    ];
+    let s = scene.to_str().unwrap();
+    let run = rara(
+        &[
+            &["render", "--scene", s, "-o", out.to_str().unwrap()][..],
+            &cam[..],
+        ]
+        .concat(),
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(stdout.contains("secondary"), "{stdout}");
+    assert_eq!(image::open(&out).unwrap().width(), 96);
+    let run = rara(
+        &[
+            &["bench", "--scene", s, "--frames", "2", "--warmup", "0"][..],
+            &cam[..],
+        ]
+        .concat(),
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        stdout.contains("median frame") && stdout.contains("trace"),
+        "{stdout}"
+    );
+    let bad = write(
+        &dir,
+        "bad.json",
+        r#"{ "meshes": [{ "path": "quad.obj", "material": { "mirror": { "reflectance": 2 } } }] }"#,
+    );
+    let run = rara(
+        &[
+            &[
+                "render",
+                "--scene",
+                bad.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ][..],
+            &cam[..],
+        ]
+        .concat(),
+    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains("meshes[0].material.mirror.reflectance"),
+        "{stderr}"
+    );
+}

@@ -20,9 +20,13 @@ use crate::{load_scene, median, resolve_camera, CameraArgs};
 /// `rara bench` options.
 #[derive(Args)]
 pub struct BenchArgs {
-    /// The scene (.ply); not needed with --sort.
-    #[arg(required_unless_present = "sort")]
+    /// The scene (.ply); not needed with --sort or --scene.
+    #[arg(required_unless_present_any = ["sort", "scene_file"], conflicts_with = "scene_file")]
     scene: Option<PathBuf>,
+    /// A mixed scene (SPEC section 8, JSON), ray traced: frame time, rays per pixel, time per
+    /// pass.
+    #[arg(long = "scene", value_name = "SCENE.json")]
+    scene_file: Option<PathBuf>,
     #[command(flatten)]
     camera: CameraArgs,
     /// Frames per mode (after the warm-up frames).
@@ -169,8 +173,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(n) = args.sort {
         return bench_sort(n);
     }
-    let path = args.scene.as_ref().expect("clap requires the scene");
     let camera = resolve_camera(&args.camera)?;
+    if let Some(file) = &args.scene_file {
+        if !args.clip.is_empty() {
+            return Err(super::scene::no_clip_options("clip options"));
+        }
+        let json = args
+            .json
+            .as_deref()
+            .map(|p| Output::prepare(p, &["json"]))
+            .transpose()?;
+        return super::scene::bench(file, &camera, args.frames, args.warmup, args.sh_half, json);
+    }
+    let path = args.scene.as_ref().expect("clap requires the scene");
     // The outputs are checked before the run, which can take minutes.
     let json_out = args
         .json

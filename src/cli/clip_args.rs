@@ -41,6 +41,19 @@ pub struct ClipArgs {
 }
 
 impl ClipArgs {
+    /// Whether no clip option was given.
+    pub fn is_empty(&self) -> bool {
+        self.planes.is_empty()
+            && self.boxes.is_empty()
+            && self.sphere.is_none()
+            && !self.invert
+            && self.mode.is_none()
+            && self.weight.is_none()
+            && self.band.is_none()
+            && !self.trace_all
+            && self.file.is_none()
+    }
+
     /// The clip these options describe, with `extra` half-spaces added to the region.
     pub fn build(&self, extra: &[Plane]) -> Result<Clip> {
         let file = match &self.file {

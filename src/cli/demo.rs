@@ -103,7 +103,11 @@ pub fn run(dir: &Path) -> Result<()> {
         background: BACKGROUND,
         tracer: rara::Tracer::Raster,
     };
-    let series = plan.run(&mut renderer, &gpu_scene, |_, mut frame| {
+    let target = super::sweep::SweepTarget::Splats {
+        renderer: &mut renderer,
+        scene: &gpu_scene,
+    };
+    let series = plan.run(target, |_, mut frame| {
         draw_label(&mut frame, "HARD", 8, 8, 2);
         draw_label(&mut frame, "RARA", camera.width + 8, 8, 2);
         gif.add(frame)

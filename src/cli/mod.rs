@@ -6,6 +6,7 @@ pub mod demo;
 pub mod flatten;
 pub mod mesh;
 pub mod output;
+pub mod scene;
 pub mod sweep;
 
 use rara::{FrameMemory, GpuScene};

@@ -16,8 +16,13 @@ use crate::{load_scene, resolve_camera, save_png, CameraArgs};
 /// `rara sweep` options.
 #[derive(Args)]
 pub struct SweepArgs {
-    /// The scene (.ply).
-    scene: PathBuf,
+    /// The scene (.ply); or give --scene.
+    #[arg(required_unless_present = "scene_file", conflicts_with = "scene_file")]
+    scene: Option<PathBuf>,
+    /// A mixed scene (SPEC section 8, JSON), ray traced: the moving plane clips every splat
+    /// object, in the world's frame, in place of the file's clips.
+    #[arg(long = "scene", value_name = "SCENE.json")]
+    scene_file: Option<PathBuf>,
     #[command(flatten)]
     camera: CameraArgs,
     /// Normal NX,NY,NZ of the moving plane; visible where n.x + d >= 0.
@@ -122,11 +127,25 @@ pub fn default_range(scene: &Scene, n: Vec3) -> (f32, f32) {
 /// Runs the sweep.
 pub fn run(args: &SweepArgs) -> Result<()> {
     let camera = resolve_camera(&args.camera)?;
-    let scene = load_scene(&args.scene)?;
+    let (scene_path, mixed) = match &args.scene_file {
+        Some(file) => (
+            file,
+            Some(super::scene::load_mixed(file, Some(args.background))?),
+        ),
+        None => (args.scene.as_ref().expect("clap requires a scene"), None),
+    };
+    let loaded;
+    let scene = match &mixed {
+        Some(m) => &m.gaussians,
+        None => {
+            loaded = load_scene(scene_path)?;
+            &loaded
+        }
+    };
     if scene.is_empty() {
         return Err(Error::InvalidInput(format!(
             "{}: no Gaussians to sweep",
-            args.scene.display()
+            scene_path.display()
         )));
     }
     let normal = Plane::new(args.plane_normal, 0.0)?.normal;
@@ -153,7 +172,18 @@ pub fn run(args: &SweepArgs) -> Result<()> {
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene = renderer.upload(&scene)?;
+    let (gpu_scene, mut mixed_gpu) = match &mixed {
+        Some(m) => (None, Some(super::scene::MixedGpu::new(&ctx, m, false)?)),
+        None => (Some(renderer.upload(scene)?), None),
+    };
+    let target = match (&gpu_scene, &mut mixed_gpu) {
+        (Some(g), _) => SweepTarget::Splats {
+            renderer: &mut renderer,
+            scene: g,
+        },
+        (None, Some(m)) => SweepTarget::Mixed(m),
+        (None, None) => unreachable!("one of the two is made above"),
+    };
     let gif_path = args.output.join("sweep.gif");
     let mut gif = GifWriter::create(&gif_path, args.delay_ms)?;
     let labels = configs.iter().map(describe).collect::<Vec<_>>();
@@ -174,7 +204,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         background: args.background,
         tracer: args.tracer.into(),
     };
-    let mut series = plan.run(&mut renderer, &gpu_scene, |k, frame_img| {
+    let mut series = plan.run(target, |k, frame_img| {
         save_png(&frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
         gif.add(frame_img)
     })?;
@@ -186,7 +216,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         gif_path.display(),
         camera.width,
         camera.height,
-        args.scene.display(),
+        scene_path.display(),
         ctx.info().name
     );
     println!(
@@ -213,7 +243,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         }));
     }
     let json = serde_json::json!({
-        "scene": args.scene.display().to_string(),
+        "scene": scene_path.display().to_string(),
         "width": camera.width,
         "height": camera.height,
         "frames": args.frames,
@@ -249,13 +279,27 @@ pub struct Sweep<'a> {
     pub tracer: rara::Tracer,
 }
 
+/// What a sweep renders: a splat scene through the renderer, or a mixed scene (SPEC section 8)
+/// whose splat objects all take the moving clip.
+pub enum SweepTarget<'a> {
+    /// A splat scene.
+    Splats {
+        /// The renderer.
+        renderer: &'a mut Renderer,
+        /// The scene.
+        scene: &'a rara::GpuScene,
+    },
+    /// A mixed scene, ray traced.
+    Mixed(&'a mut super::scene::MixedGpu),
+}
+
 impl Sweep<'_> {
     /// Renders the sweep, with a progress bar, handing each frame (the configurations' images
-    /// side by side) to `on_frame`; returns the statistics per configuration.
+    /// side by side) to `on_frame`; returns the statistics per configuration. (A mixed scene's
+    /// cutoff counts are 0: its tracer does not classify Gaussians up front.)
     pub fn run(
         &self,
-        renderer: &mut Renderer,
-        gpu_scene: &rara::GpuScene,
+        mut target: SweepTarget,
         mut on_frame: impl FnMut(u32, image::RgbaImage) -> Result<()>,
     ) -> Result<Vec<SeriesStats>> {
         let mut series: Vec<SeriesStats> = self
@@ -278,14 +322,28 @@ impl Sweep<'_> {
             let moving = Plane::new(self.normal, d)?;
             let mut panels = Vec::new();
             for (config, stats) in self.configs.iter().zip(series.iter_mut()) {
-                let options = RenderOptions {
-                    background: self.background,
-                    clip: with_moving_plane(config, moving),
-                    tracer: self.tracer,
-                    ..RenderOptions::default()
+                let clip = with_moving_plane(config, moving);
+                let img = match &mut target {
+                    SweepTarget::Splats { renderer, scene } => {
+                        let options = RenderOptions {
+                            background: self.background,
+                            clip,
+                            tracer: self.tracer,
+                            ..RenderOptions::default()
+                        };
+                        let (img, frame) = renderer.render(scene, self.camera, &options)?;
+                        stats.add(&img, frame.cutoff, frame.gpu_ms);
+                        img
+                    }
+                    SweepTarget::Mixed(gpu) => {
+                        let objects = gpu.objects();
+                        gpu.scene.set_clips(&vec![clip; objects])?;
+                        let (img, frame, wall) = gpu.render(self.camera)?;
+                        let gpu_ms = frame.passes.iter().map(|p| p.1).sum::<f64>();
+                        stats.add(&img, 0, if gpu_ms > 0.0 { gpu_ms } else { wall });
+                        img
+                    }
                 };
-                let (img, frame) = renderer.render(gpu_scene, self.camera, &options)?;
-                stats.add(&img, frame.cutoff, frame.gpu_ms);
                 panels.push(img);
             }
             on_frame(k, concat_horizontally(&panels))?;

@@ -178,6 +178,30 @@ impl GpuMixedScene {
         })
     }
 
+    /// Splat objects.
+    pub fn objects(&self) -> usize {
+        self.params.counts[3] as usize
+    }
+
+    /// Replaces the splat objects' clips (one per object, in the world), as a sweep moves a
+    /// plane; the Gaussians and meshes stay.
+    pub fn set_clips(&mut self, clips: &[crate::clip::Clip]) -> Result<()> {
+        if clips.len() != self.params.counts[3] as usize {
+            return Err(Error::InvalidInput(format!(
+                "{} clips for {} splat objects",
+                clips.len(),
+                self.params.counts[3]
+            )));
+        }
+        for c in clips {
+            c.validate()?;
+        }
+        let data: Vec<GpuClipParams> = clips.iter().map(|c| c.to_gpu()).collect();
+        self.clips.upload(bytemuck::cast_slice(&data))?;
+        self.clip0 = clips[0].clone();
+        Ok(())
+    }
+
     /// Device bytes of the meshes and the clips (the Gaussians' are [`GpuScene`]'s).
     pub fn mesh_bytes(&self) -> u64 {
         self.triangles.size + self.nodes.size + self.clips.size

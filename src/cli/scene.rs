@@ -1,0 +1,258 @@
+//! `--scene SCENE.json` (SPEC section 8): mixed scenes of splats, meshes and lights, ray traced,
+//! for `render`, `bench` and `sweep`.
+
+use std::path::Path;
+
+use indicatif::ProgressBar;
+
+use rara::mixed::MixedScene;
+use rara::reference::raytrace::RayTraceOptions;
+use rara::stages::mixed::{GpuMixedScene, MixedFrameStats, MixedTracer};
+use rara::{Camera, Context, Error, Result};
+
+use crate::{load_scene, median};
+
+/// Loads a scene file, each splat scene through the CLI's loader (its progress and warnings),
+/// and says what it holds. `background` overrides the file's.
+pub fn load_mixed(path: &Path, background: Option<glam::Vec3>) -> Result<MixedScene> {
+    let mut scene = MixedScene::load(path, load_scene)?;
+    if let Some(bg) = background {
+        scene.background = bg;
+    }
+    eprintln!("{}", describe(&scene, path));
+    Ok(scene)
+}
+
+/// One line on a mixed scene.
+pub fn describe(scene: &MixedScene, path: &Path) -> String {
+    let clipped = scene
+        .objects
+        .iter()
+        .filter(|o| o.clip.region.is_some())
+        .count();
+    format!(
+        "scene {}: {} splat objects ({} Gaussians, {clipped} clipped), {} triangles in {} meshes, \
+         {} lights, ray depth {}",
+        path.display(),
+        scene.objects.len(),
+        scene.gaussians.len(),
+        scene.meshes.triangles.len(),
+        scene.materials.len(),
+        scene.lights.len(),
+        scene.max_depth
+    )
+}
+
+/// Rays per pixel of a frame, as a phrase.
+pub fn rays_per_pixel(stats: &MixedFrameStats, pixels: u64) -> String {
+    let per = |n: u64| n as f64 / pixels.max(1) as f64;
+    format!(
+        "per pixel {:.2} primary, {:.3} secondary, {:.3} shadow rays ({} generations, {} \
+         branches cut)",
+        per(stats.primary),
+        per(stats.secondary),
+        per(stats.shadow),
+        stats.generations,
+        stats.cut
+    )
+}
+
+/// The device side of a scene file: the kernels and the uploaded scene.
+pub struct MixedGpu {
+    /// The kernels.
+    pub tracer: MixedTracer,
+    /// The uploaded scene.
+    pub scene: GpuMixedScene,
+}
+
+impl MixedGpu {
+    /// Builds the kernels and uploads `scene`.
+    pub fn new(ctx: &Context, scene: &MixedScene, sh_half: bool) -> Result<Self> {
+        let spinner = ProgressBar::new_spinner().with_message(format!(
+            "uploading {} Gaussians and {} triangles to {}",
+            scene.gaussians.len(),
+            scene.meshes.triangles.len(),
+            ctx.info().name
+        ));
+        spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+        let made = MixedTracer::new(ctx).and_then(|tracer| {
+            let s = GpuMixedScene::new(ctx, scene, super::sh_precision(sh_half))?;
+            Ok(MixedGpu { tracer, scene: s })
+        });
+        spinner.finish_and_clear();
+        made
+    }
+
+    /// Splat objects of the scene.
+    pub fn objects(&self) -> usize {
+        self.scene.objects()
+    }
+
+    /// One frame and its wall milliseconds.
+    pub fn render(&self, camera: &Camera) -> Result<(image::RgbaImage, MixedFrameStats, f64)> {
+        let start = std::time::Instant::now();
+        let (img, stats) = self
+            .tracer
+            .render(&self.scene, camera, &RayTraceOptions::default())?;
+        Ok((img, stats, start.elapsed().as_secs_f64() * 1e3))
+    }
+}
+
+/// `render --scene`: the GPU (or, with `reference`, the CPU reference) image, its counts, and
+/// with `repeat` the medians of that many more frames.
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    path: &Path,
+    camera: &Camera,
+    background: Option<glam::Vec3>,
+    output: super::output::Output,
+    out_path: &Path,
+    reference: bool,
+    sh_half: bool,
+    repeat: usize,
+) -> Result<()> {
+    let scene = load_mixed(path, background)?;
+    let pixels = camera.width as u64 * camera.height as u64;
+    if reference {
+        let start = std::time::Instant::now();
+        let (img, s) = rara::reference::mixed::render(&scene, camera, &RayTraceOptions::default());
+        output.write_png(&img)?;
+        let per = |n: u64| n as f64 / pixels as f64;
+        println!(
+            "wrote {} ({}x{}, CPU reference of section 8): per pixel {:.2} primary, {:.3} \
+             secondary, {:.3} shadow rays, {:.0} ms",
+            out_path.display(),
+            camera.width,
+            camera.height,
+            per(s.primary),
+            per(s.secondary),
+            per(s.shadow),
+            start.elapsed().as_secs_f64() * 1e3
+        );
+        return Ok(());
+    }
+    let ctx = Context::from_env()?;
+    let gpu = MixedGpu::new(&ctx, &scene, sh_half)?;
+    drop(scene);
+    let spinner = ProgressBar::new_spinner()
+        .with_message(format!("ray tracing {}x{}", camera.width, camera.height));
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    let rendered = gpu.render(camera);
+    spinner.finish_and_clear();
+    let (img, stats, wall) = rendered?;
+    output.write_png(&img)?;
+    println!(
+        "wrote {} ({}x{}) on {}: {}; {:.0} ms wall",
+        out_path.display(),
+        camera.width,
+        camera.height,
+        ctx.info().name,
+        rays_per_pixel(&stats, pixels),
+        wall
+    );
+    if repeat > 0 {
+        let (mut walls, mut passes): (Vec<f64>, Vec<(&'static str, Vec<f64>)>) =
+            (Vec::new(), Vec::new());
+        for _ in 0..repeat {
+            let (_, s, w) = gpu.render(camera)?;
+            walls.push(w);
+            for (name, ms) in s.passes {
+                match passes.iter_mut().find(|(n, _)| *n == name) {
+                    Some(p) => p.1.push(ms),
+                    None => passes.push((name, vec![ms])),
+                }
+            }
+        }
+        println!(
+            "median over {repeat} frames: wall {:.1} ms (device {}, driver {})",
+            median(&mut walls),
+            ctx.info().name,
+            ctx.info().driver
+        );
+        for (name, mut v) in passes {
+            println!("  {name:<12} {:8.2} ms", median(&mut v));
+        }
+    }
+    Ok(())
+}
+
+/// `bench --scene`: `frames` frames after `warmup`, the median frame time, the rays per pixel
+/// and the median GPU time of each pass (summed over a frame's generations).
+pub fn bench(
+    path: &Path,
+    camera: &Camera,
+    frames: u32,
+    warmup: u32,
+    sh_half: bool,
+    json: Option<super::output::Output>,
+) -> Result<()> {
+    let scene = load_mixed(path, None)?;
+    let ctx = Context::from_env()?;
+    let gpu = MixedGpu::new(&ctx, &scene, sh_half)?;
+    let pixels = camera.width as u64 * camera.height as u64;
+    for _ in 0..warmup {
+        gpu.render(camera)?;
+    }
+    let mut walls = Vec::new();
+    let mut passes: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    let mut last = MixedFrameStats::default();
+    for _ in 0..frames {
+        let (_, s, w) = gpu.render(camera)?;
+        walls.push(w);
+        for (name, ms) in &s.passes {
+            match passes.iter_mut().find(|(n, _)| n == name) {
+                Some(p) => p.1.push(*ms),
+                None => passes.push((name, vec![*ms])),
+            }
+        }
+        last = s;
+    }
+    let frame_ms = median(&mut walls);
+    println!(
+        "{} at {}x{} on {} (driver {}), {frames} frames after {warmup} warm-up",
+        path.display(),
+        camera.width,
+        camera.height,
+        ctx.info().name,
+        ctx.info().driver
+    );
+    println!(
+        "median frame {frame_ms:.1} ms wall; {}",
+        rays_per_pixel(&last, pixels)
+    );
+    let mut pass_medians = Vec::new();
+    for (name, v) in &mut passes {
+        let m = median(v);
+        println!("  {name:<12} {m:9.2} ms (median GPU, summed over the generations)");
+        pass_medians.push(serde_json::json!({ "pass": name, "median_ms": m }));
+    }
+    if let Some(out) = json {
+        let per = |n: u64| n as f64 / pixels as f64;
+        let value = serde_json::json!({
+            "scene": path.display().to_string(),
+            "width": camera.width,
+            "height": camera.height,
+            "device": ctx.info().name,
+            "driver": ctx.info().driver,
+            "frames": frames,
+            "median_frame_ms": frame_ms,
+            "rays_per_pixel": {
+                "primary": per(last.primary),
+                "secondary": per(last.secondary),
+                "shadow": per(last.shadow),
+            },
+            "generations": last.generations,
+            "passes": pass_medians,
+        });
+        out.write_json(&value)?;
+    }
+    Ok(())
+}
+
+/// The error for a clip option given with `--scene` (the scene file's splat entries hold
+/// their clips).
+pub fn no_clip_options(what: &str) -> Error {
+    Error::InvalidInput(format!(
+        "{what} with --scene: a scene file's splat entries carry their own clips (\"clip\")"
+    ))
+}
