@@ -53,6 +53,8 @@ struct MixedParams {
     vec4 light_intensity[MIXED_MAX_LIGHTS]; // rgb
     uvec4 refs;         // addresses (lo, hi): triangles, nodes
     uvec4 refs2;        // addresses (lo, hi): the rays of this generation (MixedRay), the clips
+    uvec4 occluders;    // addresses (lo, hi): the opaque triangles alone, their nodes
+    uvec4 occluder_counts;  // the opaque triangles, their nodes
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MixedParamsRef { MixedParams p; };
 
@@ -113,18 +115,19 @@ vec4 triangle_hit(vec3 o, vec3 d, vec3 v0, vec3 v1, vec3 v2, float t_lo, float t
 }
 
 // The nearest triangle on o + t d with t in (t_lo, t_hi) (ties: the lower index), or with
-// `any_opaque` whether a diffuse or mirror one lies there (glass lets shadow rays through).
-// Returns the triangle (NO_TRIANGLE for none) and its (t, barycentrics) in `hit`; counts the
-// nodes visited into `visits` (the caller's loop budget).
+// `any_opaque` whether a diffuse or mirror one lies there (glass lets shadow rays through:
+// those queries walk the occluders' BVH, which holds the opaque triangles alone). Returns the
+// triangle (NO_TRIANGLE for none; an index into the occluders with `any_opaque`) and its (t,
+// barycentrics) in `hit`; counts the nodes visited into `visits` (the caller's loop budget).
 uint mesh_hit(MixedParams m, vec3 o, vec3 d, float t_lo, float t_hi, bool any_opaque,
               out vec4 hit, inout uint visits) {
     hit = vec4(-1.0);
     uint best = NO_TRIANGLE;
-    if (m.counts.x == 0u) {
+    if ((any_opaque ? m.occluder_counts.x : m.counts.x) == 0u) {
         return best;
     }
-    MeshNodes nodes = MeshNodes(mixed_address(m.refs.zw));
-    MeshTriangles tris = MeshTriangles(mixed_address(m.refs.xy));
+    MeshNodes nodes = MeshNodes(mixed_address(any_opaque ? m.occluders.zw : m.refs.zw));
+    MeshTriangles tris = MeshTriangles(mixed_address(any_opaque ? m.occluders.xy : m.refs.xy));
     vec3 inv = safe_inverse(d);
     uint stack[MIXED_MESH_STACK];
     uint sp = 1u;
@@ -147,9 +150,6 @@ uint mesh_hit(MixedParams m, vec3 o, vec3 d, float t_lo, float t_hi, bool any_op
             uint first = node.a & ~MESH_LEAF_BIT;
             for (uint k = first; k < first + node.b; ++k) {
                 MeshTriangle tri = tris.v[k];
-                if (any_opaque && uint(tri.v0.w) == MATERIAL_GLASS) {
-                    continue;
-                }
                 vec4 h = triangle_hit(o, d, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, t_lo, t_hi);
                 if (h.x >= 0.0 && (best == NO_TRIANGLE || h.x < limit || (h.x == hit.x && k < best))) {
                     best = k;
@@ -187,7 +187,7 @@ void toward_light(MixedParams m, uint l, vec3 p, out vec3 dir, out float dist, o
 // A Gaussian's shadow factor at p (section 8): per light 1 - strength (1 - T_mesh), T_mesh 0
 // when an opaque mesh lies between p and the light; their mean. 1 without lights or meshes.
 float shadow_factor(MixedParams m, vec3 p, inout uint visits) {
-    if (m.counts.z == 0u || m.counts.x == 0u) {
+    if (m.counts.z == 0u || m.occluder_counts.x == 0u) {
         return 1.0;
     }
     float sum = 0.0;

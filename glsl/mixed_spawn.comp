@@ -189,6 +189,11 @@ void main() {
         return;
     }
     g_pixel = px;
+    // A pixel whose tree was done before this generation leaves at once (every generation
+    // dispatches over all pixels), before it reads anything else.
+    if (pc.generation != 0u && (uint(load_vec4_item(pc.cur, 3u * px + 2u).w) & 3u) == KIND_NONE) {
+        return;
+    }
     MixedParams m = pc.mixed.p;
     uint64_t ray_at = mixed_address(m.refs2.xy) + 64ul * uint64_t(px);
     TreeRay ray;
@@ -212,9 +217,6 @@ void main() {
         g_acc = load_vec4_item(pc.acc, px).rgb;
         g_sp = pc.sp.v[px];
         TreeRay last = tree_ray(pc.cur, 3u * px);
-        if (last.kind == KIND_NONE) {
-            return;  // the tree was done before this generation
-        }
         uint tri = pc.cur_tri.v[px];
         vec4 s = load_vec4_item(pc.state, px);
         if (last.kind == KIND_SHADOW) {

@@ -276,6 +276,16 @@ void main() {
         local = pc.lists.v[((pc.round - 1u) & 1u) * stride + item];
     }
     uint ray = pc.ray_base + local;
+#ifdef MIXED
+    // A pixel with no ray this generation leaves at once: nothing reads its state, and every
+    // generation dispatches over all of the batch's pixels at round 0.
+    if (pc.round == 0u) {
+        uint64_t mixed_at = mixed_address(MixedParamsRef(mixed_address(pc.params.p.mixed.xy)).p.refs2.xy);
+        if ((load_uvec4(mixed_at + 64ul * uint64_t(ray) + 48ul).x & MIXED_RAY_NONE) != 0u) {
+            return;
+        }
+    }
+#endif
     uint64_t state_at = uint64_t(pc.rays) + 48ul * uint64_t(local);
     uint64_t k_section = 4ul * uint64_t(TRACE_K) * uint64_t(stride);
     uint64_t k_t = uint64_t(pc.kbuf) + 4ul * uint64_t(TRACE_K) * uint64_t(local);
@@ -316,7 +326,7 @@ void main() {
         d = r1.xyz;
         t_hi = r1.w;
         cull = (ray_flags & MIXED_RAY_CULL) != 0u;
-        shade = (ray_flags & MIXED_RAY_SHADOW) == 0u && mixed.counts.x > 0u && mixed.counts.z > 0u;
+        shade = (ray_flags & MIXED_RAY_SHADOW) == 0u && mixed.occluder_counts.x > 0u && mixed.counts.z > 0u;
         if (pc.round == 0u) {
             colour_t = load_vec4(ray_at + 32ul);
         }

@@ -593,6 +593,7 @@ fn examples_match_the_cpu_reference() {
         ("glass_biker", "biker_capture_sh0"),
         ("shadow_skull", "skull_mesh2splat_100k_sh0"),
         ("clipped_mirror", "plant_capture_sh0"),
+        ("glass_plant", "plant_capture_sh0"),
     ] {
         let Some((_, Some(cameras))) = common::real_scene(stem) else {
             continue;

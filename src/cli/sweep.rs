@@ -150,7 +150,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     }
     let normal = Plane::new(args.plane_normal, 0.0)?.normal;
     let (d0, d1) = {
-        let (lo, hi) = default_range(&scene, normal);
+        let (lo, hi) = default_range(scene, normal);
         (args.from.unwrap_or(lo), args.to.unwrap_or(hi))
     };
     // The configurations rendered per frame: the one asked for, or hard next to it.

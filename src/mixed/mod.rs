@@ -210,6 +210,9 @@ pub struct MixedScene {
     pub objects: Vec<SplatObject>,
     /// The meshes' triangles and their BVH.
     pub meshes: MeshBvh,
+    /// The opaque (diffuse and mirror) triangles alone and their BVH: what shadow queries
+    /// test (glass lets light through), so that they never walk a glass mesh's nodes.
+    pub occluders: MeshBvh,
     /// Materials, indexed by [`Triangle::material`].
     pub materials: Vec<Material>,
     /// Lights.
@@ -251,6 +254,7 @@ impl MixedScene {
                 clip,
             }],
             meshes: MeshBvh::default(),
+            occluders: MeshBvh::default(),
             materials: Vec::new(),
             lights: Vec::new(),
             ambient: Vec3::ZERO,
@@ -269,7 +273,19 @@ impl MixedScene {
             t.material = m;
             t
         }));
-        self.meshes = MeshBvh::build(all);
+        self.set_triangles(all);
+    }
+
+    /// Sets the scene's triangles (materials indexed into [`MixedScene::materials`]): builds
+    /// the BVH of all of them and the occluders' BVH.
+    pub fn set_triangles(&mut self, triangles: Vec<Triangle>) {
+        let opaque = triangles
+            .iter()
+            .filter(|t| !matches!(self.materials[t.material as usize], Material::Glass(_)))
+            .copied()
+            .collect();
+        self.meshes = MeshBvh::build(triangles);
+        self.occluders = MeshBvh::build(opaque);
     }
 
     /// Loads a scene file with every file it names; `load_splats` reads a splat scene (the
@@ -396,6 +412,7 @@ impl MixedScene {
             gaussians: Scene::default(),
             objects: Vec::new(),
             meshes: MeshBvh::default(),
+            occluders: MeshBvh::default(),
             materials: Vec::new(),
             lights,
             ambient,
@@ -453,8 +470,8 @@ impl MixedScene {
                 ));
             }
         }
-        out.meshes = MeshBvh::build(all);
         out.materials = materials;
+        out.set_triangles(all);
         Ok(out)
     }
 

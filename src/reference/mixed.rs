@@ -106,19 +106,12 @@ pub fn toward_light(l: &Light, p: DVec3) -> (DVec3, f64, Vec3) {
 
 impl Frame<'_> {
     /// Whether an opaque (diffuse or mirror) triangle lies on `p + t d`, `t` in
-    /// `(SECONDARY_OFFSET, t_end)`.
+    /// `(SECONDARY_OFFSET, t_end)` (the occluders' BVH: glass is not in it).
     fn blocked(&self, p: DVec3, d: DVec3, t_end: f64) -> bool {
-        let m = &self.scene.meshes;
-        // The nearest hit would do, but any opaque one ends the search: walk them in t order.
-        let mut from = SECONDARY_OFFSET;
-        while let Some(h) = m.hit(p, d, from, t_end, false) {
-            let mat = self.scene.materials[m.triangles[h.triangle as usize].material as usize];
-            if !matches!(mat, Material::Glass(_)) {
-                return true;
-            }
-            from = h.t;
-        }
-        false
+        self.scene
+            .occluders
+            .hit(p, d, SECONDARY_OFFSET, t_end, true)
+            .is_some()
     }
 
     /// A Gaussian's shadow factor at `p` (section 8): per light `1 - strength (1 - T_mesh)`,

@@ -11,9 +11,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::linear_grid;
-use super::trace::{
-    MixedRays, RayTracer, TraceBuffers, FIRST_TRACE_ROUNDS, MAX_TRACE_ROUNDS, TRACE_PARAMS_BYTES,
-};
+use super::trace::{MixedRays, RayTracer, TraceBuffers, MAX_TRACE_ROUNDS, TRACE_PARAMS_BYTES};
 use crate::camera::Camera;
 use crate::constants::{
     MIXED_COUNTER_CUT, MIXED_COUNTER_LIVE, MIXED_COUNTER_OVERFLOW, MIXED_COUNTER_PRIMARY,
@@ -31,6 +29,12 @@ use crate::shaders;
 use crate::timing::PassTimer;
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
+/// Rounds a generation's trace records at first; the host records more (twice as many each
+/// time) while rays are live. A round with no live ray still costs its two dispatches, and
+/// most generations need one or two rounds (glass_plant at 320x240: 64 rounds at first took
+/// about 50 ms per generation with a single live ray, docs/PERFORMANCE.md).
+pub const FIRST_GENERATION_ROUNDS: u32 = 4;
+
 /// Generations a frame may take at most (a pixel's tree: its rays and its shadow rays).
 pub const MAX_GENERATIONS: u32 = 512;
 
@@ -46,6 +50,8 @@ struct GpuMixedParams {
     light_intensity: [[f32; 4]; MIXED_MAX_LIGHTS as usize],
     refs: [u32; 4],
     refs2: [u32; 4],
+    occluders: [u32; 4],
+    occluder_counts: [u32; 4],
 }
 
 #[repr(C)]
@@ -76,6 +82,8 @@ pub struct GpuMixedScene {
     pub gaussians: GpuScene,
     triangles: Buffer,
     nodes: Buffer,
+    occluder_triangles: Buffer,
+    occluder_nodes: Buffer,
     clips: Buffer,
     params: GpuMixedParams,
     /// The first object's clip (the tracer's `clip`, for its validation and upload).
@@ -87,41 +95,51 @@ impl GpuMixedScene {
     pub fn new(ctx: &Context, scene: &MixedScene, precision: ShPrecision) -> Result<Self> {
         scene.validate()?;
         let gaussians = GpuScene::with_sh_precision(ctx, &scene.gaussians, precision)?;
-        let tris: Vec<GpuTriangle> = scene
-            .meshes
-            .triangles
-            .iter()
-            .map(|t| {
-                let (kind, p) = match scene.materials[t.material as usize] {
-                    Material::Diffuse(c) => (0.0, c.to_array()),
-                    Material::Mirror(r) => (1.0, [r, 0.0, 0.0]),
-                    Material::Glass(eta) => (2.0, [eta, 0.0, 0.0]),
-                };
-                let v = |k: usize, w: f32| [t.v[k].x, t.v[k].y, t.v[k].z, w];
-                let n = |k: usize| [t.n[k].x, t.n[k].y, t.n[k].z, p[k]];
-                GpuTriangle {
-                    v0: v(0, kind),
-                    v1: v(1, 0.0),
-                    v2: v(2, 0.0),
-                    n0: n(0),
-                    n1: n(1),
-                    n2: n(2),
-                }
-            })
-            .collect();
-        // (A buffer is never empty: a scene without meshes gets one unused entry.)
-        let tris = if tris.is_empty() {
-            vec![GpuTriangle::zeroed()]
-        } else {
-            tris
+        let gpu_triangles = |bvh: &crate::mixed::triangles::MeshBvh| -> Vec<GpuTriangle> {
+            let tris: Vec<GpuTriangle> = bvh
+                .triangles
+                .iter()
+                .map(|t| {
+                    let (kind, p) = match scene.materials[t.material as usize] {
+                        Material::Diffuse(c) => (0.0, c.to_array()),
+                        Material::Mirror(r) => (1.0, [r, 0.0, 0.0]),
+                        Material::Glass(eta) => (2.0, [eta, 0.0, 0.0]),
+                    };
+                    let v = |k: usize, w: f32| [t.v[k].x, t.v[k].y, t.v[k].z, w];
+                    let n = |k: usize| [t.n[k].x, t.n[k].y, t.n[k].z, p[k]];
+                    GpuTriangle {
+                        v0: v(0, kind),
+                        v1: v(1, 0.0),
+                        v2: v(2, 0.0),
+                        n0: n(0),
+                        n1: n(1),
+                        n2: n(2),
+                    }
+                })
+                .collect();
+            // (A buffer is never empty: a scene without meshes gets one unused entry.)
+            if tris.is_empty() {
+                vec![GpuTriangle::zeroed()]
+            } else {
+                tris
+            }
         };
-        let triangles = Buffer::from_slice(ctx, "mixed triangles", &tris)?;
-        let node_data = if scene.meshes.nodes.is_empty() {
-            vec![Default::default()]
-        } else {
-            scene.meshes.nodes.clone()
+        let node_data = |bvh: &crate::mixed::triangles::MeshBvh| {
+            if bvh.nodes.is_empty() {
+                vec![Default::default()]
+            } else {
+                bvh.nodes.clone()
+            }
         };
-        let nodes = Buffer::from_slice(ctx, "mixed mesh nodes", &node_data)?;
+        let triangles = Buffer::from_slice(ctx, "mixed triangles", &gpu_triangles(&scene.meshes))?;
+        let nodes = Buffer::from_slice(ctx, "mixed mesh nodes", &node_data(&scene.meshes))?;
+        let occluder_triangles = Buffer::from_slice(
+            ctx,
+            "mixed occluder triangles",
+            &gpu_triangles(&scene.occluders),
+        )?;
+        let occluder_nodes =
+            Buffer::from_slice(ctx, "mixed occluder nodes", &node_data(&scene.occluders))?;
         let clip_data: Vec<GpuClipParams> = scene.objects.iter().map(|o| o.clip.to_gpu()).collect();
         let clips = Buffer::from_slice(ctx, "mixed object clips", &clip_data)?;
         let mut params = GpuMixedParams::zeroed();
@@ -168,10 +186,21 @@ impl GpuMixedScene {
         let [a, b] = lo_hi(triangles.address);
         let [c, d] = lo_hi(nodes.address);
         params.refs = [a, b, c, d];
+        let [a, b] = lo_hi(occluder_triangles.address);
+        let [c, d] = lo_hi(occluder_nodes.address);
+        params.occluders = [a, b, c, d];
+        params.occluder_counts = [
+            scene.occluders.triangles.len() as u32,
+            scene.occluders.nodes.len() as u32,
+            0,
+            0,
+        ];
         Ok(GpuMixedScene {
             gaussians,
             triangles,
             nodes,
+            occluder_triangles,
+            occluder_nodes,
             clips,
             params,
             clip0: scene.objects[0].clip.clone(),
@@ -204,7 +233,11 @@ impl GpuMixedScene {
 
     /// Device bytes of the meshes and the clips (the Gaussians' are [`GpuScene`]'s).
     pub fn mesh_bytes(&self) -> u64 {
-        self.triangles.size + self.nodes.size + self.clips.size
+        self.triangles.size
+            + self.nodes.size
+            + self.occluder_triangles.size
+            + self.occluder_nodes.size
+            + self.clips.size
     }
 }
 
@@ -403,7 +436,7 @@ impl MixedTracer {
             };
             for batch in 0..bufs.batches {
                 let mut end = 0;
-                let mut next = FIRST_TRACE_ROUNDS;
+                let mut next = FIRST_GENERATION_ROUNDS;
                 loop {
                     ctx.run_commands(|cmd| {
                         timer.begin_frame(cmd);
