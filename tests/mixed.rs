@@ -621,7 +621,7 @@ fn examples_match_the_cpu_reference() {
     common::assert_no_validation_messages(&ctx);
 }
 
-/// `render --scene` and `bench --scene` from the command line, on a scene file of the crate's
+/// `render --scene`, `bench --scene` and `sweep --scene` from the command line, on a scene file of the crate's
 /// own (a generated PLY, an OBJ), and a bad file's error on stderr with its JSON path.
 #[test]
 fn the_cli_renders_and_benches_a_scene_file() {
@@ -688,6 +688,30 @@ fn the_cli_renders_and_benches_a_scene_file() {
         stdout.contains("median frame") && stdout.contains("trace"),
         "{stdout}"
     );
+    let sweep = dir.join("sweep");
+    let run = rara(
+        &[
+            &[
+                "sweep",
+                "--scene",
+                s,
+                "--plane-normal",
+                "1,0,0",
+                "--frames",
+                "2",
+                "-o",
+                sweep.to_str().unwrap(),
+            ][..],
+            &cam[..],
+        ]
+        .concat(),
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(sweep.join("frame_0001.png").is_file() && sweep.join("sweep.gif").is_file());
     let bad = write(
         &dir,
         "bad.json",
