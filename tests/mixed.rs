@@ -510,6 +510,47 @@ fn scene_files_load_and_name_the_path_of_each_error() {
     // The OBJ's normals are read and turned: the ball's normals point out.
     let t = &ok.meshes.triangles[0];
     assert!(t.n[0].dot(t.v[0]) > 0.0 || t.material == 1);
+    // Meshes and lights alone: one empty splat object.
+    let meshes_only = load(r#"{ "meshes": [{ "path": "ball.obj", "material": { "diffuse": { "color": [1, 1, 1] } } }] }"#).unwrap();
+    assert_eq!(
+        (meshes_only.objects.len(), meshes_only.gaussians.len()),
+        (1, 0)
+    );
+    // A .gltf with its buffer in a file beside it, and one with a base64 data URI: one
+    // triangle under a node moved by (0, 0, 2).
+    let tri: Vec<u8> = [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    std::fs::write(dir.join("tri.bin"), &tri).unwrap();
+    use base64::Engine;
+    let data_uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&tri)
+    );
+    for (name, uri) in [
+        ("tri_file.gltf", "tri.bin".to_string()),
+        ("tri_data.gltf", data_uri),
+    ] {
+        write(
+            &dir,
+            name,
+            &format!(
+                r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"uri": "{uri}", "byteLength": 36}}],
+                    "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+                    "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}}],
+                    "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+                    "nodes": [{{"mesh": 0, "translation": [0, 0, 2]}}], "scenes": [{{"nodes": [0]}}], "scene": 0}}"#
+            ),
+        );
+        let s = load(&format!(r#"{{ "meshes": [{{ "path": "{name}", "material": {{ "mirror": {{ "reflectance": 1 }} }} }}] }}"#)).unwrap();
+        assert_eq!(s.meshes.triangles.len(), 1, "{name}");
+        assert_eq!(
+            s.meshes.triangles[0].v[1],
+            Vec3::new(1.0, 0.0, 2.0),
+            "{name}"
+        );
+    }
     for (text, wanted) in [
         (
             r#"{ "splats": [{ "path": "s.ply", "transfrom": {} }] }"#,

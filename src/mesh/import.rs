@@ -70,8 +70,15 @@ fn mesh_err(path: &Path, message: impl std::fmt::Display) -> Error {
     Error::InvalidInput(format!("mesh {}: {message}", path.display()))
 }
 
-/// Reads a mesh (.ply, .obj or .glb).
+/// Reads a mesh (.ply, .obj, .glb, or .gltf with its buffers in files beside it or in
+/// base64 data URIs).
 pub fn read_mesh(path: &Path) -> Result<MeshData> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if ext.as_deref() == Some("gltf") {
+        return read_glb_mesh(path);
+    }
     match super::export::MeshFormat::from_path(path)? {
         super::export::MeshFormat::Ply => read_ply_mesh(path),
         super::export::MeshFormat::Obj => read_obj_mesh(path),
@@ -297,6 +304,37 @@ fn read_obj_mesh(path: &Path) -> Result<MeshData> {
     Ok(mesh)
 }
 
+/// The bytes of a glTF buffer at `uri` (a `data:` URI in base64, or a file relative to the
+/// glTF at `path`), which must hold at least `length` bytes.
+fn buffer_from_uri(path: &Path, uri: &str, length: usize) -> Result<Vec<u8>> {
+    use base64::Engine;
+    let bytes = if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, data) = rest
+            .split_once(";base64,")
+            .ok_or_else(|| mesh_err(path, "a data URI that is not base64"))?;
+        base64::engine::general_purpose::STANDARD
+            .decode(data)
+            .map_err(|e| mesh_err(path, format!("a base64 buffer: {e}")))?
+    } else {
+        let file = path.parent().unwrap_or(Path::new(".")).join(uri);
+        let mut bytes = Vec::new();
+        open(&file)?
+            .read_to_end(&mut bytes)
+            .map_err(|source| Error::Io { path: file, source })?;
+        bytes
+    };
+    if bytes.len() < length {
+        return Err(mesh_err(
+            path,
+            format!(
+                "buffer '{uri}' holds {} bytes, the file says {length}",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
 fn read_glb_mesh(path: &Path) -> Result<MeshData> {
     let mut bytes = Vec::new();
     open(path)?
@@ -307,9 +345,17 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
         })?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| mesh_err(path, format!("glTF: {e}")))?;
     let blob = gltf.blob.as_deref();
+    // A .gltf's buffers: files beside it, or base64 data URIs.
+    let mut external: Vec<Option<Vec<u8>>> = Vec::new();
+    for b in gltf.buffers() {
+        external.push(match b.source() {
+            gltf::buffer::Source::Bin => None,
+            gltf::buffer::Source::Uri(uri) => Some(buffer_from_uri(path, uri, b.length())?),
+        });
+    }
     let buffer_data = |b: gltf::Buffer| match b.source() {
         gltf::buffer::Source::Bin => blob,
-        gltf::buffer::Source::Uri(_) => None,
+        gltf::buffer::Source::Uri(_) => external[b.index()].as_deref(),
     };
     let mut mesh = MeshData::default();
     let mut all_ids = true;

@@ -423,6 +423,10 @@ impl MixedScene {
         for (scene, t, clip) in parts {
             out.add_splats(&scene, &t, clip);
         }
+        if out.objects.is_empty() {
+            // Meshes and lights alone: one empty splat object keeps the frame's layout.
+            out.add_splats(&Scene::default(), &Transform::default(), Clip::default());
+        }
         // Meshes.
         let mut materials = Vec::new();
         let mut all = Vec::new();
