@@ -27,7 +27,7 @@
 use glam::{DVec3, Vec3};
 
 use super::project::eval_sh;
-use super::rasterize::{pixel_ray, to_rgba8};
+use super::rasterize::pixel_ray;
 use super::raytrace::{clip_weight, gaussian_hit, Bvh, Hit, RayTraceOptions};
 use super::Rgba8Image;
 use crate::camera::Camera;
@@ -342,39 +342,14 @@ pub fn render(
         camera,
         rt,
     };
-    let (w, h) = (camera.width, camera.height);
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(h as usize)
-        .max(1);
-    let rows_per = (h as usize).div_ceil(threads);
-    let mut pixels = vec![[0u8; 4]; (w * h) as usize];
-    let mut stats = MixedStats::default();
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = pixels
-            .chunks_mut(rows_per * w as usize)
-            .enumerate()
-            .map(|(c, chunk)| {
-                let frame = &frame;
-                scope.spawn(move || {
-                    let mut s = MixedStats::default();
-                    for (k, px) in chunk.iter_mut().enumerate() {
-                        let idx = c * rows_per * w as usize + k;
-                        let (i, j) = ((idx % w as usize) as u32, (idx / w as usize) as u32);
-                        *px = to_rgba8(frame.pixel(i, j, &mut s));
-                    }
-                    s
-                })
-            })
-            .collect();
-        for handle in handles {
-            let s = handle.join().expect("a ray tracing thread panicked");
-            stats.primary += s.primary;
-            stats.secondary += s.secondary;
-            stats.shadow += s.shadow;
-            stats.cut += s.cut;
-        }
-    });
-    let img = image::RgbaImage::from_fn(w, h, |i, j| image::Rgba(pixels[(j * w + i) as usize]));
-    (img, stats)
+    super::raytrace::render_rows(
+        camera,
+        |i, j, s| frame.pixel(i, j, s),
+        |total: &mut MixedStats, s| {
+            total.primary += s.primary;
+            total.secondary += s.secondary;
+            total.shadow += s.shadow;
+            total.cut += s.cut;
+        },
+    )
 }

@@ -462,6 +462,36 @@ fn render_with(
 ) -> (Rgba8Image, TraceStats) {
     let bvh = use_bvh.then(|| Bvh::build(scene, rt.q));
     let live = not_culled(scene, camera);
+    let frame = Frame {
+        scene,
+        bvh: bvh.as_ref(),
+        live: &live,
+        options,
+        rt,
+    };
+    render_rows(
+        camera,
+        |i, j, s: &mut TraceStats| {
+            let (e, d) = pixel_ray(camera, i, j);
+            frame.trace(e, d, s)
+        },
+        |total, s| {
+            total.rays += s.rays;
+            total.hits += s.hits;
+            total.hits_walked += s.hits_walked;
+            total.capped += s.capped;
+        },
+    )
+}
+
+/// The image of `pixel(i, j, stats)` (a colour over the background already), rows shared among
+/// the host's threads, each thread's stats folded into the total by `merge`: the frame loop of
+/// the CPU ray tracers (this one and [`super::mixed`]).
+pub(crate) fn render_rows<S: Default + Send>(
+    camera: &Camera,
+    pixel: impl Fn(u32, u32, &mut S) -> Vec3 + Sync,
+    mut merge: impl FnMut(&mut S, S),
+) -> (Rgba8Image, S) {
     let (w, h) = (camera.width, camera.height);
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
@@ -469,38 +499,29 @@ fn render_with(
         .max(1);
     let rows_per = (h as usize).div_ceil(threads);
     let mut pixels = vec![[0u8; 4]; (w * h) as usize];
-    let mut stats = TraceStats::default();
+    let mut stats = S::default();
+    let pixel = &pixel;
     std::thread::scope(|scope| {
         let handles: Vec<_> = pixels
             .chunks_mut(rows_per * w as usize)
             .enumerate()
             .map(|(c, chunk)| {
-                let frame = Frame {
-                    scene,
-                    bvh: bvh.as_ref(),
-                    live: &live,
-                    options,
-                    rt,
-                };
                 scope.spawn(move || {
-                    let mut s = TraceStats::default();
+                    let mut s = S::default();
                     for (k, px) in chunk.iter_mut().enumerate() {
                         let idx = c * rows_per * w as usize + k;
                         let (i, j) = ((idx % w as usize) as u32, (idx / w as usize) as u32);
-                        let (e, d) = pixel_ray(camera, i, j);
-                        let colour = frame.trace(e, d, &mut s);
-                        *px = super::rasterize::to_rgba8(colour);
+                        *px = super::rasterize::to_rgba8(pixel(i, j, &mut s));
                     }
                     s
                 })
             })
             .collect();
         for handle in handles {
-            let s = handle.join().expect("a ray tracing thread panicked");
-            stats.rays += s.rays;
-            stats.hits += s.hits;
-            stats.hits_walked += s.hits_walked;
-            stats.capped += s.capped;
+            merge(
+                &mut stats,
+                handle.join().expect("a ray tracing thread panicked"),
+            );
         }
     });
     let img = image::RgbaImage::from_fn(w, h, |i, j| image::Rgba(pixels[(j * w + i) as usize]));
