@@ -39,6 +39,7 @@ pub mod clip;
 /// counter slots). `build.rs` passes them to the shader compiler as macros.
 pub mod constants;
 pub mod error;
+pub mod formats;
 pub mod frame;
 pub mod gpu_scene;
 pub mod gpu_types;

@@ -33,7 +33,7 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
     Info {
-        /// The scene (.ply).
+        /// The scene (.ply or .splat, told apart by content).
         scene: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -130,7 +130,7 @@ pub struct CameraArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// The scene (.ply); or give --scene.
+    /// The scene (.ply or .splat, told apart by content); or give --scene.
     #[arg(required_unless_present = "scene_file", conflicts_with = "scene_file")]
     scene: Option<PathBuf>,
     /// A mixed scene (SPEC section 8, JSON: splat scenes, meshes, lights; docs/CLI.md), ray
@@ -236,7 +236,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     let spinner = ProgressBar::new_spinner().with_message(format!("loading {}", path.display()));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
     let start = std::time::Instant::now();
-    let loaded = rara::ply::load_ply(path);
+    let loaded = rara::formats::load_scene(path);
     spinner.finish_and_clear();
     let (scene, report) = loaded?;
     eprintln!(
@@ -462,7 +462,7 @@ fn print_raster_counts(
 }
 
 fn cmd_info(path: &Path, json: bool) -> Result<()> {
-    let (scene, report) = rara::ply::load_ply(path)?;
+    let (scene, report) = rara::formats::load_scene(path)?;
     let n = scene.len();
     let range = |f: &dyn Fn(usize) -> f32| -> (f32, f32) {
         (0..n)

@@ -1,5 +1,6 @@
-//! Fuzzing of the two parsers that read untrusted files: the PLY loader and the cameras.json
-//! parser. A property test, not a coverage-guided fuzzer: it mutates real headers and payloads
+//! Fuzzing of the parsers that read untrusted files: the PLY loader, the `.splat` reader (with
+//! the format detection), the cameras.json parser and the clip file parser. A property test,
+//! not a coverage-guided fuzzer: it mutates real headers and payloads
 //! (the real scenes' first vertices when `../shared/data/real` is there, the crate's own
 //! scenes in every encoding and SH degree always) with structure-aware and byte-level
 //! mutations, and checks for every input that
@@ -773,6 +774,54 @@ fn clip_file_parser_survives_mutated_files() {
         let path = Path::new("fuzz.clip.json");
         match ClipFile::parse(&text, path).and_then(ClipFile::into_clip) {
             Ok(clip) => check_clip(&clip).map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+            Err(e) => Err(e.to_string()),
+        }
+    });
+}
+
+/// `.splat` seeds: a generated scene, and the first 2,000 records of the real plant's
+/// original when it is here.
+fn splat_seeds() -> Vec<(String, Vec<u8>)> {
+    let dir = common::tempdir("fuzz_splat_seed");
+    let mut scene = rara::synth::shell(400, 0, 5);
+    scene.sh_degree = 0;
+    scene.sh = (0..scene.len()).flat_map(|_| [0.3f32, -0.2, 0.1]).collect();
+    let path = dir.join("seed.splat");
+    rara::formats::splat::write_splat(&scene, &path).unwrap();
+    let mut seeds = vec![("generated".to_string(), std::fs::read(&path).unwrap())];
+    if let Some(bytes) = common::real_data_dir()
+        .map(|d| d.join("originals/plant.splat"))
+        .and_then(|p| std::fs::read(p).ok())
+    {
+        seeds.push((
+            "plant".to_string(),
+            bytes[..bytes.len().min(2000 * 32)].to_vec(),
+        ));
+    }
+    seeds
+}
+
+/// The format detection and the `.splat` reader on mutated files (through a file: the
+/// reader works from a path, since the format has no header and its count is the size).
+#[test]
+fn splat_reader_survives_mutated_files() {
+    let seeds = splat_seeds();
+    let dir = common::tempdir("fuzz_splat");
+    let path = dir.join("fuzz.splat");
+    fuzz("splat", &seeds, mutate_bytes, |input| {
+        std::fs::write(&path, input).unwrap();
+        match rara::formats::load_scene(&path) {
+            Ok((scene, report)) => {
+                if report.vertices_in_file * 32 != input.len() {
+                    return Err(format!(
+                        "ACCEPTED BAD INPUT: {} records from {} bytes",
+                        report.vertices_in_file,
+                        input.len()
+                    ));
+                }
+                check_scene(&scene, report.vertices_in_file)
+                    .map_err(|e| format!("ACCEPTED BAD INPUT: {e}"))
+            }
             Err(e) => Err(e.to_string()),
         }
     });
