@@ -55,6 +55,8 @@ struct MixedParams {
     uvec4 refs2;        // addresses (lo, hi): the rays of this generation (MixedRay), the clips
     uvec4 occluders;    // addresses (lo, hi): the opaque triangles alone, their nodes
     uvec4 occluder_counts;  // the opaque triangles, their nodes
+    uvec4 lists;        // per tracer batch, this generation's rays: address (lo, hi), the
+                        // batch's rays (the list's stride), unused
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MixedParamsRef { MixedParams p; };
 

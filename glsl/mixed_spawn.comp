@@ -37,8 +37,14 @@ layout(push_constant) uniform Push {
     Vec4s stack;        // per pixel MIXED_STACK TreeRays, entry k of pixel p at 3 (k * pixels + p)
     U32s sp;            // per pixel, its stack's size
     U32s counters;      // MIXED_COUNTER_* slots
+    U32s list_in;       // generation > 0: the pixels the last generation gave a ray
+    U32s list_out;      // out: the pixels this generation gives a ray (counters[LIVE] of them)
+    U32s batch_counts;  // out: per tracer batch, the rays it traces this generation (listed at
+                        // MixedParams.lists, as indices in the batch)
     uint generation;    // 0: every pixel starts its camera ray
     uint pixels;
+    uint count_in;      // generation > 0: pixels in list_in
+    uint pad;
 } pc;
 
 #define KIND_CAMERA 0u
@@ -183,17 +189,23 @@ void shade(MixedParams m, TreeRay ray, uint tri, vec4 hit, float w) {
     }
 }
 
+// Lists pixel px's ray for the tracer, in its batch's list.
+void list_for_tracer(MixedParams m, uint px) {
+    uint per = m.lists.z;
+    uint batch = px / per;
+    uint at = atomicAdd(pc.batch_counts.v[batch], 1u);
+    U32s(mixed_address(m.lists.xy)).v[batch * per + at] = px - batch * per;
+}
+
 void main() {
-    uint px = linear_index();
-    if (px >= pc.pixels) {
+    // Generation 0 runs over every pixel; a later one over the pixels the one before gave a
+    // ray (a list in no particular order), so a pixel whose tree is done costs nothing.
+    uint item = linear_index();
+    if (item >= (pc.generation == 0u ? pc.pixels : pc.count_in)) {
         return;
     }
+    uint px = pc.generation == 0u ? item : pc.list_in.v[item];
     g_pixel = px;
-    // A pixel whose tree was done before this generation leaves at once (every generation
-    // dispatches over all pixels), before it reads anything else.
-    if (pc.generation != 0u && (uint(load_vec4_item(pc.cur, 3u * px + 2u).w) & 3u) == KIND_NONE) {
-        return;
-    }
     MixedParams m = pc.mixed.p;
     uint64_t ray_at = mixed_address(m.refs2.xy) + 64ul * uint64_t(px);
     TreeRay ray;
@@ -242,7 +254,7 @@ void main() {
         ray.kind = KIND_NONE;
         store_uvec4(ray_at + 48ul, uvec4(MIXED_RAY_NONE, 0u, 0u, 0u));
     } else {
-        atomicAdd(pc.counters.v[MIXED_COUNTER_LIVE], 1u);
+        pc.list_out.v[atomicAdd(pc.counters.v[MIXED_COUNTER_LIVE], 1u)] = px;
         uint slot = ray.kind == KIND_CAMERA ? MIXED_COUNTER_PRIMARY
                   : (ray.kind == KIND_SHADOW ? MIXED_COUNTER_SHADOW : MIXED_COUNTER_SECONDARY);
         atomicAdd(pc.counters.v[slot], 1u);
@@ -256,6 +268,9 @@ void main() {
             store_vec4(ray_at + 16ul, vec4(ray.d, ray.t_end));
             store_vec4(ray_at + 32ul, vec4(0.0, 0.0, 0.0, 1.0));
             store_uvec4(ray_at + 48ul, uvec4(blocked ? MIXED_RAY_NONE : MIXED_RAY_SHADOW, 0u, 0u, 0u));
+            if (!blocked) {
+                list_for_tracer(m, px);
+            }
         } else {
             float offset = ray.kind == KIND_CAMERA ? 0.0 : SECONDARY_OFFSET;
             tri = mesh_hit(m, ray.o, ray.d, ray.t_start + offset, UNBOUNDED, false, hit, visits);
@@ -263,6 +278,7 @@ void main() {
             store_vec4(ray_at + 16ul, vec4(ray.d, tri == NO_TRIANGLE ? UNBOUNDED : hit.x));
             store_vec4(ray_at + 32ul, vec4(g_acc, ray.carry.r));
             store_uvec4(ray_at + 48ul, uvec4(ray.cull ? MIXED_RAY_CULL : 0u, 0u, 0u, 0u));
+            list_for_tracer(m, px);
         }
         store_vec4_item(pc.cur_hit, px, hit);
         pc.cur_tri.v[px] = tri;

@@ -268,7 +268,14 @@ void main() {
         if (item >= pc.batch_rays) {
             return;
         }
+#ifdef MIXED
+        // The batch's rays of this generation, as the ray tree listed them (mixed_spawn.comp;
+        // pc.batch_rays is their count), so a pixel without a ray costs nothing.
+        MixedParams listing = MixedParamsRef(mixed_address(pc.params.p.mixed.xy)).p;
+        local = U32s(mixed_address(listing.lists.xy)).v[(pc.ray_base / stride) * stride + item];
+#else
         local = item;
+#endif
     } else {
         if (item >= pc.live.v[pc.round - 1u]) {
             return;
@@ -276,16 +283,6 @@ void main() {
         local = pc.lists.v[((pc.round - 1u) & 1u) * stride + item];
     }
     uint ray = pc.ray_base + local;
-#ifdef MIXED
-    // A pixel with no ray this generation leaves at once: nothing reads its state, and every
-    // generation dispatches over all of the batch's pixels at round 0.
-    if (pc.round == 0u) {
-        uint64_t mixed_at = mixed_address(MixedParamsRef(mixed_address(pc.params.p.mixed.xy)).p.refs2.xy);
-        if ((load_uvec4(mixed_at + 64ul * uint64_t(ray) + 48ul).x & MIXED_RAY_NONE) != 0u) {
-            return;
-        }
-    }
-#endif
     uint64_t state_at = uint64_t(pc.rays) + 48ul * uint64_t(local);
     uint64_t k_section = 4ul * uint64_t(TRACE_K) * uint64_t(stride);
     uint64_t k_t = uint64_t(pc.kbuf) + 4ul * uint64_t(TRACE_K) * uint64_t(local);

@@ -778,3 +778,13 @@ fn the_cli_renders_and_benches_a_scene_file() {
         "{stderr}"
     );
 }
+
+/// A frame of more rays than one batch of the tracer (640x480: two batches of 2^18), whose
+/// generations each trace a few rays in both: GPU vs CPU.
+#[test]
+fn a_frame_of_two_batches_matches_the_cpu_reference() {
+    let camera = common::tracer_camera(640);
+    assert!(camera.width * camera.height > rara::stages::trace::TRACE_BATCH_RAYS);
+    let (gpu, cpu) = both(&showcase(Clip::default()), &camera);
+    common::check_images("mixed showcase, two batches", &gpu, &cpu, 45.0, 255);
+}

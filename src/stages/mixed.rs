@@ -52,6 +52,7 @@ struct GpuMixedParams {
     refs2: [u32; 4],
     occluders: [u32; 4],
     occluder_counts: [u32; 4],
+    lists: [u32; 4],
 }
 
 #[repr(C)]
@@ -67,8 +68,13 @@ struct SpawnPush {
     stack: u64,
     sp: u64,
     counters: u64,
+    list_in: u64,
+    list_out: u64,
+    batch_counts: u64,
     generation: u32,
     pixels: u32,
+    count_in: u32,
+    pad: u32,
 }
 
 fn lo_hi(a: u64) -> [u32; 2] {
@@ -269,12 +275,18 @@ struct TreeBuffers {
     cur_tri: Buffer,
     stack: Buffer,
     sp: Buffer,
+    /// Two lists of pixels, each generation's rays and the next's (`mixed_spawn.comp`).
+    lists: Buffer,
+    /// Per tracer batch, the list of its rays of this generation (indices in the batch).
+    trace_lists: Buffer,
+    /// Per tracer batch, the rays in its list.
+    batch_counts: Buffer,
     counters: Buffer,
     readback: Buffer,
 }
 
 impl TreeBuffers {
-    fn new(ctx: &Context, pixels: u64) -> Result<Self> {
+    fn new(ctx: &Context, pixels: u64, batches: u32) -> Result<Self> {
         let gpu = MemoryLocation::GpuOnly;
         let counters = MIXED_COUNTER_WORDS as u64 * 4;
         Ok(TreeBuffers {
@@ -297,11 +309,14 @@ impl TreeBuffers {
                 gpu,
             )?,
             sp: Buffer::new(ctx, "mixed stack sizes", pixels * 4, gpu)?,
+            lists: Buffer::new(ctx, "mixed pixel lists", 2 * pixels * 4, gpu)?,
+            trace_lists: Buffer::new(ctx, "mixed traced rays", pixels * 4, gpu)?,
+            batch_counts: Buffer::new(ctx, "mixed traced rays per batch", batches as u64 * 4, gpu)?,
             counters: Buffer::new(ctx, "mixed counters", counters, gpu)?,
             readback: Buffer::new(
                 ctx,
                 "mixed counters (host)",
-                counters,
+                counters + batches as u64 * 4,
                 MemoryLocation::GpuToCpu,
             )?,
         })
@@ -310,6 +325,11 @@ impl TreeBuffers {
     fn counter(&self, slot: u32) -> u32 {
         let at = slot as usize * 4;
         bytemuck::pod_read_unaligned(&self.readback.mapped()[at..at + 4])
+    }
+
+    /// The rays tracer batch `b` traces this generation.
+    fn batch_count(&self, b: u32) -> u32 {
+        self.counter(MIXED_COUNTER_WORDS + b)
     }
 }
 
@@ -352,11 +372,13 @@ impl MixedTracer {
         let (w, h) = (camera.width, camera.height);
         let pixels = w as u64 * h as u64;
         let mut bufs = TraceBuffers::new(&self.tracer, ctx, (w, h), scene.gaussians.len())?;
-        let tree = TreeBuffers::new(ctx, pixels)?;
+        let tree = TreeBuffers::new(ctx, pixels, bufs.batches)?;
         let mut params = scene.params;
         let [a, b] = lo_hi(tree.rays.address);
         let [c, d] = lo_hi(scene.clips.address);
         params.refs2 = [a, b, c, d];
+        let [a, b] = lo_hi(tree.trace_lists.address);
+        params.lists = [a, b, bufs.batch_rays, 0];
         let mut timer = PassTimer::new(ctx)?;
         let mut stats = MixedFrameStats::default();
         let add_times = |timer: &PassTimer, stats: &mut MixedFrameStats| -> Result<()> {
@@ -369,6 +391,8 @@ impl MixedTracer {
             Ok(())
         };
         let camera_params = super::trace::camera_params(camera, &scene.gaussians, options);
+        let list = |k: u32| tree.lists.address + (k as u64 & 1) * pixels * 4;
+        let mut count_in = pixels as u32;
         for generation in 0..MAX_GENERATIONS {
             // The ray tree's step: the next ray of every pixel, and how many there are.
             let push = SpawnPush {
@@ -382,8 +406,13 @@ impl MixedTracer {
                 stack: tree.stack.address,
                 sp: tree.sp.address,
                 counters: tree.counters.address,
+                list_in: list(generation + 1),
+                list_out: list(generation),
+                batch_counts: tree.batch_counts.address,
                 generation,
                 pixels: pixels as u32,
+                count_in,
+                pad: 0,
             };
             ctx.run_commands(|cmd| {
                 timer.begin_frame(cmd);
@@ -400,15 +429,19 @@ impl MixedTracer {
                     } else {
                         device.cmd_fill_buffer(cmd, tree.counters.raw, 0, 4, 0);
                     }
+                    device.cmd_fill_buffer(cmd, tree.batch_counts.raw, 0, vk::WHOLE_SIZE, 0);
                 }
                 compute_barrier(ctx, cmd);
                 timer.begin_pass(cmd, c"ray tree");
-                self.spawn.dispatch(cmd, &push, linear_grid(pixels as u32));
+                self.spawn.dispatch(cmd, &push, linear_grid(count_in));
                 timer.end_pass(cmd, c"ray tree");
                 crate::renderer::copy_parts_to_host(
                     ctx,
                     cmd,
-                    &[(&tree.counters, 0)],
+                    &[
+                        (&tree.counters, 0),
+                        (&tree.batch_counts, MIXED_COUNTER_WORDS as u64 * 4),
+                    ],
                     &tree.readback,
                 );
             })?;
@@ -419,7 +452,8 @@ impl MixedTracer {
                     tree.counter(MIXED_COUNTER_OVERFLOW)
                 )));
             }
-            if tree.counter(MIXED_COUNTER_LIVE) == 0 {
+            count_in = tree.counter(MIXED_COUNTER_LIVE);
+            if count_in == 0 {
                 stats.generations = generation;
                 break;
             }
@@ -429,12 +463,15 @@ impl MixedTracer {
                 )));
             }
             // The Gaussians along every pixel's ray, batch by batch, rounds until done.
-            let mixed = MixedRays {
-                params: tree.params.address,
-                clips: scene.clips.address,
-                build_bvh: generation == 0,
-            };
             for batch in 0..bufs.batches {
+                // (A batch with no ray this generation is still recorded: the first call of a
+                // generation sets up its counters; its dispatches are then empty.)
+                let mixed = MixedRays {
+                    params: tree.params.address,
+                    clips: scene.clips.address,
+                    build_bvh: generation == 0,
+                    listed_rays: tree.batch_count(batch),
+                };
                 let mut end = 0;
                 let mut next = FIRST_GENERATION_ROUNDS;
                 loop {

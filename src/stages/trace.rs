@@ -114,6 +114,9 @@ pub struct MixedRays {
     pub clips: u64,
     /// Build the BVH in this call.
     pub build_bvh: bool,
+    /// The rays of the batch the call records (one batch per call), listed by the ray tree:
+    /// round 0 runs over them alone.
+    pub listed_rays: u32,
 }
 
 #[repr(C)]
@@ -771,6 +774,11 @@ impl RayTracer {
                 "ray tracer rounds {rounds:?}: at most {MAX_TRACE_ROUNDS}"
             )));
         }
+        if mixed.is_some() && batches.len() != 1 {
+            return Err(Error::InvalidInput(
+                "a mixed scene's generation records one batch per call".into(),
+            ));
+        }
         if batches.end > bufs.batches || batches.start >= batches.end {
             return Err(Error::InvalidInput(format!(
                 "ray tracer batches {batches:?} of {}",
@@ -836,7 +844,10 @@ impl RayTracer {
             // Each batch's rays go through all of their rounds before the next batch reuses
             // the per-ray buffers.
             push.ray_base = batch * bufs.batch_rays;
-            push.batch_rays = bufs.batch_rays.min(rays - push.ray_base);
+            push.batch_rays = match mixed {
+                Some(m) => m.listed_rays,
+                None => bufs.batch_rays.min(rays - push.ray_base),
+            };
             push.live = bufs.live.address + 4 * batch as u64 * max;
             for round in rounds.clone() {
                 push.round = round;
