@@ -88,6 +88,30 @@ impl MixedGpu {
         self.scene.objects()
     }
 
+    /// `n` frames: each one's wall milliseconds, each pass's GPU milliseconds per frame (in
+    /// the order the passes first ran), and the last frame's counts.
+    #[allow(clippy::type_complexity)]
+    pub fn time_frames(
+        &self,
+        camera: &Camera,
+        n: u32,
+    ) -> Result<(Vec<f64>, Vec<(&'static str, Vec<f64>)>, MixedFrameStats)> {
+        let (mut walls, mut passes) = (Vec::new(), Vec::<(&'static str, Vec<f64>)>::new());
+        let mut last = MixedFrameStats::default();
+        for _ in 0..n {
+            let (_, s, w) = self.render(camera)?;
+            walls.push(w);
+            for &(name, ms) in &s.passes {
+                match passes.iter_mut().find(|(n, _)| *n == name) {
+                    Some(p) => p.1.push(ms),
+                    None => passes.push((name, vec![ms])),
+                }
+            }
+            last = s;
+        }
+        Ok((walls, passes, last))
+    }
+
     /// One frame and its wall milliseconds.
     pub fn render(&self, camera: &Camera) -> Result<(image::RgbaImage, MixedFrameStats, f64)> {
         let start = std::time::Instant::now();
@@ -151,18 +175,7 @@ pub fn render(
         wall
     );
     if repeat > 0 {
-        let (mut walls, mut passes): (Vec<f64>, Vec<(&'static str, Vec<f64>)>) =
-            (Vec::new(), Vec::new());
-        for _ in 0..repeat {
-            let (_, s, w) = gpu.render(camera)?;
-            walls.push(w);
-            for (name, ms) in s.passes {
-                match passes.iter_mut().find(|(n, _)| *n == name) {
-                    Some(p) => p.1.push(ms),
-                    None => passes.push((name, vec![ms])),
-                }
-            }
-        }
+        let (mut walls, passes, _) = gpu.time_frames(camera, repeat as u32)?;
         println!(
             "median over {repeat} frames: wall {:.1} ms (device {}, driver {})",
             median(&mut walls),
@@ -193,20 +206,7 @@ pub fn bench(
     for _ in 0..warmup {
         gpu.render(camera)?;
     }
-    let mut walls = Vec::new();
-    let mut passes: Vec<(&'static str, Vec<f64>)> = Vec::new();
-    let mut last = MixedFrameStats::default();
-    for _ in 0..frames {
-        let (_, s, w) = gpu.render(camera)?;
-        walls.push(w);
-        for (name, ms) in &s.passes {
-            match passes.iter_mut().find(|(n, _)| n == name) {
-                Some(p) => p.1.push(*ms),
-                None => passes.push((name, vec![*ms])),
-            }
-        }
-        last = s;
-    }
+    let (mut walls, mut passes, last) = gpu.time_frames(camera, frames)?;
     let frame_ms = median(&mut walls);
     println!(
         "{} at {}x{} on {} (driver {}), {frames} frames after {warmup} warm-up",
