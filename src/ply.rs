@@ -31,8 +31,11 @@ pub struct LoadReport {
     /// Gaussians dropped because one of their values was NaN or infinite (or their rotation
     /// was zero).
     pub dropped_non_finite: usize,
-    /// PLY encoding name as in the header.
+    /// The encoding: a PLY's as its header names it, or the format's name.
     pub encoding: &'static str,
+    /// What the reader saw that a user should know (an SPZ's antialiased flag, an SH band a
+    /// scene cannot hold, a draft-era glTF), one sentence each.
+    pub notes: Vec<String>,
 }
 
 /// Where a chunk of [`for_each_chunk`] sits in the scene.
@@ -343,13 +346,13 @@ pub fn for_each_chunk(
 }
 
 /// The loader behind [`read_ply_from`] and [`for_each_chunk`].
-fn read_ply_into<R: BufRead>(
-    mut reader: R,
-    len: Option<u64>,
+/// Reads and parses a PLY header (up to and with its `end_header` line): its bytes, and what
+/// ply-rs makes of them, with errors that name the offending line.
+pub(crate) fn read_header(
     path: &Path,
-    chunks: Option<(usize, ChunkSink<'_>)>,
-) -> Result<(Scene, LoadReport)> {
-    let header_bytes = read_header_bytes(path, &mut reader)?;
+    reader: &mut impl BufRead,
+) -> Result<(Vec<u8>, ply_rs::ply::Header)> {
+    let header_bytes = read_header_bytes(path, reader)?;
     // ply-rs expects '\n' line ends; accept '\r\n' too.
     let header_text = String::from_utf8_lossy(&header_bytes).replace('\r', "");
     check_header_structure(path, &header_text)?;
@@ -379,7 +382,16 @@ fn read_ply_into<R: BufRead>(
                 ),
             }
         })?;
+    Ok((header_bytes, header))
+}
 
+fn read_ply_into<R: BufRead>(
+    mut reader: R,
+    len: Option<u64>,
+    path: &Path,
+    chunks: Option<(usize, ChunkSink<'_>)>,
+) -> Result<(Scene, LoadReport)> {
+    let (header_bytes, header) = read_header(path, &mut reader)?;
     let (encoding_name, big_endian) = match header.encoding {
         Encoding::Ascii => ("ascii", false),
         Encoding::BinaryLittleEndian => ("binary_little_endian", false),
@@ -802,7 +814,7 @@ fn push_gaussian(
 
 /// A 3-scale Gaussian whose smallest scale is at most [`FLAT_SCALE_RATIO`] of its largest,
 /// made flat along that axis (SPEC section 6).
-fn flat_if_degenerate(mut scale: Vec3) -> Vec3 {
+pub(crate) fn flat_if_degenerate(mut scale: Vec3) -> Vec3 {
     let k = smallest_axis(scale);
     if scale[k] <= FLAT_SCALE_RATIO * scale.max_element() {
         scale[k] = 0.0;

@@ -173,3 +173,69 @@ fn original_splat_files_match_the_shared_ply_conversions() {
         common::test_skipped("none of its real scenes is here");
     }
 }
+
+#[test]
+fn explore_biker_spz() {
+    let dir = common::real_data_dir().unwrap();
+    use rara::formats::spz::{read_spz, SpzAxes};
+    let (b, _) = rara::ply::load_ply(dir.join("biker_capture_sh0.ply")).unwrap();
+    for axes in [SpzAxes::Rub, SpzAxes::AsStored] {
+        let (a, r) = read_spz(&dir.join("originals/biker.spz"), axes).unwrap();
+        eprintln!("{axes:?} {:?} {} {}", r.notes, a.len(), b.len());
+        if a.len() == b.len() {
+            eprintln!("{:?}", differences(&b, &a));
+        }
+        eprintln!(
+            "{} {} / {} {}",
+            a.means[0], a.rotations[0], b.means[0], b.rotations[0]
+        );
+    }
+}
+
+#[test]
+fn explore_biker_cply() {
+    let dir = common::real_data_dir().unwrap();
+    let (b, _) = rara::ply::load_ply(dir.join("biker_capture_sh0.ply")).unwrap();
+    let (a, r) = load_scene(dir.join("originals/biker.compressed.ply")).unwrap();
+    eprintln!("{:?} {} {}", r.notes, a.len(), b.len());
+    let keep: Vec<usize> = (0..a.len())
+        .filter(|&i| a.opacities[i] > 2e-6 && a.opacities[i] < 1.0 - 2e-6)
+        .collect();
+    eprintln!("kept {}", keep.len());
+    let sub = |s: &Scene| Scene {
+        means: keep.iter().map(|&i| s.means[i]).collect(),
+        opacities: keep.iter().map(|&i| s.opacities[i]).collect(),
+        scales: keep.iter().map(|&i| s.scales[i]).collect(),
+        rotations: keep.iter().map(|&i| s.rotations[i]).collect(),
+        sh_degree: s.sh_degree,
+        sh: keep.iter().flat_map(|&i| s.sh_of(i).to_vec()).collect(),
+    };
+    eprintln!("cply vs ply {:?}", differences(&b, &sub(&a)));
+    let (c, _) = load_scene(dir.join("originals/biker.spz")).unwrap();
+    eprintln!("spz vs ply {:?}", differences(&b, &sub(&c)));
+}
+
+#[test]
+fn explore_playbot_sog() {
+    let dir = common::real_data_dir().unwrap();
+    let t = std::time::Instant::now();
+    let (b, _) = rara::ply::load_ply(dir.join("playbot_lod0_500k_sh2.ply")).unwrap();
+    eprintln!("ply {:?}", t.elapsed());
+    let t = std::time::Instant::now();
+    let (a, r) = load_scene(dir.join("originals/playbot_lod0_sog")).unwrap();
+    eprintln!(
+        "sog {:?} {:?} {} {}",
+        t.elapsed(),
+        r.notes,
+        a.len(),
+        b.len()
+    );
+    eprintln!("sog vs ply {:?}", differences(&b, &a));
+    let mut d = 0f32;
+    for i in 0..a.len() {
+        for k in 0..a.sh_stride() {
+            d = d.max((a.sh_of(i)[k] - b.sh_of(i)[k]).abs());
+        }
+    }
+    eprintln!("sh {d}");
+}

@@ -6,14 +6,142 @@
 //! - SPZ, glTF `KHR_gaussian_splatting`, SOG and PlayCanvas compressed PLY are recognised and
 //!   named, and refused with a clear error until their readers land.
 
+pub mod compressed_ply;
+pub mod sog;
 pub mod splat;
+pub mod spz;
 
 use std::io::Read;
 use std::path::Path;
 
+use glam::{Quat, Vec3};
+
 use crate::error::{Error, Result};
 use crate::ply::LoadReport;
 use crate::scene::Scene;
+
+/// The parity of each real SH basis function (3DGS order, bands 1 to 3, after the DC) in
+/// `x`, `y` and `z`: whether it changes sign when that axis does. Band 1 is `(y, z, x)`,
+/// band 2 `(xy, yz, 3z^2 - 1, xz, x^2 - y^2)`, band 3 `(y(3x^2 - y^2), xyz, y(5z^2 - 1),
+/// z(5z^2 - 3), x(5z^2 - 1), z(x^2 - y^2), x(x^2 - 3y^2))`.
+const SH_PARITY: [[bool; 3]; 15] = [
+    [false, true, false],
+    [false, false, true],
+    [true, false, false],
+    [true, true, false],
+    [false, true, true],
+    [false, false, false],
+    [true, false, true],
+    [false, false, false],
+    [false, true, false],
+    [true, true, true],
+    [false, true, false],
+    [false, false, true],
+    [true, false, false],
+    [false, false, true],
+    [true, false, false],
+];
+
+/// Turns `scene` into a frame whose axes are `flips` of its own (`true`: that axis points the
+/// other way). Two flips at most, so the change is a rotation by half a turn and keeps the
+/// handedness: centres flip, a rotation `q` becomes `F q F` (its vector part flips like a
+/// centre) and each SH coefficient takes the sign its basis function takes. SPZ's RUB and
+/// glTF's LUF are such turns of rara's RDF.
+pub fn flip_axes(scene: &mut Scene, flips: [bool; 3]) {
+    assert!(
+        flips.iter().filter(|&&f| f).count() % 2 == 0,
+        "an odd number of flips would mirror the scene"
+    );
+    let sign = Vec3::from_array(flips.map(|f| if f { -1.0 } else { 1.0 }));
+    for m in &mut scene.means {
+        *m *= sign;
+    }
+    for q in &mut scene.rotations {
+        let v = Vec3::new(q.x, q.y, q.z) * sign;
+        *q = Quat::from_xyzw(v.x, v.y, v.z, q.w);
+    }
+    let stride = scene.sh_stride();
+    let per_channel = scene.sh_coeffs_per_channel();
+    let coeff_sign: Vec<f32> = (1..per_channel)
+        .map(|k| {
+            let odd = SH_PARITY[k - 1]
+                .iter()
+                .zip(flips)
+                .filter(|(p, f)| **p && *f)
+                .count();
+            if odd % 2 == 1 {
+                -1.0
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    if coeff_sign.iter().all(|&s| s > 0.0) {
+        return;
+    }
+    for g in scene.sh.chunks_exact_mut(stride) {
+        for (k, s) in coeff_sign.iter().enumerate() {
+            for c in 0..3 {
+                g[3 * (k + 1) + c] *= s;
+            }
+        }
+    }
+}
+
+/// Adds one decoded Gaussian to `scene` the way the PLY reader does: the rotation normalised,
+/// a 3-scale Gaussian far thinner along one axis made flat (SPEC section 6), and a Gaussian
+/// with a value that is not finite, a negative scale or a zero rotation dropped and counted.
+pub(crate) fn push_decoded(
+    scene: &mut Scene,
+    dropped: &mut usize,
+    mean: Vec3,
+    scale: Vec3,
+    opacity: f32,
+    rotation: Quat,
+    sh: &[f32],
+) {
+    let rotation = crate::scene::normalized_rotation(rotation);
+    let finite = mean.is_finite()
+        && scale.is_finite()
+        && opacity.is_finite()
+        && sh.iter().all(|v| v.is_finite());
+    match rotation {
+        Some(q) if finite && scale.min_element() >= 0.0 => scene.push(
+            mean,
+            opacity.clamp(OPACITY_MIN, 1.0 - OPACITY_MIN),
+            crate::ply::flat_if_degenerate(scale),
+            q,
+            sh,
+        ),
+        _ => *dropped += 1,
+    }
+}
+
+/// The opacity a decoded Gaussian keeps at least (and `1 - ` it at most): splat-transform's
+/// clamp before its logit, so an 8-bit 0 or 255 stays a finite logit when written back.
+pub const OPACITY_MIN: f32 = 1e-6;
+
+/// Reads all of `path` after checking that it is a plain file of at most `limit` bytes.
+pub(crate) fn read_file_bounded(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    let file = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
+    let size = file.metadata().map_err(|e| io_error(path, e))?.len();
+    if size > limit {
+        return Err(Error::InvalidInput(format!(
+            "{}: {size} bytes, more than the {limit} this reader takes",
+            path.display()
+        )));
+    }
+    let mut bytes = Vec::with_capacity(size as usize);
+    file.take(limit)
+        .read_to_end(&mut bytes)
+        .map_err(|e| io_error(path, e))?;
+    Ok(bytes)
+}
+
+/// The most bytes a compressed stream may inflate to per byte it holds: generous (real SPZ
+/// streams inflate 2 to 5 times), and what bounds a decompression bomb's allocation before
+/// any of it is made. SPZ's reference reader uses the same ratio.
+pub const MAX_INFLATION: u64 = 1024;
 
 /// A scene format, as [`detect`] finds it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -136,8 +264,14 @@ fn sniff(path: &Path) -> Result<Sniffed> {
         return found(SceneFormat::Sog);
     }
     let text = String::from_utf8_lossy(&head);
-    if text.trim_start().starts_with('{') && text.contains("\"asset\"") {
-        return found(SceneFormat::Gltf);
+    if text.trim_start().starts_with('{') {
+        // A SOG's meta.json also has an "asset" (its generator); its "means" tell it apart.
+        if text.contains("\"means\"") && text.contains("\"count\"") {
+            return found(SceneFormat::Sog);
+        }
+        if text.contains("\"asset\"") {
+            return found(SceneFormat::Gltf);
+        }
     }
     let ext = path
         .extension()
@@ -157,8 +291,24 @@ fn sniff(path: &Path) -> Result<Sniffed> {
     Ok(Sniffed::Unknown(head))
 }
 
-/// Loads the scene at `path` in whichever format it is ([`detect`]).
+/// How the readers take what a format leaves open.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ReadOptions {
+    /// The axes of an SPZ file (RUB unless told otherwise).
+    pub spz_axes: spz::SpzAxes,
+}
+
+/// Loads the scene at `path` in whichever format it is ([`detect`]), with the default
+/// [`ReadOptions`].
 pub fn load_scene(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
+    load_scene_with(path, &ReadOptions::default())
+}
+
+/// Loads the scene at `path` in whichever format it is ([`detect`]).
+pub fn load_scene_with(
+    path: impl AsRef<Path>,
+    options: &ReadOptions,
+) -> Result<(Scene, LoadReport)> {
     let path = path.as_ref();
     let format = match sniff(path)? {
         Sniffed::Format(f) => f,
@@ -176,6 +326,9 @@ pub fn load_scene(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     match format {
         SceneFormat::Ply => crate::ply::load_ply(path),
         SceneFormat::Splat => splat::read_splat(path),
+        SceneFormat::Spz => spz::read_spz(path, options.spz_axes),
+        SceneFormat::CompressedPly => compressed_ply::read_compressed_ply(path),
+        SceneFormat::Sog => sog::read_sog(path),
         other => Err(Error::InvalidInput(format!(
             "{}: {} is recognised but not read yet (rara reads PLY and .splat)",
             path.display(),

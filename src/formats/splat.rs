@@ -61,6 +61,7 @@ pub fn read_splat(path: &Path) -> Result<(Scene, LoadReport)> {
             vertices_in_file: count,
             dropped_non_finite: dropped,
             encoding: "antimatter15 .splat",
+            notes: Vec::new(),
         },
     ))
 }
