@@ -19,6 +19,28 @@ use cli::output::Output;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// The axes of SPZ files read or written: rub (the format's own, what Niantic's tools
+    /// write; turned into rara's RDF) or as-stored (what splat-transform and SuperSplat write,
+    /// already in the PLY's axes).
+    #[arg(long, global = true, value_enum, default_value = "rub")]
+    spz_axes: SpzAxesArg,
+}
+
+/// `--spz-axes`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum SpzAxesArg {
+    /// Right, up, back: SPZ's default.
+    Rub,
+    /// Taken as they are.
+    AsStored,
+}
+
+/// The `--spz-axes` of this run.
+static SPZ_AXES: std::sync::OnceLock<rara::formats::spz::SpzAxes> = std::sync::OnceLock::new();
+
+/// The `--spz-axes` of this run (RUB unless told).
+pub fn spz_axes() -> rara::formats::spz::SpzAxes {
+    SPZ_AXES.get().copied().unwrap_or_default()
 }
 
 #[derive(Subcommand)]
@@ -32,8 +54,11 @@ enum Command {
     /// scene) with per-pass GPU timings, or the radix sort alone (--sort N).
     Bench(cli::bench::BenchArgs),
     /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
+    /// Convert a scene to PLY, SPZ (v4 or v3), glTF (.glb, KHR_gaussian_splatting) or .splat,
+    /// warning about what the target format drops.
+    Convert(cli::convert::ConvertArgs),
     Info {
-        /// The scene (.ply or .splat, told apart by content).
+        /// The scene (PLY, compressed PLY, SPZ, glTF, SOG or .splat, told apart by content).
         scene: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -130,7 +155,7 @@ pub struct CameraArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// The scene (.ply or .splat, told apart by content); or give --scene.
+    /// The scene (PLY, compressed PLY, SPZ, glTF, SOG or .splat, told apart by content); or give --scene.
     #[arg(required_unless_present = "scene_file", conflicts_with = "scene_file")]
     scene: Option<PathBuf>,
     /// A mixed scene (SPEC section 8, JSON: splat scenes, meshes, lights; docs/CLI.md), ray
@@ -236,7 +261,10 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     let spinner = ProgressBar::new_spinner().with_message(format!("loading {}", path.display()));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
     let start = std::time::Instant::now();
-    let loaded = rara::formats::load_scene(path);
+    let options = rara::formats::ReadOptions {
+        spz_axes: spz_axes(),
+    };
+    let loaded = rara::formats::load_scene_with(path, &options);
     spinner.finish_and_clear();
     let (scene, report) = loaded?;
     eprintln!(
@@ -247,6 +275,9 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
         report.encoding,
         start.elapsed().as_secs_f64() * 1e3
     );
+    for note in &report.notes {
+        eprintln!("note: {note}");
+    }
     if report.dropped_non_finite > 0 {
         eprintln!(
             "warning: dropped {} of {} Gaussians with non-finite values",
@@ -462,7 +493,10 @@ fn print_raster_counts(
 }
 
 fn cmd_info(path: &Path, json: bool) -> Result<()> {
-    let (scene, report) = rara::formats::load_scene(path)?;
+    let options = rara::formats::ReadOptions {
+        spz_axes: spz_axes(),
+    };
+    let (scene, report) = rara::formats::load_scene_with(path, &options)?;
     let n = scene.len();
     let range = |f: &dyn Fn(usize) -> f32| -> (f32, f32) {
         (0..n)
@@ -508,6 +542,7 @@ fn cmd_info(path: &Path, json: bool) -> Result<()> {
             "sh_degree": scene.sh_degree,
             "flat": flat,
             "encoding": report.encoding,
+            "notes": report.notes,
             "bounds": {"min": lo.to_array(), "max": hi.to_array()},
             "properties": props.iter().map(|(k, (a, b))| (k.clone(), serde_json::json!({"min": a, "max": b}))).collect::<serde_json::Map<_, _>>(),
         });
@@ -521,6 +556,9 @@ fn cmd_info(path: &Path, json: bool) -> Result<()> {
         println!("SH degree:   {}", scene.sh_degree);
         println!("flat:        {flat} (one scale 0; SPEC section 6)");
         println!("encoding:    {}", report.encoding);
+        for note in &report.notes {
+            println!("note:        {note}");
+        }
         println!(
             "bounds:      min {:?} max {:?}",
             lo.to_array(),
@@ -624,10 +662,15 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
+    let _ = SPZ_AXES.set(match cli.spz_axes {
+        SpzAxesArg::Rub => rara::formats::spz::SpzAxes::Rub,
+        SpzAxesArg::AsStored => rara::formats::spz::SpzAxes::AsStored,
+    });
     let result = match &cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Sweep(args) => cli::sweep::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Convert(args) => cli::convert::run(args),
         Command::Info { scene, json } => cmd_info(scene, *json),
         Command::Compare { a, b, diff, json } => cmd_compare(a, b, diff.as_deref(), *json),
         Command::Synth {

@@ -77,6 +77,24 @@ impl Scene {
         flat
     }
 
+    /// The scene at SH degree `degree`: the bands above it dropped, or new bands of zeros.
+    pub fn with_sh_degree(self, degree: u32) -> Scene {
+        if self.sh_degree == degree {
+            return self;
+        }
+        let (from, to) = (self.sh_stride(), 3 * sh_coeffs(degree));
+        let keep = from.min(to);
+        let mut sh = vec![0.0; self.len() * to];
+        for g in 0..self.len() {
+            sh[g * to..g * to + keep].copy_from_slice(&self.sh[g * from..g * from + keep]);
+        }
+        Scene {
+            sh_degree: degree,
+            sh,
+            ..self
+        }
+    }
+
     /// Appends one Gaussian (`sh` holds [`Scene::sh_stride`] floats).
     pub fn push(&mut self, mean: Vec3, opacity: f32, scale: Vec3, rotation: Quat, sh: &[f32]) {
         debug_assert_eq!(sh.len(), self.sh_stride());

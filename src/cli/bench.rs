@@ -20,7 +20,7 @@ use crate::{load_scene, median, resolve_camera, CameraArgs};
 /// `rara bench` options.
 #[derive(Args)]
 pub struct BenchArgs {
-    /// The scene (.ply or .splat, told apart by content); not needed with --sort or --scene.
+    /// The scene (PLY, compressed PLY, SPZ, glTF, SOG or .splat, told apart by content); not needed with --sort or --scene.
     #[arg(required_unless_present_any = ["sort", "scene_file"], conflicts_with = "scene_file")]
     scene: Option<PathBuf>,
     /// A mixed scene (SPEC section 8, JSON), ray traced: frame time, rays per pixel, time per

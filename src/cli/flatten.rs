@@ -13,7 +13,7 @@ use super::output::Output;
 /// `rara flatten`.
 #[derive(Args)]
 pub struct FlattenArgs {
-    /// The scene (.ply).
+    /// The scene (any format rara reads).
     pub scene: PathBuf,
     /// Output PLY of flat Gaussians.
     #[arg(short, long)]

@@ -35,7 +35,7 @@ enum MeshCommand {
 
 #[derive(Args)]
 struct ExportArgs {
-    /// The scene (.ply); Gaussians that are not flat are flattened on the fly.
+    /// The scene (any format rara reads); Gaussians that are not flat are flattened on the fly.
     scene: PathBuf,
     /// Output mesh: .ply, .obj (with an .mtl beside it) or .glb.
     #[arg(short, long)]

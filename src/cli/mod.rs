@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod clip_args;
+pub mod convert;
 pub mod demo;
 pub mod flatten;
 pub mod mesh;

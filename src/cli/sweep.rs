@@ -16,7 +16,7 @@ use crate::{load_scene, resolve_camera, save_png, CameraArgs};
 /// `rara sweep` options.
 #[derive(Args)]
 pub struct SweepArgs {
-    /// The scene (.ply or .splat, told apart by content); or give --scene.
+    /// The scene (PLY, compressed PLY, SPZ, glTF, SOG or .splat, told apart by content); or give --scene.
     #[arg(required_unless_present = "scene_file", conflicts_with = "scene_file")]
     scene: Option<PathBuf>,
     /// A mixed scene (SPEC section 8, JSON), ray traced: the moving plane clips every splat

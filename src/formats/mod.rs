@@ -7,6 +7,7 @@
 //!   named, and refused with a clear error until their readers land.
 
 pub mod compressed_ply;
+pub mod gltf;
 pub mod sog;
 pub mod splat;
 pub mod spz;
@@ -329,10 +330,6 @@ pub fn load_scene_with(
         SceneFormat::Spz => spz::read_spz(path, options.spz_axes),
         SceneFormat::CompressedPly => compressed_ply::read_compressed_ply(path),
         SceneFormat::Sog => sog::read_sog(path),
-        other => Err(Error::InvalidInput(format!(
-            "{}: {} is recognised but not read yet (rara reads PLY and .splat)",
-            path.display(),
-            other.name()
-        ))),
+        SceneFormat::Gltf => gltf::read_gltf(path),
     }
 }

@@ -530,19 +530,7 @@ impl MixedScene {
 
 /// `scene` with its SH at `degree` (>= its own), the new coefficients 0.
 fn padded(scene: &Scene, degree: u32) -> Scene {
-    if scene.sh_degree == degree {
-        return scene.clone();
-    }
-    let mut out = Scene {
-        sh_degree: degree,
-        ..scene.clone()
-    };
-    let (from, to) = (scene.sh_stride(), out.sh_stride());
-    out.sh = vec![0.0; scene.len() * to];
-    for g in 0..scene.len() {
-        out.sh[g * to..g * to + from].copy_from_slice(scene.sh_of(g));
-    }
-    out
+    scene.clone().with_sh_degree(degree)
 }
 
 /// `scene` moved by `t` (a similarity): centres `s R mu + t`, rotations `R q`, scales `s`
