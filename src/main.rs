@@ -43,6 +43,13 @@ pub fn spz_axes() -> rara::formats::spz::SpzAxes {
     SPZ_AXES.get().copied().unwrap_or_default()
 }
 
+/// How this run's readers take what a format leaves open (`--spz-axes`).
+fn read_options() -> rara::formats::ReadOptions {
+    rara::formats::ReadOptions {
+        spz_axes: spz_axes(),
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene from one camera to a PNG, optionally clipped.
@@ -261,10 +268,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     let spinner = ProgressBar::new_spinner().with_message(format!("loading {}", path.display()));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
     let start = std::time::Instant::now();
-    let options = rara::formats::ReadOptions {
-        spz_axes: spz_axes(),
-    };
-    let loaded = rara::formats::load_scene_with(path, &options);
+    let loaded = rara::formats::load_scene_with(path, &read_options());
     spinner.finish_and_clear();
     let (scene, report) = loaded?;
     eprintln!(
@@ -493,10 +497,7 @@ fn print_raster_counts(
 }
 
 fn cmd_info(path: &Path, json: bool) -> Result<()> {
-    let options = rara::formats::ReadOptions {
-        spz_axes: spz_axes(),
-    };
-    let (scene, report) = rara::formats::load_scene_with(path, &options)?;
+    let (scene, report) = rara::formats::load_scene_with(path, &read_options())?;
     let n = scene.len();
     let range = |f: &dyn Fn(usize) -> f32| -> (f32, f32) {
         (0..n)
