@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the real clients the tests drive, where they are missing: Debian's Blender (with
-# python3-numpy, which its glTF importer needs) and the Khronos glTF validator from npm (into
-# target/clients). Sourced by scripts/test.sh after setup.sh; a client that cannot be
+# python3-numpy, which its glTF importer needs), and from npm (into target/clients) the Khronos
+# glTF validator and PlayCanvas' splat-transform (the scene formats' reference tool). Sourced by scripts/test.sh after setup.sh; a client that cannot be
 # installed is reported, and the tests that need it say TEST SKIPPED.
 
 client_packages=(blender python3-numpy)
@@ -31,5 +31,20 @@ if [ ! -d target/clients/node_modules/gltf-validator ]; then
       echo "clients: npm install gltf-validator failed; the validator test will be skipped" >&2
   else
     echo "clients: npm not found; the glTF validator test will be skipped" >&2
+  fi
+fi
+
+# 3.10.2 declares node >= 22 but runs its readers and writers on Debian's node 20 (npm warns).
+splat_transform_version=3.10.2
+if ! grep -qs "\"version\": \"$splat_transform_version\"" \
+  target/clients/node_modules/@playcanvas/splat-transform/package.json; then
+  if command -v npm >/dev/null 2>&1; then
+    echo "clients: installing @playcanvas/splat-transform@$splat_transform_version from npm into target/clients" >&2
+    mkdir -p target/clients
+    npm install --silent --no-audit --no-fund --prefix target/clients \
+      "@playcanvas/splat-transform@$splat_transform_version" >/dev/null 2>&1 ||
+      echo "clients: npm install splat-transform failed; the format cross-checks will be skipped" >&2
+  else
+    echo "clients: npm not found; the splat-transform cross-checks will be skipped" >&2
   fi
 fi

@@ -288,39 +288,17 @@ fn blender_renders_a_real_scene() {
 /// The Khronos glTF validator (npm `gltf-validator`) finds no error and no warning in any glb.
 #[test]
 fn gltf_validator_accepts_every_glb() {
-    let module = std::env::var_os("RARA_GLTF_VALIDATOR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("target/clients/node_modules/gltf-validator")
-        });
-    let node_ok = Command::new("node")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !node_ok || !module.is_dir() {
-        common::test_skipped("node or npm's gltf-validator is not installed (scripts/clients.sh)");
-        return;
-    }
     let dir = common::tempdir("validator");
     let scene = fixture();
     for falloff in [Falloff::Constant, Falloff::Centre, Falloff::Texture] {
         let glb = dir.join(format!("{falloff:?}.glb"));
         export(&scene, &glb, falloff);
-        let js = format!(
-            "const v = require({module:?}); const fs = require('fs');\n\
-             v.validateBytes(new Uint8Array(fs.readFileSync({glb:?})), {{maxIssues: 100}})\n\
-              .then(r => console.log(JSON.stringify(r.issues)))\n\
-              .catch(e => {{ console.error(e); process.exit(2); }});",
-            module = module.display().to_string(),
-            glb = glb.display().to_string()
-        );
-        let out = Command::new("node").arg("-e").arg(js).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let issues: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let Some(issues) = common::gltf_validator_issues(&glb) else {
+            common::test_skipped(
+                "node or npm's gltf-validator is not installed (scripts/clients.sh)",
+            );
+            return;
+        };
         eprintln!(
             "glTF validator, {falloff:?}: {} errors, {} warnings, {} infos",
             issues["numErrors"], issues["numWarnings"], issues["numInfos"]

@@ -300,3 +300,77 @@ pub fn check_traced(
     );
     d
 }
+
+/// Whether `node` runs here.
+fn node_runs() -> bool {
+    std::process::Command::new("node")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// The glTF validator's report on `glb` (its `issues` object: `numErrors`, `numWarnings`,
+/// `messages`...), or `None` when node or npm's `gltf-validator` is not installed
+/// (`scripts/clients.sh` installs it into target/clients; `RARA_GLTF_VALIDATOR` points elsewhere).
+pub fn gltf_validator_issues(glb: &Path) -> Option<serde_json::Value> {
+    let module = std::env::var_os("RARA_GLTF_VALIDATOR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("target/clients/node_modules/gltf-validator")
+        });
+    if !node_runs() || !module.is_dir() {
+        return None;
+    }
+    let js = format!(
+        "const v = require({module:?}); const fs = require('fs');\n\
+         v.validateBytes(new Uint8Array(fs.readFileSync({glb:?})), {{maxIssues: 100}})\n\
+          .then(r => console.log(JSON.stringify(r.issues)))\n\
+          .catch(e => {{ console.error(e); process.exit(2); }});",
+        module = module.display().to_string(),
+        glb = glb.display().to_string()
+    );
+    let out = std::process::Command::new("node")
+        .arg("-e")
+        .arg(js)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "gltf-validator on {}: {}",
+        glb.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some(serde_json::from_slice(&out.stdout).unwrap())
+}
+
+/// PlayCanvas' splat-transform command (npm `@playcanvas/splat-transform`, which
+/// `scripts/clients.sh` installs into target/clients; `RARA_SPLAT_TRANSFORM` points elsewhere),
+/// or `None` when it or node is not here.
+pub fn splat_transform() -> Option<PathBuf> {
+    let bin = std::env::var_os("RARA_SPLAT_TRANSFORM")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("target/clients/node_modules/.bin/splat-transform")
+        });
+    (node_runs() && bin.is_file()).then_some(bin)
+}
+
+/// Runs splat-transform to convert `input` into `output` (any format it writes, by extension),
+/// failing the test with its message when it fails.
+pub fn run_splat_transform(bin: &Path, input: &Path, output: &Path) {
+    let out = std::process::Command::new(bin)
+        .args(["-q", "-w"])
+        .arg(input)
+        .arg(output)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success() && output.exists(),
+        "splat-transform {} {}: {}{}",
+        input.display(),
+        output.display(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
