@@ -659,7 +659,8 @@ fn splat_transform_and_rara_read_each_others_files() {
         e.assert_within(&same, &format!("{name}, rara against splat-transform"));
     }
 
-    let written: [(&str, &str, &dyn Fn(&std::path::Path)); 4] = [
+    type Write<'a> = &'a dyn Fn(&std::path::Path);
+    let written: [(&str, &str, Write); 4] = [
         ("rara.ply", "ply", &|p| {
             rara::ply::write_ply(&source, p, rara::ply::PlyEncoding::BinaryLittleEndian).unwrap()
         }),
@@ -742,5 +743,186 @@ fn splat_transform_and_rara_read_each_others_files() {
             );
         }
         _ => eprintln!("rara.glb: the glTF validator is not installed, not checked"),
+    }
+}
+
+/// Each reader's error for the hostile inputs every format meets: a truncated file or stream,
+/// a bad magic, a count that does not match the data, and a decompression bomb (a count or a
+/// stream far larger than the file could hold), each named for what it is.
+#[test]
+fn hostile_files_get_clear_errors() {
+    use rara::formats::spz::{decode, encode, SpzAxes, SpzVersion};
+    let dir = common::tempdir("formats_hostile");
+    let fixtures = fixtures_dir();
+    let scene = rara::synth::shell(300, 1, 9);
+    let path = std::path::Path::new("hostile.spz");
+    let spz = |bytes: &[u8]| decode(bytes, path, SpzAxes::Rub).unwrap_err().to_string();
+    let gz = |inner: &[u8]| {
+        use std::io::Write;
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        e.write_all(inner).unwrap();
+        e.finish().unwrap()
+    };
+    let gunzip = |bytes: &[u8]| {
+        use std::io::Read;
+        let mut out = Vec::new();
+        flate2::read::GzDecoder::new(bytes)
+            .read_to_end(&mut out)
+            .unwrap();
+        out
+    };
+    let v4 = encode(&scene, SpzVersion::V4, SpzAxes::Rub).unwrap();
+    let v3 = encode(&scene, SpzVersion::V3, SpzAxes::Rub).unwrap();
+    let mut cases: Vec<(String, String, &str)> = Vec::new();
+    let mut case = |what: &str, message: String, expect: &'static str| {
+        cases.push((what.to_string(), message, expect))
+    };
+
+    // SPZ v4: truncated, bad magic, a count one more than the streams hold, a count no file
+    // of this size could hold, and a stream that inflates past its table entry.
+    case("SPZ v4 truncated", spz(&v4[..v4.len() - 10]), "truncated");
+    let mut bad_magic = v4.clone();
+    bad_magic[0] = b'X';
+    case("SPZ v4 bad magic", spz(&bad_magic), "no NGSP header");
+    let mut more = v4.clone();
+    more[8..12].copy_from_slice(&301u32.to_le_bytes());
+    case(
+        "SPZ v4 count mismatch",
+        spz(&more),
+        "where 301 Gaussians need",
+    );
+    let mut huge = v4.clone();
+    huge[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
+    case("SPZ v4 count bomb", spz(&huge), "does not fit in");
+    let mut bomb = v4.clone();
+    {
+        // The last (SH) stream replaced by 64 MiB of zeros, its table entry kept.
+        let toc = u32::from_le_bytes(bomb[16..20].try_into().unwrap()) as usize;
+        let last = toc + 16 * (bomb[15] as usize - 1);
+        let packed = u64::from_le_bytes(bomb[last..last + 8].try_into().unwrap()) as usize;
+        bomb.truncate(bomb.len() - packed);
+        let zeros = zstd::encode_all(&vec![0u8; 64 << 20][..], 3).unwrap();
+        bomb[last..last + 8].copy_from_slice(&(zeros.len() as u64).to_le_bytes());
+        bomb.extend_from_slice(&zeros);
+    }
+    case("SPZ v4 stream bomb", spz(&bomb), "holds more than");
+    // SPZ v3: truncated gzip, a count the stream does not hold, a count bomb.
+    case(
+        "SPZ v3 truncated",
+        spz(&v3[..v3.len() / 2]),
+        "SPZ: gzip stream",
+    );
+    let mut inner = gunzip(&v3);
+    inner[8..12].copy_from_slice(&400u32.to_le_bytes());
+    case("SPZ v3 count mismatch", spz(&gz(&inner)), "truncated");
+    inner[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
+    case("SPZ v3 count bomb", spz(&gz(&inner)), "does not fit in");
+
+    // Through files: compressed PLY, SOG, glb.
+    let load = |name: &str, bytes: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        rara::formats::load_scene(&p).unwrap_err().to_string()
+    };
+    let cply = std::fs::read(fixtures.join("st.compressed.ply")).unwrap();
+    case(
+        "compressed PLY truncated",
+        load("t.compressed.ply", &cply[..cply.len() - 100]),
+        "bytes after the header",
+    );
+    let text = String::from_utf8_lossy(&cply[..4000]).into_owned();
+    let header_end = text.find("end_header\n").unwrap() + "end_header\n".len();
+    let header = text[..header_end].replace("element vertex 1000", "element vertex 1001");
+    let mut counted = header.into_bytes();
+    counted.extend_from_slice(&cply[header_end..]);
+    case(
+        "compressed PLY count mismatch",
+        load("c.compressed.ply", &counted),
+        "sh rows for 1001 vertices",
+    );
+
+    let sog = std::fs::read(fixtures.join("st.sog")).unwrap();
+    case(
+        "SOG truncated",
+        load("t.sog", &sog[..sog.len() / 2]),
+        "not a readable zip",
+    );
+    let mut bad = sog.clone();
+    bad[0] = b'X';
+    case("SOG bad magic", load("m.sog", &bad), "starts with");
+    {
+        // meta.json's count raised past the images' pixels, and a member that is a bomb.
+        use std::io::{Read, Write};
+        let mut archive = zip::ZipArchive::new(std::io::Cursor::new(sog.clone())).unwrap();
+        let mut members = Vec::new();
+        for i in 0..archive.len() {
+            let mut f = archive.by_index(i).unwrap();
+            let mut data = Vec::new();
+            f.read_to_end(&mut data).unwrap();
+            members.push((f.name().unwrap().to_string(), data));
+        }
+        let rezip = |members: &[(String, Vec<u8>)]| {
+            let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+            let o = zip::write::SimpleFileOptions::default()
+                .compression_method(zip::CompressionMethod::Deflated);
+            for (n, d) in members {
+                w.start_file(n.as_str(), o).unwrap();
+                w.write_all(d).unwrap();
+            }
+            w.finish().unwrap().into_inner()
+        };
+        let mut counted = members.clone();
+        for (n, d) in &mut counted {
+            if n == "meta.json" {
+                let t = String::from_utf8(d.clone()).unwrap();
+                *d = t.replace("\"count\":1000", "\"count\":5000").into_bytes();
+            }
+        }
+        case(
+            "SOG count mismatch",
+            load("c.sog", &rezip(&counted)),
+            "too small for 5000",
+        );
+        let mut bombed = members.clone();
+        for (n, d) in &mut bombed {
+            if n == "means_l.webp" {
+                *d = vec![0u8; 256 << 20];
+            }
+        }
+        case(
+            "SOG member bomb",
+            load("b.sog", &rezip(&bombed)),
+            "decompression bomb",
+        );
+    }
+
+    let glb = std::fs::read(fixtures.join("st.glb")).unwrap();
+    case(
+        "glb truncated",
+        load("t.glb", &glb[..glb.len() - 1000]),
+        "(truncated)",
+    );
+    let mut bad = glb.clone();
+    bad[0] = b'X';
+    case("glb bad magic", load("m.glb", &bad), "starts with");
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let json = String::from_utf8_lossy(&glb[20..20 + json_len]).into_owned();
+    let counted = json.replacen("\"count\":1000", "\"count\":9000", 1);
+    assert_ne!(counted, json);
+    let mut counted_glb = glb[..20].to_vec();
+    counted_glb.extend_from_slice(counted.as_bytes());
+    counted_glb.extend_from_slice(&glb[20 + json_len..]);
+    case(
+        "glb count mismatch",
+        load("c.glb", &counted_glb),
+        "do not fit in",
+    );
+
+    for (what, message, expect) in &cases {
+        eprintln!("{what}: {message}");
+        assert!(
+            message.contains(expect),
+            "{what}: '{message}' does not say '{expect}'"
+        );
     }
 }

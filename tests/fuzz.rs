@@ -1,5 +1,6 @@
-//! Fuzzing of the parsers that read untrusted files: the PLY loader, the `.splat` reader (with
-//! the format detection), the cameras.json parser and the clip file parser. A property test,
+//! Fuzzing of the parsers that read untrusted files: the PLY loader, every scene format's
+//! reader (`.splat` with the format detection, SPZ v3 and v4, compressed PLY, SOG, glb), the
+//! cameras.json parser and the clip file parser. A property test,
 //! not a coverage-guided fuzzer: it mutates real headers and payloads
 //! (the real scenes' first vertices when `../shared/data/real` is there, the crate's own
 //! scenes in every encoding and SH degree always) with structure-aware and byte-level
@@ -587,6 +588,17 @@ fn fuzz(
     mutate: impl Fn(&mut Rng, &mut Vec<u8>),
     parse: impl Fn(&[u8]) -> Result<(), String>,
 ) {
+    fuzz_bounded(target, seeds, mutate, parse, allocation_bound)
+}
+
+/// [`fuzz`] with the allocation bound `bound` (of the input's length).
+fn fuzz_bounded(
+    target: &str,
+    seeds: &[(String, Vec<u8>)],
+    mutate: impl Fn(&mut Rng, &mut Vec<u8>),
+    parse: impl Fn(&[u8]) -> Result<(), String>,
+    bound: fn(usize) -> usize,
+) {
     let budget = seconds();
     let seed = seed();
     let mut rng = Rng::new(seed);
@@ -611,7 +623,7 @@ fn fuzz(
         let (result, largest) = tracked(|| parse(&input));
         slowest = slowest.max(t.elapsed());
         cases += 1;
-        let bound = allocation_bound(input.len());
+        let bound = bound(input.len());
         largest_any = largest_any.max(largest);
         if input.len() >= 4096 {
             largest_ratio = largest_ratio.max(largest as f64 / input.len() as f64);
@@ -824,5 +836,372 @@ fn splat_reader_survives_mutated_files() {
             }
             Err(e) => Err(e.to_string()),
         }
+    });
+}
+
+// ---------------------------------------------------------------- compressed formats
+
+/// The most one parse of a compressed format may allocate at once for `len` bytes of input:
+/// its reader inflates at most `MAX_INFLATION` times the input (more is a decompression bomb,
+/// refused before it is inflated), and a scene's largest vector takes at most 4 times the bytes
+/// of the records it is decoded from (twice, and twice again while a vector grows).
+fn inflating_bound(len: usize) -> usize {
+    4 * rara::formats::MAX_INFLATION as usize * len + (4 << 20)
+}
+
+/// A file of `tests/fixtures/formats/` (made by splat-transform from a generated scene).
+fn format_fixture(name: &str) -> Vec<u8> {
+    std::fs::read(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/formats")
+            .join(name),
+    )
+    .unwrap()
+}
+
+/// Loads `input` as a file named `name` (the readers of formats with members or an extension
+/// to tell them apart work from a path), and checks what it accepts.
+fn load_as_file(path: &Path, input: &[u8]) -> Result<(), String> {
+    std::fs::write(path, input).unwrap();
+    match rara::formats::load_scene(path) {
+        Ok((scene, report)) => check_scene(&scene, report.vertices_in_file)
+            .map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+        // Without the path, so that messages group by their shape.
+        Err(e) => Err(e.to_string().replace(&path.display().to_string(), "")),
+    }
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+fn gunzip(bytes: &[u8]) -> Option<Vec<u8>> {
+    use std::io::Read;
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(bytes)
+        .take(64 << 20)
+        .read_to_end(&mut out)
+        .ok()?;
+    Some(out)
+}
+
+/// Writes a hostile value into a little-endian u32 field at `at`.
+fn hostile_u32(rng: &mut Rng, bytes: &mut [u8], at: usize) {
+    if at + 4 <= bytes.len() {
+        let old = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+        let v = pick(
+            rng,
+            &[0u32, 1, 2, 3, 4, 5, 255, 0xffff, 0x7fff_ffff, 0xffff_ffff],
+        );
+        let v = match rng.next_u64() % 3 {
+            0 => v,
+            1 => old.wrapping_add(1),
+            _ => old.wrapping_mul(1 + below(rng, 4096) as u32),
+        };
+        bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// SPZ seeds: splat-transform's v4 and v3 fixtures (SH degree 3), and rara's v4 and v3 of a
+/// generated degree-1 scene.
+fn spz_seeds() -> Vec<(String, Vec<u8>)> {
+    use rara::formats::spz::{encode, SpzAxes, SpzVersion};
+    let scene = rara::synth::shell(300, 1, 9);
+    vec![
+        ("splat-transform v4".into(), format_fixture("st_v4.spz")),
+        ("splat-transform v3".into(), format_fixture("st_v3.spz")),
+        (
+            "rara v4".into(),
+            encode(&scene, SpzVersion::V4, SpzAxes::Rub).unwrap(),
+        ),
+        (
+            "rara v3".into(),
+            encode(&scene, SpzVersion::V3, SpzAxes::Rub).unwrap(),
+        ),
+    ]
+}
+
+/// The mutations of an SPZ: byte-level ones on the file; a header field (version, count, SH
+/// degree, fractional bits, flags, the v4 stream count and table offset) set to a hostile value;
+/// for v3 the gzip stream's content mutated and compressed again; for v4 a table-of-contents
+/// size; and bombs: megabytes of zeros compressed into a few kilobytes, appended to a v3
+/// stream or in place of a v4 stream, with the header's count raised to match or not.
+fn mutate_spz(rng: &mut Rng, input: &mut Vec<u8>) {
+    let gz = input.starts_with(&[0x1f, 0x8b]);
+    match rng.next_u64() % 5 {
+        0 => mutate_bytes(rng, input),
+        1 | 2 if gz => {
+            let Some(mut inner) = gunzip(input) else {
+                return mutate_bytes(rng, input);
+            };
+            if rng.next_u64() % 2 == 0 {
+                let at = pick(rng, &[4usize, 8, 12]);
+                hostile_u32(rng, &mut inner, at);
+            } else {
+                mutate_bytes(rng, &mut inner);
+            }
+            *input = gzip(&inner);
+        }
+        1 => {
+            let at = pick(rng, &[4usize, 8, 12, 16]);
+            hostile_u32(rng, input, at);
+        }
+        2 => {
+            // A table-of-contents entry's packed or unpacked size (v4).
+            if input.len() >= 32 {
+                let toc = u32::from_le_bytes(input[16..20].try_into().unwrap()) as usize;
+                let streams = input[15] as usize;
+                if streams > 0 {
+                    let at = toc + 16 * below(rng, streams) + 8 * below(rng, 2);
+                    hostile_u32(rng, input, at);
+                }
+            }
+        }
+        _ => {
+            let zeros = vec![0u8; (1 + below(rng, 8)) << 20];
+            if gz {
+                let Some(mut inner) = gunzip(input) else {
+                    return mutate_bytes(rng, input);
+                };
+                inner.extend_from_slice(&zeros);
+                if rng.next_u64() % 2 == 0 && inner.len() >= 12 {
+                    let count = (inner.len() / 20) as u32;
+                    inner[8..12].copy_from_slice(&count.to_le_bytes());
+                }
+                *input = gzip(&inner);
+            } else if input.len() >= 32 {
+                // Replace the last stream with the zeros, its table entry kept or told the truth.
+                let toc = u32::from_le_bytes(input[16..20].try_into().unwrap()) as usize;
+                let streams = input[15] as usize;
+                let bomb = zstd::encode_all(&zeros[..], 1).unwrap();
+                let toc_end = toc + 16 * streams;
+                if streams > 0 && toc_end <= input.len() {
+                    let last = toc_end - 16;
+                    let packed = u64::from_le_bytes(input[last..last + 8].try_into().unwrap());
+                    let start = (input.len() as u64).saturating_sub(packed) as usize;
+                    input.truncate(start.max(toc_end));
+                    input.extend_from_slice(&bomb);
+                    input[last..last + 8].copy_from_slice(&(bomb.len() as u64).to_le_bytes());
+                    if rng.next_u64() % 2 == 0 {
+                        input[last + 8..last + 16]
+                            .copy_from_slice(&(zeros.len() as u64).to_le_bytes());
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The SPZ reader (v2 to v4, gzip and zstd) on mutated files and bombs.
+#[test]
+fn spz_reader_survives_mutated_files_and_bombs() {
+    use rara::formats::spz::{decode, SpzAxes};
+    let seeds = spz_seeds();
+    fuzz_bounded(
+        "spz",
+        &seeds,
+        mutate_spz,
+        |input| match decode(input, Path::new("fuzz.spz"), SpzAxes::Rub) {
+            Ok((scene, report)) => check_scene(&scene, report.vertices_in_file)
+                .map_err(|e| format!("ACCEPTED BAD INPUT: {e}")),
+            Err(e) => Err(e.to_string()),
+        },
+        inflating_bound,
+    );
+}
+
+/// The compressed PLY reader on mutated headers, packed words and bytes: splat-transform's
+/// fixture (SH degree 3) and its first chunk alone.
+#[test]
+fn compressed_ply_reader_survives_mutated_files() {
+    let whole = format_fixture("st.compressed.ply");
+    let seeds = vec![("splat-transform".to_string(), whole)];
+    let dir = common::tempdir("fuzz_compressed_ply");
+    let path = dir.join("fuzz.compressed.ply");
+    fuzz(
+        "compressed_ply",
+        &seeds,
+        |rng, input| match rng.next_u64() % 4 {
+            0 => mutate_header_line(rng, input),
+            1 => mutate_payload_value(rng, input),
+            _ => mutate_bytes(rng, input),
+        },
+        |input| load_as_file(&path, input),
+    );
+}
+
+/// The members of a zip, by name, in order.
+fn unzip(bytes: &[u8]) -> Option<Vec<(String, Vec<u8>)>> {
+    use std::io::Read;
+    let mut archive = zip::ZipArchive::new(Cursor::new(bytes)).ok()?;
+    let mut out = Vec::new();
+    for i in 0..archive.len() {
+        let mut f = archive.by_index(i).ok()?;
+        let mut data = Vec::new();
+        (&mut f).take(64 << 20).read_to_end(&mut data).ok()?;
+        out.push((f.name().ok()?.to_string(), data));
+    }
+    Some(out)
+}
+
+fn zip_members(members: &[(String, Vec<u8>)]) -> Vec<u8> {
+    use std::io::Write;
+    let mut w = zip::ZipWriter::new(Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    for (name, data) in members {
+        w.start_file(name.as_str(), options).unwrap();
+        w.write_all(data).unwrap();
+    }
+    w.finish().unwrap().into_inner()
+}
+
+/// Fields of a SOG's meta.json that `mutate_json` renames away.
+const SOG_FIELDS: &[&str] = &[
+    "\"version\"",
+    "\"count\"",
+    "\"means\"",
+    "\"mins\"",
+    "\"maxs\"",
+    "\"scales\"",
+    "\"codebook\"",
+    "\"quats\"",
+    "\"sh0\"",
+    "\"shN\"",
+    "\"bands\"",
+    "\"files\"",
+];
+
+/// The mutations of a SOG bundle: byte-level ones on the zip; meta.json's numbers and fields
+/// (`mutate_json`); a WebP member's bytes; a member dropped; a member replaced by a bomb
+/// (megabytes of one byte, deflated).
+fn mutate_sog(rng: &mut Rng, input: &mut Vec<u8>) {
+    let Some(mut members) = unzip(input) else {
+        return mutate_bytes(rng, input);
+    };
+    match rng.next_u64() % 5 {
+        0 => return mutate_bytes(rng, input),
+        1 | 2 => {
+            if let Some(meta) = members.iter_mut().find(|(n, _)| n == "meta.json") {
+                mutate_json(rng, &mut meta.1, SOG_FIELDS);
+            }
+        }
+        3 if !members.is_empty() => {
+            let k = below(rng, members.len());
+            if rng.next_u64() % 4 == 0 {
+                members.remove(k);
+            } else {
+                mutate_bytes(rng, &mut members[k].1);
+            }
+        }
+        _ if !members.is_empty() => {
+            let k = below(rng, members.len());
+            members[k].1 = vec![b'{'; (1 + below(rng, 8)) << 20];
+        }
+        _ => {}
+    }
+    *input = zip_members(&members);
+}
+
+/// The SOG reader (a bundled .sog) on mutated bundles and bombs.
+#[test]
+fn sog_reader_survives_mutated_bundles_and_bombs() {
+    let seeds = vec![("splat-transform".to_string(), format_fixture("st.sog"))];
+    let dir = common::tempdir("fuzz_sog");
+    let path = dir.join("fuzz.sog");
+    fuzz_bounded(
+        "sog",
+        &seeds,
+        mutate_sog,
+        |input| load_as_file(&path, input),
+        inflating_bound,
+    );
+}
+
+/// Fields of a glTF that `mutate_json` renames away.
+const GLTF_FIELDS: &[&str] = &[
+    "\"accessors\"",
+    "\"bufferViews\"",
+    "\"buffers\"",
+    "\"byteLength\"",
+    "\"byteOffset\"",
+    "\"count\"",
+    "\"componentType\"",
+    "\"type\"",
+    "\"attributes\"",
+    "\"POSITION\"",
+    "\"KHR_gaussian_splatting\"",
+    "\"KHR_gaussian_splatting:SCALE\"",
+    "\"KHR_gaussian_splatting:ROTATION\"",
+    "\"meshes\"",
+    "\"nodes\"",
+];
+
+/// The JSON chunk and the binary chunk of a glb, or `None`.
+fn glb_chunks(bytes: &[u8]) -> Option<(Vec<u8>, Vec<u8>)> {
+    let u32_at = |at: usize| -> Option<usize> {
+        Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?) as usize)
+    };
+    let json_len = u32_at(12)?;
+    let json = bytes.get(20..20 + json_len)?.to_vec();
+    let bin_at = 20 + json_len;
+    let bin_len = u32_at(bin_at)?;
+    let bin = bytes.get(bin_at + 8..bin_at + 8 + bin_len)?.to_vec();
+    Some((json, bin))
+}
+
+/// A glb of `json` (padded with spaces) and `bin`.
+fn glb_of(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let mut json = json.to_vec();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(bin);
+    out
+}
+
+/// The mutations of a glb: byte-level ones; the JSON's numbers and fields (`mutate_json`, the
+/// chunk lengths kept right); the binary chunk's bytes.
+fn mutate_glb(rng: &mut Rng, input: &mut Vec<u8>) {
+    let Some((mut json, mut bin)) = glb_chunks(input) else {
+        return mutate_bytes(rng, input);
+    };
+    match rng.next_u64() % 4 {
+        0 => return mutate_bytes(rng, input),
+        1 | 2 => mutate_json(rng, &mut json, GLTF_FIELDS),
+        _ => mutate_payload_value(rng, &mut bin),
+    }
+    *input = glb_of(&json, &bin);
+}
+
+/// The glTF reader (glb) on mutated files: splat-transform's fixture (SH degree 3) and rara's
+/// glb of a generated degree-1 scene.
+#[test]
+fn gltf_reader_survives_mutated_files() {
+    let scene = rara::synth::shell(300, 1, 11);
+    let seeds = vec![
+        ("splat-transform".to_string(), format_fixture("st.glb")),
+        (
+            "rara".to_string(),
+            rara::formats::gltf::encode_glb(&scene).unwrap(),
+        ),
+    ];
+    let dir = common::tempdir("fuzz_glb");
+    let path = dir.join("fuzz.glb");
+    fuzz("glb", &seeds, mutate_glb, |input| {
+        load_as_file(&path, input)
     });
 }

@@ -61,6 +61,20 @@ struct Document {
 fn load(path: &Path) -> Result<Document> {
     let bytes = read_file_bounded(path, MAX_FILE_BYTES)?;
     let (json_bytes, bin) = if bytes.starts_with(b"glTF") {
+        // The header's length first, so a cut file says so rather than what the chunk
+        // parser trips on.
+        if let Some(length) = bytes.get(8..12) {
+            let length = u32::from_le_bytes(length.try_into().unwrap()) as usize;
+            if length > bytes.len() {
+                return Err(bad(
+                    path,
+                    format!(
+                        "the glb header gives {length} bytes and the file has {} (truncated)",
+                        bytes.len()
+                    ),
+                ));
+            }
+        }
         let glb = gltf::Glb::from_slice(&bytes).map_err(|e| bad(path, e))?;
         (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
     } else {

@@ -95,7 +95,7 @@ impl Source {
         Ok(Source::Zip(archive, size))
     }
 
-    /// The bytes of `name`, at most `limit` of them.
+    /// The bytes of `name`, at most `limit` of them (more is an error that names a bomb).
     fn read(&mut self, path: &Path, name: &str, limit: u64) -> Result<Vec<u8>> {
         if name.contains("..") || name.starts_with('/') || name.contains('\\') {
             return Err(bad(path, format!("the file name '{name}' leaves the SOG")));
@@ -116,8 +116,8 @@ impl Source {
                     return Err(bad(
                         path,
                         format!(
-                            "'{name}' inflates past {limit} bytes ({MAX_INFLATION} times the \
-                             bundle's size): a decompression bomb, or not a SOG"
+                            "'{name}' inflates past {limit} bytes, more than this SOG's member \
+                             can hold: a decompression bomb, or not a SOG"
                         ),
                     ));
                 }
@@ -135,8 +135,17 @@ impl Source {
     }
 }
 
+/// The most bytes a lossless WebP of `pixels` RGBA pixels takes: its raw size and a margin
+/// for headers and an incompressible image's coding overhead.
+fn max_webp_bytes(pixels: u64) -> u64 {
+    pixels.saturating_mul(5).saturating_add(1 << 20)
+}
+
 /// An RGBA image of at least `need` pixels; the decoder may allocate at most `max_pixels`
-/// pixels (a small WebP that claims a huge size is refused before it is decoded).
+/// pixels (a small WebP that claims a huge size is refused before it is decoded), and the
+/// member may inflate to at most what a WebP of that many pixels takes (a bomb, which a zip's
+/// deflate makes a thousand times its size, is refused at that bound, before the rest of it
+/// is inflated).
 fn image(
     source: &mut Source,
     path: &Path,
@@ -144,7 +153,7 @@ fn image(
     need: usize,
     max_pixels: u64,
 ) -> Result<image::RgbaImage> {
-    let limit = source.member_limit();
+    let limit = source.member_limit().min(max_webp_bytes(max_pixels));
     let bytes = source.read(path, name, limit)?;
     let mut reader = image::ImageReader::with_format(Cursor::new(&bytes), image::ImageFormat::WebP);
     let mut limits = image::Limits::default();
@@ -189,7 +198,8 @@ fn inverse_log(v: f64) -> f64 {
 /// Reads a SOG: a folder holding `meta.json`, that `meta.json` itself, or a bundled `.sog`.
 pub fn read_sog(path: &Path) -> Result<(Scene, LoadReport)> {
     let mut source = Source::open(path)?;
-    let meta_bytes = source.read(path, "meta.json", 64 << 20)?;
+    // Three codebooks of 256 numbers and a few file names: a few tens of kilobytes.
+    let meta_bytes = source.read(path, "meta.json", 1 << 20)?;
     let mut de = serde_json::Deserializer::from_slice(&meta_bytes);
     let meta: Meta = serde_path_to_error::deserialize(&mut de)
         .map_err(|e| bad(path, format!("meta.json: {}: {}", e.path(), e.inner())))?;
