@@ -135,20 +135,41 @@ fn formats_are_detected_by_content() {
 /// quantisation (splat-transform decodes `u / 255 * 2 - 1`, antimatter15 `(u - 128) / 128`).
 #[test]
 fn original_splat_files_match_the_shared_ply_conversions() {
-    let Some(dir) = common::real_data_dir() else {
-        common::test_skipped("none of its real scenes is here");
-        return;
-    };
-    let mut ran = 0;
-    for (original, ply) in [
+    let cases = [
         ("originals/plant.splat", "plant_capture_sh0.ply"),
         (
             "originals/skull_100k.splat",
             "skull_mesh2splat_100k_sh0.ply",
         ),
-    ] {
+    ];
+    with_real_originals(&cases, |original, ply, a, b, note| {
+        let [pos, scale, opacity, colour, rotation] = differences(&b, &a);
+        eprintln!(
+            "real-scene case '{original}' ran: {note}; against {ply}: position {pos:e}, scale {scale:e}, opacity {opacity:e}, colour {colour:e}, rotation {rotation:e}",
+        );
+        assert_eq!(pos, 0.0);
+        assert!(scale <= 1e-5, "{scale}");
+        assert!(opacity <= 1e-5, "{opacity}");
+        assert!(colour <= 1e-5, "{colour}");
+        assert!(rotation <= 1e-3, "{rotation}");
+    });
+}
+
+/// Loads each real original (`originals/...`) and its shared PLY conversion that are here and
+/// hands both to `check`, with a note of the original's count, load time and load notes;
+/// names each case that ran or was skipped, and marks the test skipped when none ran.
+fn with_real_originals(
+    cases: &[(&str, &str)],
+    mut check: impl FnMut(&str, &str, Scene, Scene, String),
+) {
+    let Some(dir) = common::real_data_dir() else {
+        common::test_skipped("none of its real scenes is here");
+        return;
+    };
+    let mut ran = 0;
+    for &(original, ply) in cases {
         let (o, p) = (dir.join(original), dir.join(ply));
-        if !o.is_file() || !p.is_file() {
+        if !o.exists() || !p.is_file() {
             eprintln!("real-scene case '{original}' SKIPPED: not here");
             continue;
         }
@@ -156,17 +177,13 @@ fn original_splat_files_match_the_shared_ply_conversions() {
         let (a, report) = load_scene(&o).unwrap();
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         let (b, _) = rara::ply::load_ply(&p).unwrap();
-        let [pos, scale, opacity, colour, rotation] = differences(&b, &a);
-        eprintln!(
-            "real-scene case '{original}' ran: {} Gaussians ({} dropped) in {load_ms:.0} ms; against {ply}: position {pos:e}, scale {scale:e}, opacity {opacity:e}, colour {colour:e}, rotation {rotation:e}",
+        let note = format!(
+            "{} Gaussians ({} dropped) in {load_ms:.0} ms {:?}",
             a.len(),
-            report.dropped_non_finite
+            report.dropped_non_finite,
+            report.notes
         );
-        assert_eq!(pos, 0.0);
-        assert!(scale <= 1e-5, "{scale}");
-        assert!(opacity <= 1e-5, "{opacity}");
-        assert!(colour <= 1e-5, "{colour}");
-        assert!(rotation <= 1e-3, "{rotation}");
+        check(original, ply, a, b, note);
         ran += 1;
     }
     if ran == 0 {
@@ -192,15 +209,11 @@ fn without_saturated_opacity(s: &Scene) -> Scene {
 
 /// The real originals in compressed PLY, SPZ v4 and SOG decode to the shared PLY conversions
 /// (splat-transform 2.7.1): compressed PLY and SOG to f32 rounding (SH included), SPZ within
-/// its quantisation (centres 1/8192, colour half a level of 1/(0.15 * 255) in f_dc).
+/// its quantisation (centres 1/8192, log scales 1/32 above SPZ's floor of -10, colour half a
+/// level of 1/(0.15 * 255) in f_dc).
 #[test]
 fn original_compressed_files_match_the_shared_ply_conversions() {
-    let Some(dir) = common::real_data_dir() else {
-        common::test_skipped("none of its real scenes is here");
-        return;
-    };
-    let mut ran = 0;
-    for (original, ply) in [
+    let cases = [
         ("originals/biker.compressed.ply", "biker_capture_sh0.ply"),
         (
             "originals/guitar.compressed.ply",
@@ -208,16 +221,8 @@ fn original_compressed_files_match_the_shared_ply_conversions() {
         ),
         ("originals/biker.spz", "biker_capture_sh0.ply"),
         ("originals/playbot_lod0_sog", "playbot_lod0_500k_sh2.ply"),
-    ] {
-        let (o, p) = (dir.join(original), dir.join(ply));
-        if !o.exists() || !p.is_file() {
-            eprintln!("real-scene case '{original}' SKIPPED: not here");
-            continue;
-        }
-        let start = std::time::Instant::now();
-        let (a, report) = load_scene(&o).unwrap();
-        let load_ms = start.elapsed().as_secs_f64() * 1e3;
-        let (b, _) = rara::ply::load_ply(&p).unwrap();
+    ];
+    with_real_originals(&cases, |original, ply, a, b, note| {
         let a = if a.len() == b.len() {
             a
         } else {
@@ -231,16 +236,23 @@ fn original_compressed_files_match_the_shared_ply_conversions() {
             }
         }
         eprintln!(
-            "real-scene case '{original}' ran: {} Gaussians in {load_ms:.0} ms ({:?}); against {ply}: position {pos:e}, scale {scale:e}, opacity {opacity:e}, colour {colour:e}, rotation {rotation:e}, SH {sh:e}",
-            a.len(),
-            report.notes
+            "real-scene case '{original}' ran: {note}; against {ply}: position {pos:e}, scale {scale:e}, opacity {opacity:e}, colour {colour:e}, rotation {rotation:e}, SH {sh:e}",
         );
         if original.ends_with(".spz") {
+            // SPZ's log scales are u / 16 - 10: half a level of 1/16 in the log, and a scale
+            // below e^-10 (88 of biker's, down to e^-11.25) stored as e^-10.
+            let log_scale = (0..a.len())
+                .map(|i| {
+                    let (x, y) = (a.scales[i].to_array(), b.scales[i].to_array());
+                    (0..3)
+                        .map(|k| (x[k].ln() - y[k].ln().max(-10.0)).abs())
+                        .fold(0f32, f32::max)
+                })
+                .fold(0f32, f32::max);
+            eprintln!("  log scale, e^-10 and up: {log_scale:e}");
+            assert!(log_scale <= 0.5 / 16.0 + 1e-4, "{log_scale}");
             assert!(pos <= 0.5 / 4096.0 + 1e-6, "{pos}");
-            assert!(
-                colour <= 0.5 * SH_C0 / (0.15 * 255.0) / SH_C0 * SH_C0 + 1e-4,
-                "{colour}"
-            );
+            assert!(colour <= 0.5 * SH_C0 / (0.15 * 255.0) + 1e-4, "{colour}");
             assert!(opacity <= 1e-6, "{opacity}");
             assert!(rotation <= 1e-5, "{rotation}");
         } else {
@@ -251,11 +263,7 @@ fn original_compressed_files_match_the_shared_ply_conversions() {
             assert!(rotation <= 1e-6, "{rotation}");
             assert_eq!(sh, 0.0);
         }
-        ran += 1;
-    }
-    if ran == 0 {
-        common::test_skipped("none of its real scenes is here");
-    }
+    });
 }
 
 /// rara's own writers read back within each format's quantisation: SPZ v3 and v4 (centres
@@ -852,25 +860,8 @@ fn hostile_files_get_clear_errors() {
     case("SOG bad magic", load("m.sog", &bad), "starts with");
     {
         // meta.json's count raised past the images' pixels, and a member that is a bomb.
-        use std::io::{Read, Write};
-        let mut archive = zip::ZipArchive::new(std::io::Cursor::new(sog.clone())).unwrap();
-        let mut members = Vec::new();
-        for i in 0..archive.len() {
-            let mut f = archive.by_index(i).unwrap();
-            let mut data = Vec::new();
-            f.read_to_end(&mut data).unwrap();
-            members.push((f.name().unwrap().to_string(), data));
-        }
-        let rezip = |members: &[(String, Vec<u8>)]| {
-            let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-            let o = zip::write::SimpleFileOptions::default()
-                .compression_method(zip::CompressionMethod::Deflated);
-            for (n, d) in members {
-                w.start_file(n.as_str(), o).unwrap();
-                w.write_all(d).unwrap();
-            }
-            w.finish().unwrap().into_inner()
-        };
+        let members = common::unzip(&sog).unwrap();
+        let rezip = common::zip_members;
         let mut counted = members.clone();
         for (n, d) in &mut counted {
             if n == "meta.json" {

@@ -1033,32 +1033,6 @@ fn compressed_ply_reader_survives_mutated_files() {
     );
 }
 
-/// The members of a zip, by name, in order.
-fn unzip(bytes: &[u8]) -> Option<Vec<(String, Vec<u8>)>> {
-    use std::io::Read;
-    let mut archive = zip::ZipArchive::new(Cursor::new(bytes)).ok()?;
-    let mut out = Vec::new();
-    for i in 0..archive.len() {
-        let mut f = archive.by_index(i).ok()?;
-        let mut data = Vec::new();
-        (&mut f).take(64 << 20).read_to_end(&mut data).ok()?;
-        out.push((f.name().ok()?.to_string(), data));
-    }
-    Some(out)
-}
-
-fn zip_members(members: &[(String, Vec<u8>)]) -> Vec<u8> {
-    use std::io::Write;
-    let mut w = zip::ZipWriter::new(Cursor::new(Vec::new()));
-    let options = zip::write::SimpleFileOptions::default()
-        .compression_method(zip::CompressionMethod::Deflated);
-    for (name, data) in members {
-        w.start_file(name.as_str(), options).unwrap();
-        w.write_all(data).unwrap();
-    }
-    w.finish().unwrap().into_inner()
-}
-
 /// Fields of a SOG's meta.json that `mutate_json` renames away.
 const SOG_FIELDS: &[&str] = &[
     "\"version\"",
@@ -1079,7 +1053,7 @@ const SOG_FIELDS: &[&str] = &[
 /// (`mutate_json`); a WebP member's bytes; a member dropped; a member replaced by a bomb
 /// (megabytes of one byte, deflated).
 fn mutate_sog(rng: &mut Rng, input: &mut Vec<u8>) {
-    let Some(mut members) = unzip(input) else {
+    let Some(mut members) = common::unzip(input) else {
         return mutate_bytes(rng, input);
     };
     match rng.next_u64() % 5 {
@@ -1103,7 +1077,7 @@ fn mutate_sog(rng: &mut Rng, input: &mut Vec<u8>) {
         }
         _ => {}
     }
-    *input = zip_members(&members);
+    *input = common::zip_members(&members);
 }
 
 /// The SOG reader (a bundled .sog) on mutated bundles and bombs.

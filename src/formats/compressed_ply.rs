@@ -18,10 +18,10 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use glam::{Quat, Vec3};
+use glam::Vec3;
 use ply_rs::ply::{Encoding, PropertyDef, PropertyType, ScalarType};
 
-use super::{push_decoded, read_file_bounded};
+use super::{from_smallest_three_wxyz, push_decoded, read_file_bounded};
 use crate::error::{Error, Result};
 use crate::ply::LoadReport;
 use crate::scene::Scene;
@@ -249,20 +249,7 @@ pub fn read_compressed_ply(path: &Path) -> Result<(Scene, LoadReport)> {
             Vec3::from_array([0, 1, 2].map(|k| (lerp(ch(6 + k), ch(9 + k), t[k]) as f32).exp()));
         let norm = std::f64::consts::SQRT_2;
         let abc = [20, 10, 0].map(|shift| (unorm(r, shift, 10) - 0.5) * norm);
-        let m = (1.0 - abc.iter().map(|v| v * v).sum::<f64>())
-            .max(0.0)
-            .sqrt();
-        let largest = (r >> 30) as usize;
-        let mut wxyz = [0f64; 4];
-        let mut others = abc.iter();
-        for (k, slot) in wxyz.iter_mut().enumerate() {
-            *slot = if k == largest {
-                m
-            } else {
-                *others.next().unwrap()
-            };
-        }
-        let [w, x, y, z] = wxyz.map(|v| v as f32);
+        let rotation = from_smallest_three_wxyz((r >> 30) as usize, abc);
         let rgba = [24, 16, 8, 0].map(|shift| unorm(col, shift, 8));
         for k in 0..3 {
             let v = if with_colour {
@@ -289,7 +276,7 @@ pub fn read_compressed_ply(path: &Path) -> Result<(Scene, LoadReport)> {
             mean,
             scale,
             rgba[3] as f32,
-            Quat::from_xyzw(x, y, z, w),
+            rotation,
             &sh,
         );
     }

@@ -118,6 +118,24 @@ pub(crate) fn push_decoded(
     }
 }
 
+/// A "smallest three" rotation stored in `(w, x, y, z)` order (compressed PLY's and SOG's):
+/// the three `stored` components in order around the largest, at index `largest`, which is
+/// rebuilt from the unit length (non-negative).
+pub(crate) fn from_smallest_three_wxyz(largest: usize, stored: [f64; 3]) -> Quat {
+    let mut wxyz = [0f64; 4];
+    let mut others = stored.iter();
+    for (k, slot) in wxyz.iter_mut().enumerate() {
+        if k != largest {
+            *slot = *others.next().unwrap();
+        }
+    }
+    wxyz[largest] = (1.0 - stored.iter().map(|v| v * v).sum::<f64>())
+        .max(0.0)
+        .sqrt();
+    let [w, x, y, z] = wxyz.map(|v| v as f32);
+    Quat::from_xyzw(x, y, z, w)
+}
+
 /// The opacity a decoded Gaussian keeps at least (and `1 - ` it at most): splat-transform's
 /// clamp before its logit, so an 8-bit 0 or 255 stays a finite logit when written back.
 pub const OPACITY_MIN: f32 = 1e-6;

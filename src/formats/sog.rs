@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use glam::{Quat, Vec3};
 use serde::Deserialize;
 
-use super::{push_decoded, read_file_bounded, MAX_INFLATION};
+use super::{from_smallest_three_wxyz, push_decoded, read_file_bounded, MAX_INFLATION};
 use crate::error::{Error, Result};
 use crate::ply::LoadReport;
 use crate::scene::Scene;
@@ -339,20 +339,8 @@ pub fn read_sog(path: &Path) -> Result<(Scene, LoadReport)> {
         }));
         let tag = quats[o + 3];
         let rotation = if (252..=255).contains(&tag) {
-            let largest = (tag - 252) as usize;
             let abc = [0, 1, 2].map(|k| (quats[o + k] as f64 / 255.0 * 2.0 - 1.0) / sqrt2);
-            let mut wxyz = [0f64; 4];
-            let mut others = abc.iter();
-            for (k, slot) in wxyz.iter_mut().enumerate() {
-                if k != largest {
-                    *slot = *others.next().unwrap();
-                }
-            }
-            wxyz[largest] = (1.0 - abc.iter().map(|v| v * v).sum::<f64>())
-                .max(0.0)
-                .sqrt();
-            let [w, x, y, z] = wxyz.map(|v| v as f32);
-            Quat::from_xyzw(x, y, z, w)
+            from_smallest_three_wxyz((tag - 252) as usize, abc)
         } else {
             Quat::IDENTITY
         };

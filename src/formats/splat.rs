@@ -13,6 +13,7 @@ use std::path::Path;
 
 use glam::{Quat, Vec3};
 
+use super::push_decoded;
 use crate::error::{Error, Result};
 use crate::ply::LoadReport;
 use crate::scene::Scene;
@@ -23,8 +24,9 @@ pub const BYTES_PER_SPLAT: usize = 32;
 /// The SH degree-0 constant.
 const SH_C0: f32 = 0.282_094_8;
 
-/// Reads a `.splat` file. A record with a non-finite or negative value is dropped and counted
-/// (as the PLY reader does).
+/// Reads a `.splat` file. A record with a non-finite or negative value is dropped and counted,
+/// and a Gaussian far thinner along one axis is made flat, as every reader does
+/// ([`push_decoded`]).
 pub fn read_splat(path: &Path) -> Result<(Scene, LoadReport)> {
     let io = |source| Error::Io {
         path: path.to_path_buf(),
@@ -49,9 +51,15 @@ pub fn read_splat(path: &Path) -> Result<(Scene, LoadReport)> {
     for _ in 0..count {
         reader.read_exact(&mut record).map_err(io)?;
         match decode(&record) {
-            Some((mean, opacity, scale, rotation, dc)) => {
-                scene.push(mean, opacity, scale, rotation, &dc)
-            }
+            Some((mean, opacity, scale, rotation, dc)) => push_decoded(
+                &mut scene,
+                &mut dropped,
+                mean,
+                scale,
+                opacity,
+                rotation,
+                &dc,
+            ),
             None => dropped += 1,
         }
     }
@@ -76,7 +84,7 @@ pub fn decode(r: &[u8; BYTES_PER_SPLAT]) -> Option<(Vec3, f32, Vec3, Quat, [f32;
         return None;
     }
     let dc = [0, 1, 2].map(|c| (r[24 + c] as f32 / 255.0 - 0.5) / SH_C0);
-    let opacity = (r[27] as f32 / 255.0).clamp(1e-6, 1.0 - 1e-6);
+    let opacity = (r[27] as f32 / 255.0).clamp(super::OPACITY_MIN, 1.0 - super::OPACITY_MIN);
     let q = [28, 29, 30, 31].map(|k| (r[k] as f32 - 128.0) / 128.0);
     let rotation = crate::scene::normalized_rotation(Quat::from_xyzw(q[1], q[2], q[3], q[0]))
         .unwrap_or(Quat::IDENTITY);

@@ -374,3 +374,30 @@ pub fn run_splat_transform(bin: &Path, input: &Path, output: &Path) {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The members of a zip, by name, in order.
+pub fn unzip(bytes: &[u8]) -> Option<Vec<(String, Vec<u8>)>> {
+    use std::io::Read;
+    let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes)).ok()?;
+    let mut out = Vec::new();
+    for i in 0..archive.len() {
+        let mut f = archive.by_index(i).ok()?;
+        let mut data = Vec::new();
+        (&mut f).take(64 << 20).read_to_end(&mut data).ok()?;
+        out.push((f.name().ok()?.to_string(), data));
+    }
+    Some(out)
+}
+
+/// A zip of `members` (deflated), in order.
+pub fn zip_members(members: &[(String, Vec<u8>)]) -> Vec<u8> {
+    use std::io::Write;
+    let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    for (name, data) in members {
+        w.start_file(name.as_str(), options).unwrap();
+        w.write_all(data).unwrap();
+    }
+    w.finish().unwrap().into_inner()
+}
