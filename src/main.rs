@@ -60,10 +60,10 @@ enum Command {
     /// Benchmark: the RaRa paper's Table 1 (original / hard / rara while a plane sweeps the
     /// scene) with per-pass GPU timings, or the radix sort alone (--sort N).
     Bench(cli::bench::BenchArgs),
-    /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
     /// Convert a scene to PLY, SPZ (v4 or v3), glTF (.glb, KHR_gaussian_splatting) or .splat,
     /// warning about what the target format drops.
     Convert(cli::convert::ConvertArgs),
+    /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
     Info {
         /// The scene (PLY, compressed PLY, SPZ, glTF, SOG or .splat, told apart by content).
         scene: PathBuf,
