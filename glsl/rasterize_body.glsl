@@ -41,6 +41,13 @@
 // CPU drivers run both sides of every branch under a mask, so code that a frame does not need
 // must not be in its kernel at all.
 //
+// Depth (SPEC section 9; the *_depth variants define DEPTH): each pixel takes the view depth of
+// the engine's surface from `depth_limit` (depth_prepare.comp wrote it; 0: no depth test) and
+// composites only the splats in front of it; since a tile's splats come in ascending depth, the
+// pixel is done at the first one behind. Each pixel also keeps the depth outputs' sums in
+// `depth_state` between rounds: the median depth (the splat at which 1 - T first reaches 0.5,
+// +inf until then) and sum(alpha T z), which write_depth divides by sum(alpha T) = 1 - T.
+//
 // A cutoff splat's record is loaded by each invocation on its own (six 64-bit words, or three
 // texels in the strips kernels). The strips kernels used to load it across the subgroup, one or two words per lane, and broadcast
 // them; that needed every lane at the load, so the rara loops then ran while any lane of the
@@ -80,6 +87,8 @@ layout(push_constant) uniform Push {
     ClipParamsRef clip;
     CutoffRecords cutoffs;
     U32s tiles;         // with ROUND_TILE_LIST: the tile ids to walk
+    Vec4s depth_state;  // with DEPTH: per pixel (median depth, sum alpha T z, 0, 0)
+    F32s depth_limit;   // with DEPTH: per pixel the engine's view depth (0: no depth test)
     uint round_index;
     uint flags;
 } pc;
@@ -91,6 +100,9 @@ struct Staged {
     vec2 uv;
     vec3 rgb;
     uint cutoff;
+#ifdef DEPTH
+    float depth;
+#endif
 };
 
 #ifdef SPLAT_TEXELS
@@ -120,6 +132,9 @@ Staged handle_splat(uint h) {
     s.uv = p.uv;
     s.rgb = p.color;
     s.cutoff = p.cutoff;
+#ifdef DEPTH
+    s.depth = p.depth;
+#endif
     return s;
 }
 
@@ -139,6 +154,9 @@ Staged splat_at(uint base, uint k) {
 // splat is composited.
 shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
 shared uint64_t batch_tail[RASTER_BATCH];  // (blue bits, cutoff record index)
+#ifdef DEPTH
+shared float batch_depth[RASTER_BATCH];
+#endif
 
 // Staged splat k of the batch. Staging negates a weighted pair's opacity (handle_weighted).
 Staged splat_at(uint base, uint k) {
@@ -150,10 +168,16 @@ Staged splat_at(uint base, uint k) {
     s.uv = uintBitsToFloat(unpackUint2x32(w.z));
     s.rgb = vec3(uintBitsToFloat(unpackUint2x32(w.w)), uintBitsToFloat(tail.x));
     s.cutoff = tail.y;
+#ifdef DEPTH
+    s.depth = batch_depth[k];
+#endif
     return s;
 }
 
-void stage(uint slot, vec4 co, vec2 uv, vec3 color, uint cutoff) {
+void stage(uint slot, vec4 co, vec2 uv, vec3 color, uint cutoff, float depth) {
+#ifdef DEPTH
+    batch_depth[slot] = depth;
+#endif
     batch_words[slot] = u64vec4(packUint2x32(floatBitsToUint(co.xy)),
                                 packUint2x32(floatBitsToUint(co.zw)),
                                 packUint2x32(floatBitsToUint(uv)),
@@ -192,6 +216,11 @@ uvec2 first_pixel;
 vec3 px_color[NPX];
 float px_T[NPX];
 bool px_done[NPX];
+#ifdef DEPTH
+float px_limit[NPX];    // the engine's view depth (+inf without a depth test)
+float px_median[NPX];   // the median depth so far (+inf until 1 - T reaches 0.5)
+float px_zsum[NPX];     // sum of alpha T z over the composited splats
+#endif
 #if CUTOFF_WEIGHT != 0
 // The ray of pixel (c, r) of the strip is eye + t (ray0 + c ray_across + r ray_step), not
 // normalised (the weights do not depend on the scale of t): three vectors instead of C x P keep
@@ -286,6 +315,12 @@ bool composite(Staged s, bool cutoff) {
             any_open = any_open || open_px;
             float power2 = q.x + float(r) * (q.y + float(r) * q.z);
             float alpha = co.w * exp2(min(power2, 0.0));
+#ifdef DEPTH
+            // Behind the engine's surface: this splat and every later one are hidden.
+            bool behind = s.depth >= px_limit[i];
+            px_done[i] = px_done[i] || behind;
+            open_px = open_px && !behind;
+#endif
             bool use = open_px && power2 <= 0.0 && alpha >= 1.0 / 255.0;
 #if CUTOFF_WEIGHT != 0
             // Only the weight can take alpha back under the threshold (min(0.99, .) cannot);
@@ -305,6 +340,10 @@ bool composite(Staged s, bool cutoff) {
             px_done[i] = px_done[i] || finish;
             bool add = use && !finish;
             px_color[i] += (add ? alpha * px_T[i] : 0.0) * rgb;
+#ifdef DEPTH
+            px_zsum[i] += add ? alpha * px_T[i] * s.depth : 0.0;
+            px_median[i] = add && next_T <= 0.5 && isinf(px_median[i]) ? s.depth : px_median[i];
+#endif
             px_T[i] = add ? next_T : px_T[i];
         }
     }
@@ -452,6 +491,18 @@ void main() {
             px_T[i] = abs(s.a);
             px_done[i] = s.a < 0.0;
         }
+#ifdef DEPTH
+        uint at = inside ? pixel.y * f.size.x + pixel.x : 0u;
+        px_limit[i] = uint64_t(pc.depth_limit) != 0ul && inside ? pc.depth_limit.v[at]
+                                                                 : uintBitsToFloat(0x7f800000u);
+        px_median[i] = uintBitsToFloat(0x7f800000u);
+        px_zsum[i] = 0.0;
+        if ((pc.flags & ROUND_FIRST) == 0u && inside) {
+            vec4 d = load_vec4_item(pc.depth_state, at);
+            px_median[i] = d.x;
+            px_zsum[i] = d.y;
+        }
+#endif
     }
 #if CUTOFF_WEIGHT != 0
     strip_spans(f.cam_pos.xyz);
@@ -496,9 +547,9 @@ void main() {
                 // The sign of the staged opacity marks a weighted pair (handle_weighted).
                 bool weighted = (value & PAIR_WEIGHTED) != 0u;
                 stage(slot, vec4(p.conic, weighted ? -p.opacity : p.opacity), p.uv, p.color,
-                      p.cutoff);
+                      p.cutoff, p.depth);
 #else
-                stage(slot, vec4(p.conic, p.opacity), p.uv, p.color, 0u);
+                stage(slot, vec4(p.conic, p.opacity), p.uv, p.color, 0u, p.depth);
 #endif
             }
             ++j;
@@ -522,5 +573,9 @@ void main() {
         }
         store_vec4_item(pc.state, pixel.y * f.size.x + pixel.x,
                         vec4(px_color[i], px_done[i] ? -px_T[i] : px_T[i]));
+#ifdef DEPTH
+        store_vec4_item(pc.depth_state, pixel.y * f.size.x + pixel.x,
+                        vec4(px_median[i], px_zsum[i], 0.0, 0.0));
+#endif
     }
 }

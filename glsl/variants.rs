@@ -25,6 +25,24 @@ const VARIANTS: &[Variant] = &[
         ],
     },
     Variant {
+        name: "depth_prepare_buffer",
+        body: "depth_prepare_body.glsl",
+        defines: &[],
+        about: &[
+            "Depth test, first step: an engine's depth buffer (f32 per pixel) as view depth",
+            "(see depth_prepare_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "depth_prepare_image",
+        body: "depth_prepare_body.glsl",
+        defines: &["DEPTH_SOURCE_IMAGE"],
+        about: &[
+            "Depth test, first step: an engine's depth image, sampled, as view depth",
+            "(see depth_prepare_body.glsl).",
+        ],
+    },
+    Variant {
         name: "depth_counts",
         body: "depth_counts_body.glsl",
         defines: &[],
@@ -301,6 +319,60 @@ const VARIANTS: &[Variant] = &[
         ],
     },
     Variant {
+        name: "rasterize_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT 0", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, no rara clipping, with the depth test and the",
+            "depth outputs (SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_length_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the length weight, with the depth test and the",
+            "depth outputs (SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_mass_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the mass weight, with the depth test and the",
+            "depth outputs (SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT 0", "SPLAT_TEXELS", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout, no rara clipping, with the depth test and the",
+            "depth outputs (SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_length_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout, rara clipping with the length weight, with the depth test and the",
+            "depth outputs (SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_mass_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout, rara clipping with the mass weight, with the depth test and the",
+            "depth outputs (SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
         name: "sort_count_own_counts",
         body: "sort_count_own_counts_body.glsl",
         defines: &["SORT_PAIRS_IN 0"],
@@ -406,6 +478,22 @@ const VARIANTS: &[Variant] = &[
         about: &[
             "Stage 6, tile ranges, reading the sorted keys through the frame's texel views (CPU",
             "drivers); see tile_ranges_body.glsl.",
+        ],
+    },
+    Variant {
+        name: "write_depth_buffer",
+        body: "write_depth_body.glsl",
+        defines: &[],
+        about: &[
+            "Depth output into an f32 buffer (see write_depth_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "write_depth_image",
+        body: "write_depth_body.glsl",
+        defines: &["DEPTH_TARGET_IMAGE"],
+        about: &[
+            "Depth output into an R32_SFLOAT storage image (see write_depth_body.glsl).",
         ],
     },
     Variant {

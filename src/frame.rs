@@ -17,7 +17,7 @@ use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_lists::TileListsLayout;
 use crate::stages::trace::{RayTracer, TraceBuffers, FIRST_TRACE_ROUNDS, MAX_TRACE_ROUNDS};
-use crate::stages::write_target::image_target_set_layout;
+use crate::stages::write_target::single_image_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
 use crate::timing::PassTiming;
 use crate::vk::descriptors::{allocate_sets, write_texel_view};
@@ -52,6 +52,10 @@ pub struct FrameSlot {
     /// What the last recorded frame had, to judge its counters.
     recorded: Option<(u64, u32)>,
     image_set: Option<ImageTargetSet>,
+    /// The engine's depth image of a depth test ([`crate::depth::DepthSource::Image`]).
+    depth_in_set: Option<ImageTargetSet>,
+    /// The depth output's image ([`crate::depth::DepthTarget::Image`]).
+    depth_out_set: Option<ImageTargetSet>,
     frame_texels: Option<FrameTexelsSet>,
     /// The ray tracer's buffers, made by its first frame ([`crate::Tracer::Ray`]).
     pub(crate) trace: Option<TraceBuffers>,
@@ -143,6 +147,10 @@ pub(crate) struct FrameResources {
     pub(crate) tile_lists: Buffer,
     /// Per pixel (premultiplied colour, transmittance), for the write-target stage.
     pub(crate) state: Buffer,
+    /// With a depth test or a depth output (SPEC section 9), made by the first such frame:
+    /// per pixel the depth sums (median, sum alpha T z; 16 B) and the engine's view depth
+    /// (4 B).
+    pub(crate) depth: Option<(Buffer, Buffer)>,
     /// Which sort buffer holds the sorted pairs of the last frame.
     pub(crate) sorted: usize,
 }
@@ -181,12 +189,14 @@ impl FrameTexelsSet {
     }
 }
 
-/// The descriptor pool and set that hold an image target's view.
+/// The descriptor pool and set that hold one image view: an image target's, or a depth
+/// test's or depth output's.
 struct ImageTargetSet {
     layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
     view: vk::ImageView,
+    image_layout: vk::ImageLayout,
 }
 
 impl FrameSlot {
@@ -205,6 +215,8 @@ impl FrameSlot {
             rounds: 1,
             recorded: None,
             image_set: None,
+            depth_in_set: None,
+            depth_out_set: None,
             frame_texels: None,
             trace: None,
             trace_rounds: FIRST_TRACE_ROUNDS,
@@ -246,6 +258,9 @@ impl FrameSlot {
             m.per_intersection = r.sort.device_bytes();
             m.intersection_capacity = r.capacity;
             m.per_pixel = r.ranges.size + r.tile_lists.size + r.state.size;
+            if let Some((sums, limit)) = &r.depth {
+                m.per_pixel += sums.size + limit.size;
+            }
         }
         if let Some(t) = &self.trace {
             m.bvh = t.bvh_bytes();
@@ -408,6 +423,7 @@ impl FrameSlot {
                     gpu,
                 )?,
                 state: Buffer::new(ctx, "raster state", pixels * 16, gpu)?,
+                depth: None,
                 sorted: 0,
             });
         }
@@ -539,42 +555,104 @@ impl FrameSlot {
     /// The descriptor set holding `view` as the storage image at binding 0 (updated only when
     /// the view changed; the slot is idle, so the set is not in use).
     pub(crate) fn image_target_set(&mut self, view: vk::ImageView) -> Result<vk::DescriptorSet> {
-        let device = self.ctx.device();
-        if self.image_set.is_none() {
-            let layout = image_target_set_layout(&self.ctx)?;
-            let sizes = [vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_IMAGE,
-                descriptor_count: 1,
-            }];
-            let (pool, set) = match allocate_sets(&self.ctx, &sizes, &[layout]) {
-                Ok((pool, sets)) => (pool, sets[0]),
-                Err(e) => {
-                    unsafe { device.destroy_descriptor_set_layout(layout, None) };
-                    return Err(e);
-                }
-            };
-            self.image_set = Some(ImageTargetSet {
-                layout,
-                pool,
-                set,
-                view: vk::ImageView::null(),
-            });
-        }
-        let image_set = self.image_set.as_mut().unwrap();
-        if image_set.view != view {
-            let images = [vk::DescriptorImageInfo::default()
-                .image_view(view)
-                .image_layout(vk::ImageLayout::GENERAL)];
-            let write = vk::WriteDescriptorSet::default()
-                .dst_set(image_set.set)
-                .dst_binding(0)
-                .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-                .image_info(&images);
-            unsafe { device.update_descriptor_sets(&[write], &[]) };
-            image_set.view = view;
-        }
-        Ok(image_set.set)
+        single_image_set(
+            &self.ctx,
+            &mut self.image_set,
+            vk::DescriptorType::STORAGE_IMAGE,
+            view,
+            vk::ImageLayout::GENERAL,
+        )
     }
+
+    /// The descriptor set of a depth test's engine depth image: `view` as the sampled image at
+    /// binding 0, in `layout`.
+    pub(crate) fn depth_in_set(
+        &mut self,
+        view: vk::ImageView,
+        layout: vk::ImageLayout,
+    ) -> Result<vk::DescriptorSet> {
+        single_image_set(
+            &self.ctx,
+            &mut self.depth_in_set,
+            vk::DescriptorType::SAMPLED_IMAGE,
+            view,
+            layout,
+        )
+    }
+
+    /// The descriptor set of a depth output's image: `view` as the storage image at binding 0.
+    pub(crate) fn depth_out_set(&mut self, view: vk::ImageView) -> Result<vk::DescriptorSet> {
+        single_image_set(
+            &self.ctx,
+            &mut self.depth_out_set,
+            vk::DescriptorType::STORAGE_IMAGE,
+            view,
+            vk::ImageLayout::GENERAL,
+        )
+    }
+
+    /// Makes the depth buffers of the frame `prepare` sized (a depth test or a depth output).
+    pub(crate) fn prepare_depth(&mut self) -> Result<()> {
+        let f = self.resources.as_mut().expect("prepare first");
+        if f.depth.is_none() {
+            let pixels = f.width as u64 * f.height as u64;
+            let gpu = MemoryLocation::GpuOnly;
+            f.depth = Some((
+                Buffer::new(&self.ctx, "depth sums", pixels * 16, gpu)?,
+                Buffer::new(&self.ctx, "depth limit", pixels * 4, gpu)?,
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The set in `slot` (made on first use, with a layout of one `ty` descriptor at binding 0)
+/// holding `view` in `layout` (updated only when they changed; the slot is idle, so the set is
+/// not in use).
+fn single_image_set(
+    ctx: &Context,
+    slot: &mut Option<ImageTargetSet>,
+    ty: vk::DescriptorType,
+    view: vk::ImageView,
+    layout: vk::ImageLayout,
+) -> Result<vk::DescriptorSet> {
+    let device = ctx.device();
+    if slot.is_none() {
+        let set_layout = single_image_set_layout(ctx, ty)?;
+        let sizes = [vk::DescriptorPoolSize {
+            ty,
+            descriptor_count: 1,
+        }];
+        let (pool, set) = match allocate_sets(ctx, &sizes, &[set_layout]) {
+            Ok((pool, sets)) => (pool, sets[0]),
+            Err(e) => {
+                unsafe { device.destroy_descriptor_set_layout(set_layout, None) };
+                return Err(e);
+            }
+        };
+        *slot = Some(ImageTargetSet {
+            layout: set_layout,
+            pool,
+            set,
+            view: vk::ImageView::null(),
+            image_layout: vk::ImageLayout::UNDEFINED,
+        });
+    }
+    let s = slot.as_mut().unwrap();
+    if s.view != view || s.image_layout != layout {
+        let images = [vk::DescriptorImageInfo::default()
+            .image_view(view)
+            .image_layout(layout)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(s.set)
+            .dst_binding(0)
+            .descriptor_type(ty)
+            .image_info(&images);
+        unsafe { device.update_descriptor_sets(&[write], &[]) };
+        s.view = view;
+        s.image_layout = layout;
+    }
+    Ok(s.set)
 }
 
 impl Drop for FrameSlot {
@@ -588,7 +666,14 @@ impl Drop for FrameSlot {
                     .destroy_descriptor_set_layout(s.layout, None);
             }
         }
-        if let Some(s) = self.image_set.take() {
+        for s in [
+            self.image_set.take(),
+            self.depth_in_set.take(),
+            self.depth_out_set.take(),
+        ]
+        .into_iter()
+        .flatten()
+        {
             unsafe {
                 self.ctx.device().destroy_descriptor_pool(s.pool, None);
                 self.ctx

@@ -38,6 +38,7 @@ pub mod clip;
 /// Integer constants shared by the host and the GLSL kernels (tile size, workgroup sizes,
 /// counter slots). `build.rs` passes them to the shader compiler as macros.
 pub mod constants;
+pub mod depth;
 pub mod error;
 pub mod formats;
 pub mod frame;
@@ -65,6 +66,7 @@ pub mod shaders {
 
 pub use camera::Camera;
 pub use clip::{Clip, ClipMode, ClipRegion, ClipWeight, Plane};
+pub use depth::{DepthMode, DepthOutput, DepthProjection, DepthSource, DepthTarget, DepthTest};
 pub use error::{Error, Result};
 pub use frame::{FrameMemory, FrameSlot};
 pub use precision::ShPrecision;

@@ -10,6 +10,7 @@ use glam::Vec3;
 use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode};
 use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS};
+use crate::depth::{DepthMode, DepthOutput, DepthSource, DepthTarget, DepthTest};
 use crate::error::{Error, Result};
 pub use crate::frame::FrameStats;
 use crate::frame::{FrameMemory, FrameSlot};
@@ -17,6 +18,7 @@ pub use crate::gpu_scene::GpuScene;
 use crate::gpu_types::GpuFrameParams;
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
+use crate::stages::depth::DepthStages;
 use crate::stages::depth_order::{DepthOrder, DEPTH_KEY_BITS};
 use crate::stages::emit::Emit;
 use crate::stages::prefix_sum::PrefixSum;
@@ -43,6 +45,10 @@ pub struct RenderOptions {
     pub clip: Clip,
     /// The tile rasterizer (SPEC sections 3-5) or the ray tracer (section 7).
     pub tracer: Tracer,
+    /// A depth test against the engine's depth buffer (SPEC section 9; rasterizer only).
+    pub depth_test: Option<DepthTest>,
+    /// The splats' depth written out (SPEC section 9; rasterizer only).
+    pub depth_output: Option<DepthOutput>,
 }
 
 impl Default for RenderOptions {
@@ -52,6 +58,8 @@ impl Default for RenderOptions {
             composite: Composite::Background,
             clip: Clip::default(),
             tracer: Tracer::Raster,
+            depth_test: None,
+            depth_output: None,
         }
     }
 }
@@ -107,6 +115,8 @@ pub struct Renderer {
     tile_ranges: TileRanges,
     rasterize: Rasterize,
     write_target: WriteTarget,
+    /// The depth test's and depth output's kernels (SPEC section 9).
+    depth: DepthStages,
     timer: PassTimer,
     /// The slot and rgba8 image (+ host copy) of the headless path, [`Renderer::render`].
     headless: Option<HeadlessFrame>,
@@ -122,6 +132,8 @@ struct HeadlessFrame {
     slot: FrameSlot,
     /// Image of `width` x `height` rgba8 pixels, and its host-visible copy.
     image: Option<(u32, u32, Buffer, Buffer)>,
+    /// The depth output of [`Renderer::render_with_depth`] (f32 per pixel), and its copy.
+    depth: Option<(u32, u32, Buffer, Buffer)>,
 }
 
 /// Sort key bits of the frame's pair sort: enough bits for the tile id and for the tile count,
@@ -161,6 +173,7 @@ impl Renderer {
             tile_ranges: TileRanges::new(ctx, texels)?,
             rasterize: Rasterize::new(ctx, layout, texels)?,
             write_target: WriteTarget::new(ctx, texels)?,
+            depth: DepthStages::new(ctx)?,
             timer: PassTimer::new(ctx)?,
             headless: None,
             ray_tracer: std::sync::OnceLock::new(),
@@ -226,16 +239,39 @@ impl Renderer {
         camera: &Camera,
         options: &RenderOptions,
     ) -> Result<(image::RgbaImage, FrameStats)> {
+        self.render_inner(scene, camera, options, None)
+            .map(|(image, _, stats)| (image, stats))
+    }
+
+    /// [`Renderer::render`], also reading back the depth output of `mode` (SPEC section 9):
+    /// one f32 view depth per pixel, rows top first, `f32::INFINITY` where there is none.
+    pub fn render_with_depth(
+        &mut self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        mode: DepthMode,
+    ) -> Result<(image::RgbaImage, Vec<f32>, FrameStats)> {
+        self.render_inner(scene, camera, options, Some(mode))
+    }
+
+    fn render_inner(
+        &mut self,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        depth_mode: Option<DepthMode>,
+    ) -> Result<(image::RgbaImage, Vec<f32>, FrameStats)> {
         camera.validate()?;
-        let (w, h) = (camera.width, camera.height);
         let mut headless = match self.headless.take() {
             Some(h) => h,
             None => HeadlessFrame {
                 slot: FrameSlot::new(&self.ctx)?,
                 image: None,
+                depth: None,
             },
         };
-        let result = self.render_headless(&mut headless, scene, camera, options, w, h);
+        let result = self.render_headless(&mut headless, scene, camera, options, depth_mode);
         self.headless = Some(headless);
         result
     }
@@ -263,10 +299,29 @@ impl Renderer {
         scene: &GpuScene,
         camera: &Camera,
         options: &RenderOptions,
-        w: u32,
-        h: u32,
-    ) -> Result<(image::RgbaImage, FrameStats)> {
+        depth_mode: Option<DepthMode>,
+    ) -> Result<(image::RgbaImage, Vec<f32>, FrameStats)> {
+        let (w, h) = (camera.width, camera.height);
         let image_bytes = w as u64 * h as u64 * 4;
+        if depth_mode.is_some()
+            && !headless
+                .depth
+                .as_ref()
+                .is_some_and(|d| d.0 == w && d.1 == h)
+        {
+            headless.depth = None;
+            headless.depth = Some((
+                w,
+                h,
+                Buffer::new(&self.ctx, "depth f32", image_bytes, MemoryLocation::GpuOnly)?,
+                Buffer::new(
+                    &self.ctx,
+                    "depth readback",
+                    image_bytes,
+                    MemoryLocation::GpuToCpu,
+                )?,
+            ));
+        }
         if !headless
             .image
             .as_ref()
@@ -297,6 +352,17 @@ impl Renderer {
         };
         let mut options = options.clone();
         options.composite = Composite::Background;
+        let depth = depth_mode.map(|mode| {
+            let (_, _, buffer, readback) = headless.depth.as_ref().expect("made above");
+            options.depth_output = Some(DepthOutput {
+                mode,
+                target: DepthTarget::Buffer {
+                    buffer: buffer.raw,
+                    offset: 0,
+                },
+            });
+            (buffer, readback)
+        });
         let mut timer = std::mem::replace(&mut self.timer, PassTimer::labels_only(&self.ctx));
         let mut rerenders = 0;
         let result = loop {
@@ -312,6 +378,9 @@ impl Renderer {
                     Some(&mut timer),
                 )?;
                 copy_to_host(&self.ctx, cmd, image, readback, image_bytes);
+                if let Some((buffer, readback)) = depth {
+                    copy_to_host(&self.ctx, cmd, buffer, readback, image_bytes);
+                }
                 Ok(())
             });
             if let Err(e) = recorded.and_then(|r| r) {
@@ -335,7 +404,10 @@ impl Renderer {
             stats.rerenders = rerenders;
             let pixels = readback.mapped()[..image_bytes as usize].to_vec();
             let image = image::RgbaImage::from_raw(w, h, pixels).expect("image size");
-            break Ok((image, stats));
+            let depths = depth.map_or_else(Vec::new, |(_, readback)| {
+                bytemuck::pod_collect_to_vec(&readback.mapped()[..image_bytes as usize])
+            });
+            break Ok((image, depths, stats));
         };
         self.timer = timer;
         result
@@ -407,7 +479,17 @@ impl Renderer {
         options.clip.validate()?;
         let (w, h) = (camera.width, camera.height);
         let buffer_target = self.buffer_target_address(target, (w, h))?;
+        if let Some(test) = &options.depth_test {
+            test.projection.validate()?;
+        }
         if options.tracer == Tracer::Ray {
+            if options.depth_test.is_some() || options.depth_output.is_some() {
+                return Err(Error::InvalidInput(
+                    "the depth test and the depth output are the rasterizer's so far, not the \
+                     ray tracer's"
+                        .into(),
+                ));
+            }
             return self.record_trace(
                 cmd,
                 slot,
@@ -433,6 +515,7 @@ impl Renderer {
             Target::Image { view, .. } => Some(slot.image_target_set(view)?),
             Target::Buffer { .. } => None,
         };
+        let depth = self.depth_bindings(slot, options)?;
         let sorted_index = self.sort.passes_for(key_bits(w, h)) as usize % 2;
         slot.resources.as_mut().unwrap().sorted = sorted_index;
         // The texel views that most kernels read through on CPU drivers (project, depth order,
@@ -552,6 +635,18 @@ impl Renderer {
         );
         debug_assert_eq!(sorted, sorted_index);
         self.tile_ranges.record(&mut rec, &f.sort, sorted);
+        let depth_buffers = depth.as_ref().map(|_| {
+            let (sums, limit) = f.depth.as_ref().expect("prepare_depth");
+            (sums.address, limit.address)
+        });
+        let mut depth_limit = 0;
+        if let (Some(d), Some((_, limit))) = (&depth, depth_buffers) {
+            if let (Some(test), Some(source)) = (&options.depth_test, d.source) {
+                self.depth
+                    .record_prepare(&mut rec, source, &test.projection, limit);
+                depth_limit = limit;
+            }
+        }
         let cutoff_weight = rara.then_some(options.clip.weight);
         self.rasterize.record(
             &mut rec,
@@ -559,6 +654,7 @@ impl Renderer {
             rounds,
             cutoff_weight,
             tile_lists,
+            depth_buffers.map(|(sums, _)| (sums, depth_limit)),
         );
         self.write_target.record(
             &mut rec,
@@ -566,6 +662,12 @@ impl Renderer {
             options.background,
             options.composite,
         );
+        if let (Some(d), Some((sums, _)), Some(output)) =
+            (&depth, depth_buffers, &options.depth_output)
+        {
+            self.depth
+                .record_write(&mut rec, sums, output.mode, d.target.expect("an output"));
+        }
 
         // The counters, for FrameSlot::stats once the frame completed.
         copy_to_host(
@@ -579,7 +681,72 @@ impl Renderer {
     }
 }
 
+/// What a frame with a depth test or a depth output binds: the engine's depth (a buffer
+/// address, or a descriptor set of its image) and the depth output's target (likewise).
+struct DepthBindings {
+    source: Option<(u64, Option<vk::DescriptorSet>)>,
+    target: Option<(u64, Option<vk::DescriptorSet>)>,
+}
+
 impl Renderer {
+    /// The device address of `buffer` plus `offset`, which must be a multiple of 4 (`what`
+    /// names it in the error).
+    fn buffer_address(&self, buffer: vk::Buffer, offset: u64, what: &str) -> Result<u64> {
+        if offset % 4 != 0 {
+            return Err(Error::InvalidInput(format!(
+                "{what}'s offset must be a multiple of 4, not {offset}"
+            )));
+        }
+        let base = unsafe {
+            self.ctx
+                .device()
+                .get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(buffer))
+        };
+        Ok(base + offset)
+    }
+
+    /// The depth buffers and bindings of a frame with a depth test or a depth output, made in
+    /// `slot` (whose frame `prepare` has sized); `None` for a frame with neither.
+    fn depth_bindings(
+        &self,
+        slot: &mut FrameSlot,
+        options: &RenderOptions,
+    ) -> Result<Option<DepthBindings>> {
+        if options.depth_test.is_none() && options.depth_output.is_none() {
+            return Ok(None);
+        }
+        slot.prepare_depth()?;
+        let source = match options.depth_test {
+            Some(DepthTest {
+                source: DepthSource::Image { view, layout },
+                ..
+            }) => Some((0, Some(slot.depth_in_set(view, layout)?))),
+            Some(DepthTest {
+                source: DepthSource::Buffer { buffer, offset },
+                ..
+            }) => Some((
+                self.buffer_address(buffer, offset, "the depth test's buffer")?,
+                None,
+            )),
+            None => None,
+        };
+        let target = match options.depth_output {
+            Some(DepthOutput {
+                target: DepthTarget::Image { view },
+                ..
+            }) => Some((0, Some(slot.depth_out_set(view)?))),
+            Some(DepthOutput {
+                target: DepthTarget::Buffer { buffer, offset },
+                ..
+            }) => Some((
+                self.buffer_address(buffer, offset, "the depth output's buffer")?,
+                None,
+            )),
+            None => None,
+        };
+        Ok(Some(DepthBindings { source, target }))
+    }
+
     /// Checks that `target` is `size` and returns a buffer target's device address (0 for an
     /// image target).
     fn buffer_target_address(&self, target: &Target, (w, h): (u32, u32)) -> Result<u64> {

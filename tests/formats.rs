@@ -197,14 +197,7 @@ fn without_saturated_opacity(s: &Scene) -> Scene {
     let keep: Vec<usize> = (0..s.len())
         .filter(|&i| s.opacities[i] > 2e-6 && s.opacities[i] < 1.0 - 2e-6)
         .collect();
-    Scene {
-        means: keep.iter().map(|&i| s.means[i]).collect(),
-        opacities: keep.iter().map(|&i| s.opacities[i]).collect(),
-        scales: keep.iter().map(|&i| s.scales[i]).collect(),
-        rotations: keep.iter().map(|&i| s.rotations[i]).collect(),
-        sh_degree: s.sh_degree,
-        sh: keep.iter().flat_map(|&i| s.sh_of(i).to_vec()).collect(),
-    }
+    common::subset(s, &keep)
 }
 
 /// The real originals in compressed PLY, SPZ v4 and SOG decode to the shared PLY conversions

@@ -88,10 +88,42 @@ pub fn composite_pixel(
     background: Vec3,
     clip: Option<&PixelClip>,
 ) -> Vec3 {
+    composite_pixel_depth(splats, list, pixel, background, clip, f32::INFINITY).color
+}
+
+/// A pixel composited with depth (SPEC section 9).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelDepth {
+    /// The colour over the background.
+    pub color: Vec3,
+    /// The transmittance left.
+    pub t: f32,
+    /// The view depth at which `1 - T` first reached 0.5 (`+inf` when it never did).
+    pub median: f32,
+    /// `sum(alpha T z) / sum(alpha T)` over the composited splats (`+inf` when none).
+    pub mean: f32,
+}
+
+/// [`composite_pixel`] with a depth test against the engine's view depth `limit` at the pixel
+/// (`f32::INFINITY`: none): the pixel stops at the first splat not in front of it. Returns the
+/// colour and the depth outputs, in the GPU's f32 operations.
+pub fn composite_pixel_depth(
+    splats: &[ProjectedSplat],
+    list: &[u32],
+    pixel: Vec2,
+    background: Vec3,
+    clip: Option<&PixelClip>,
+    limit: f32,
+) -> PixelDepth {
     let mut color = Vec3::ZERO;
     let mut t = 1.0f32;
+    let mut median = f32::INFINITY;
+    let mut zsum = 0.0f32;
     for &k in list {
         let s = &splats[k as usize];
+        if s.depth >= limit {
+            break;
+        }
         let d = s.uv - pixel;
         let power = -0.5 * (s.conic.x * d.x * d.x + s.conic.z * d.y * d.y) - s.conic.y * d.x * d.y;
         if power > 0.0 {
@@ -111,9 +143,23 @@ pub fn composite_pixel(
             break;
         }
         color += alpha * t * s.color;
+        zsum += alpha * t * s.depth;
+        if next_t <= 0.5 && median.is_infinite() {
+            median = s.depth;
+        }
         t = next_t;
     }
-    color + t * background
+    let weight = 1.0 - t;
+    PixelDepth {
+        color: color + t * background,
+        t,
+        median,
+        mean: if weight > 0.0 {
+            zsum / weight
+        } else {
+            f32::INFINITY
+        },
+    }
 }
 
 /// 8-bit quantisation of SPEC section 4: clamp to [0, 1], round(255 x).
@@ -129,45 +175,59 @@ pub fn rasterize(
     background: Vec3,
     clip: &Clip,
 ) -> Rgba8Image {
+    rasterize_depth(splats, camera, background, clip, None).0
+}
+
+/// [`rasterize`] with depth (SPEC section 9): a depth test against `limits` (the engine's view
+/// depth per pixel, rows top first) when given, and the median and mean depths per pixel.
+pub fn rasterize_depth(
+    splats: &[ProjectedSplat],
+    camera: &Camera,
+    background: Vec3,
+    clip: &Clip,
+    limits: Option<&[f32]>,
+) -> (Rgba8Image, Vec<f32>, Vec<f32>) {
     let lists = tile_lists(splats, camera);
-    let (gx, _) = tile_grid(camera);
+    let (gx, gy) = tile_grid(camera);
     let (w, h) = (camera.width, camera.height);
-    let mut pixels = vec![0u8; (w * h * 4) as usize];
+    if let Some(l) = limits {
+        assert_eq!(l.len(), (w * h) as usize, "one limit per pixel");
+    }
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let rows_per_band = TILE_SIZE as usize;
-    let band_bytes = rows_per_band * w as usize * 4;
-    let bands: Vec<(usize, &mut [u8])> = pixels.chunks_mut(band_bytes).enumerate().collect();
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let bands = std::sync::Mutex::new(bands.into_iter().map(Some).collect::<Vec<_>>());
+    let next = std::sync::atomic::AtomicU32::new(0);
+    let done = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|scope| {
         for _ in 0..threads {
             scope.spawn(|| loop {
-                let b = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some((ty, band)) = bands.lock().unwrap().get_mut(b).and_then(Option::take)
-                else {
+                let ty = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if ty >= gy {
                     break;
-                };
-                let ty = ty as u32;
-                for row in 0..rows_per_band as u32 {
-                    let j = ty * TILE_SIZE + row;
-                    if j >= h {
-                        break;
-                    }
+                }
+                let mut band = Vec::new();
+                for j in ty * TILE_SIZE..((ty + 1) * TILE_SIZE).min(h) {
                     for i in 0..w {
                         let list = &lists[(ty * gx + i / TILE_SIZE) as usize];
-                        let c = composite_pixel(
+                        band.push(composite_pixel_depth(
                             splats,
                             list,
                             Vec2::new(i as f32, j as f32),
                             background,
                             PixelClip::new(clip, camera, i, j).as_ref(),
-                        );
-                        let o = ((row * w + i) * 4) as usize;
-                        band[o..o + 4].copy_from_slice(&to_rgba8(c));
+                            limits.map_or(f32::INFINITY, |l| l[(j * w + i) as usize]),
+                        ));
                     }
                 }
+                done.lock().unwrap().push((ty, band));
             });
         }
     });
-    Rgba8Image::from_raw(w, h, pixels).expect("image size")
+    let mut bands = done.into_inner().unwrap();
+    bands.sort_by_key(|(ty, _)| *ty);
+    let pixels: Vec<PixelDepth> = bands.into_iter().flat_map(|(_, b)| b).collect();
+    let rgba: Vec<u8> = pixels.iter().flat_map(|p| to_rgba8(p.color)).collect();
+    (
+        Rgba8Image::from_raw(w, h, rgba).expect("image size"),
+        pixels.iter().map(|p| p.median).collect(),
+        pixels.iter().map(|p| p.mean).collect(),
+    )
 }

@@ -82,6 +82,7 @@ impl FrameRecording<'_> {
 
 pub mod bvh;
 pub mod cutoff_tiles;
+pub mod depth;
 pub mod depth_order;
 pub mod emit;
 pub mod mixed;

@@ -40,6 +40,10 @@ pub struct RasterizePush {
     pub cutoffs: u64,
     /// With `ROUND_TILE_LIST` in `flags`: the ids of the tiles to walk, one per workgroup.
     pub tiles: u64,
+    /// With the depth kernels: per pixel the depth sums (median, sum alpha T z).
+    pub depth_state: u64,
+    /// With the depth kernels: per pixel the engine's view depth (0: no depth test).
+    pub depth_limit: u64,
     /// Which RASTER_CHUNK of every tile list this dispatch walks.
     pub round_index: u32,
     /// ROUND_FIRST on the first round.
@@ -106,6 +110,8 @@ pub struct Rasterize {
     plain: ComputePipeline,
     mass: ComputePipeline,
     length: ComputePipeline,
+    /// The same three with the depth test and the depth outputs (SPEC section 9).
+    depth: [ComputePipeline; 3],
     layout: RasterLayout,
 }
 
@@ -120,11 +126,16 @@ impl Rasterize {
         let build = |name: &'static CStr, spirv: &[u32]| {
             ComputePipeline::with_set_layout::<RasterizePush>(ctx, name, spirv, texels)
         };
-        let (plain, mass, length) = match layout {
+        let (plain, mass, length, depth) = match layout {
             RasterLayout::PixelPerInvocation => (
                 build(c"rasterize", shaders::RASTERIZE)?,
                 build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
                 build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
+                [
+                    build(c"rasterize_depth", shaders::RASTERIZE_DEPTH)?,
+                    build(c"rasterize_mass_depth", shaders::RASTERIZE_MASS_DEPTH)?,
+                    build(c"rasterize_length_depth", shaders::RASTERIZE_LENGTH_DEPTH)?,
+                ],
             ),
             RasterLayout::Strips => {
                 if texels.is_none() {
@@ -136,6 +147,17 @@ impl Rasterize {
                     build(c"rasterize_strips", shaders::RASTERIZE_STRIPS)?,
                     build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS)?,
                     build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH)?,
+                    [
+                        build(c"rasterize_strips_depth", shaders::RASTERIZE_STRIPS_DEPTH)?,
+                        build(
+                            c"rasterize_strips_mass_depth",
+                            shaders::RASTERIZE_STRIPS_MASS_DEPTH,
+                        )?,
+                        build(
+                            c"rasterize_strips_length_depth",
+                            shaders::RASTERIZE_STRIPS_LENGTH_DEPTH,
+                        )?,
+                    ],
                 )
             }
         };
@@ -143,6 +165,7 @@ impl Rasterize {
             plain,
             mass,
             length,
+            depth,
             layout,
         })
     }
@@ -197,6 +220,8 @@ impl Rasterize {
     /// layout, [`super::tile_lists`]; mass weight only) each round runs the plain kernel over
     /// the plain list and the weighted kernel over the weighted list, as indirect dispatches;
     /// else one kernel over the whole grid. The strips kernels read the frame's texel views.
+    /// With `depth` (the addresses of the per-pixel depth sums and of the engine's view depth,
+    /// 0 without a depth test) the depth kernels run (SPEC section 9).
     pub fn record(
         &self,
         f: &mut FrameRecording,
@@ -204,6 +229,7 @@ impl Rasterize {
         rounds: u32,
         cutoff_weight: Option<ClipWeight>,
         lists: Option<(&Buffer, TileListsLayout)>,
+        depth: Option<(u64, u64)>,
     ) {
         let push = RasterizePush {
             frame: f.at.params,
@@ -215,13 +241,19 @@ impl Rasterize {
             clip: f.at.clip,
             cutoffs: f.at.cutoffs,
             tiles: 0,
+            depth_state: depth.map_or(0, |d| d.0),
+            depth_limit: depth.map_or(0, |d| d.1),
             round_index: 0,
             flags: 0,
         };
+        let [plain, mass, length] = match depth {
+            Some(_) => [&self.depth[0], &self.depth[1], &self.depth[2]],
+            None => [&self.plain, &self.mass, &self.length],
+        };
         let pipeline = match cutoff_weight {
-            None => &self.plain,
-            Some(ClipWeight::Mass) => &self.mass,
-            Some(ClipWeight::Length) => &self.length,
+            None => plain,
+            Some(ClipWeight::Mass) => mass,
+            Some(ClipWeight::Length) => length,
         };
         debug_assert!(lists.is_none() || cutoff_weight == Some(ClipWeight::Mass));
         let (gx, gy) = f.grid;
@@ -235,12 +267,8 @@ impl Rasterize {
                         p.flags |= ROUND_TILE_LIST;
                         // The two lists hold disjoint tiles: no barrier between them.
                         for (kernel, list, args) in [
-                            (&self.plain, layout.plain(), TileListsLayout::PLAIN_ARGS),
-                            (
-                                &self.mass,
-                                layout.weighted(),
-                                TileListsLayout::WEIGHTED_ARGS,
-                            ),
+                            (plain, layout.plain(), TileListsLayout::PLAIN_ARGS),
+                            (mass, layout.weighted(), TileListsLayout::WEIGHTED_ARGS),
                         ] {
                             p.tiles = buffer.address + list;
                             kernel.dispatch_indirect_in(f.cmd, &p, f.texels, buffer.raw, args);

@@ -44,9 +44,18 @@ impl WriteTargetPush {
 /// binding 0. Layouts made by separate calls are identically defined, hence compatible, so a
 /// frame slot allocates its set from one of its own and outlives any renderer.
 pub fn image_target_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
+    single_image_set_layout(ctx, vk::DescriptorType::STORAGE_IMAGE)
+}
+
+/// Creates the layout of a descriptor set of one image of descriptor type `ty` at binding 0,
+/// for compute: a storage image (a target) or a sampled image (a depth test's engine depth).
+pub fn single_image_set_layout(
+    ctx: &Context,
+    ty: vk::DescriptorType,
+) -> Result<vk::DescriptorSetLayout> {
     let bindings = [vk::DescriptorSetLayoutBinding::default()
         .binding(0)
-        .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+        .descriptor_type(ty)
         .descriptor_count(1)
         .stage_flags(vk::ShaderStageFlags::COMPUTE)];
     let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);

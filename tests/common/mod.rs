@@ -401,3 +401,15 @@ pub fn zip_members(members: &[(String, Vec<u8>)]) -> Vec<u8> {
     }
     w.finish().unwrap().into_inner()
 }
+
+/// The Gaussians `keep` of `s` (indices in order), as a scene of their own.
+pub fn subset(s: &rara::Scene, keep: &[usize]) -> rara::Scene {
+    rara::Scene {
+        means: keep.iter().map(|&i| s.means[i]).collect(),
+        opacities: keep.iter().map(|&i| s.opacities[i]).collect(),
+        scales: keep.iter().map(|&i| s.scales[i]).collect(),
+        rotations: keep.iter().map(|&i| s.rotations[i]).collect(),
+        sh_degree: s.sh_degree,
+        sh: keep.iter().flat_map(|&i| s.sh_of(i).to_vec()).collect(),
+    }
+}
