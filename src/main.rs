@@ -191,6 +191,15 @@ struct RenderArgs {
     /// frame).
     #[arg(long, value_enum, default_value_t = TracerArg::Raster)]
     tracer: TracerArg,
+    /// Also write the splats' depth (SPEC section 9): OUT.exr (32-bit float view depth,
+    /// infinity where there is none) or OUT.png (16-bit grey, the depths' range spread over
+    /// 0..65534, 65535 where there is none; the range is printed). Rasterizer only.
+    #[arg(long, value_name = "OUT.{exr,png}")]
+    depth: Option<PathBuf>,
+    /// Which depth --depth writes: median (where the accumulated alpha reaches 0.5) or mean
+    /// (alpha-weighted).
+    #[arg(long, value_enum, default_value_t = cli::depth::DepthModeArg::Median)]
+    depth_mode: cli::depth::DepthModeArg,
     #[command(flatten)]
     clip: ClipArgs,
 }
@@ -333,6 +342,11 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         if !args.clip.is_empty() {
             return Err(cli::scene::no_clip_options("clip options"));
         }
+        if args.depth.is_some() {
+            return Err(Error::InvalidInput(
+                "--depth writes the rasterizer's depth; a scene file is ray traced".into(),
+            ));
+        }
         let output = Output::prepare(&args.output, &["png"])?;
         return cli::scene::render(
             file,
@@ -359,14 +373,28 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
                 .into(),
         ));
     }
+    if args.depth.is_some() && options.tracer == rara::Tracer::Ray {
+        return Err(Error::InvalidInput(
+            "--depth writes the rasterizer's depth, not the ray tracer's".into(),
+        ));
+    }
     let output = Output::prepare(&args.output, &["png"])?;
+    let depth_output = args.depth.as_deref().map(cli::depth::prepare).transpose()?;
+    let depth_mode = rara::DepthMode::from(args.depth_mode);
     let scene = load_scene(scene_path)?;
     if options.clip.region.is_some() {
         eprintln!("{}", describe(&options.clip));
     }
     if args.reference {
         let start = std::time::Instant::now();
-        let img = rara::reference::render(&scene, &camera, &options);
+        let splats = rara::reference::project::project_all(&scene, &camera, &options.clip);
+        let (img, median, mean) = rara::reference::rasterize::rasterize_depth(
+            &splats,
+            &camera,
+            options.background,
+            &options.clip,
+            None,
+        );
         warn_oversized(
             rara::reference::project::count_oversized(&scene, &camera, &options.clip),
             scene.len(),
@@ -379,6 +407,15 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             camera.height,
             start.elapsed().as_secs_f64() * 1e3
         );
+        if let Some(out) = depth_output {
+            let depths = if depth_mode == rara::DepthMode::Median {
+                median
+            } else {
+                mean
+            };
+            let size = (camera.width, camera.height);
+            println!("{}", cli::depth::write(out, &depths, size, depth_mode)?);
+        }
         return Ok(());
     }
     let ctx = Context::from_env()?;
@@ -394,10 +431,24 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     drop(scene); // the device copy is all the GPU path needs
     let gpu_scene = uploaded.inspect_err(|_| spinner.finish_and_clear())?;
     spinner.set_message(format!("rendering {}x{}", camera.width, camera.height));
-    let rendered = renderer.render(&gpu_scene, &camera, &options);
+    let rendered = match depth_output {
+        Some(_) => renderer
+            .render_with_depth(&gpu_scene, &camera, &options, depth_mode)
+            .map(|(img, depths, stats)| (img, Some(depths), stats)),
+        None => renderer
+            .render(&gpu_scene, &camera, &options)
+            .map(|(img, stats)| (img, None, stats)),
+    };
     spinner.finish_and_clear();
-    let (img, stats) = rendered?;
+    let (img, depths, stats) = rendered?;
     output.write_png(&img)?;
+    let depth_line = match (depth_output, depths) {
+        (Some(out), Some(depths)) => {
+            let size = (camera.width, camera.height);
+            Some(cli::depth::write(out, &depths, size, depth_mode)?)
+        }
+        _ => None,
+    };
     if let Some(t) = &stats.trace {
         println!(
             "wrote {} ({}x{}) on {}: ray traced, per ray {:.1} hits composited (p99 {}), {:.1} \
@@ -419,6 +470,9 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         );
     } else {
         print_raster_counts(&args.output, &camera, &ctx, &gpu_scene, &stats);
+    }
+    if let Some(line) = depth_line {
+        println!("{line}");
     }
     println!(
         "{}",

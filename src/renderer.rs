@@ -453,6 +453,16 @@ impl Renderer {
     ///   and accesses. The target is not touched before that pass.
     /// - **Image layout**: an image target must be in `VK_IMAGE_LAYOUT_GENERAL` when the
     ///   commands execute, and is left in it.
+    /// - **Depth test** ([`RenderOptions::depth_test`]): the engine's depth image or buffer is
+    ///   read by the "depth prepare" pass only (first and last access), stage
+    ///   `COMPUTE_SHADER`, access `SHADER_READ_BIT`; an image in the layout its
+    ///   [`crate::DepthSource::Image`] names (`DEPTH_STENCIL_READ_ONLY_OPTIMAL`,
+    ///   `DEPTH_READ_ONLY_OPTIMAL`, `SHADER_READ_ONLY_OPTIMAL` or `GENERAL`), left in it. The
+    ///   caller's barrier before: from its depth writes (`LATE_FRAGMENT_TESTS`,
+    ///   `DEPTH_STENCIL_ATTACHMENT_WRITE`) to `COMPUTE_SHADER` reads, with the transition.
+    /// - **Depth output** ([`RenderOptions::depth_output`]): written by the "write depth" pass
+    ///   only, after the write-target pass, stage `COMPUTE_SHADER`, access `SHADER_WRITE_BIT`;
+    ///   an `R32_SFLOAT` image in `GENERAL`.
     /// - **The caller's barriers**: before, one that makes the caller's earlier writes to the
     ///   target (a clear, a draw) available to `COMPUTE_SHADER` reads/writes and transitions an
     ///   image to `GENERAL`; after, one from `COMPUTE_SHADER` / `SHADER_WRITE` to whatever

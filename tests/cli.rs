@@ -1189,3 +1189,69 @@ fn render_with_the_ray_tracer() {
         &["rara::reference::raytrace"],
     );
 }
+
+/// `render --depth`: an EXR of the view depths and a 16-bit PNG of the same depths spread over
+/// the printed range, from the GPU and from the CPU reference (which agree), and the errors of
+/// a bad name, the ray tracer and a scene file.
+#[test]
+fn render_writes_depth_as_exr_and_16_bit_png() {
+    let (scene, cams) = good_scene();
+    let (scene, cams) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    let d = dir();
+    let png = d.join("depth_view.png");
+    let png = png.to_str().unwrap();
+    let mut depths = Vec::new();
+    for (name, extra) in [("gpu", &[][..]), ("cpu", &["--reference"][..])] {
+        let exr = d.join(format!("depth_{name}.exr"));
+        let depth_png = d.join(format!("depth_{name}.png"));
+        for out in [&exr, &depth_png] {
+            let mut args = render_args(scene, cams, png);
+            args.extend(["--depth", out.to_str().unwrap()]);
+            args.extend(extra);
+            let o = rara(&args);
+            assert_success(&o);
+            let stdout = String::from_utf8_lossy(&o.stdout);
+            assert!(stdout.contains("median view depth of"), "{stdout}");
+        }
+        let exr_img = image::open(&exr).unwrap().to_rgb32f();
+        let z: Vec<f32> = exr_img.pixels().map(|p| p.0[0]).collect();
+        assert_eq!((exr_img.width(), exr_img.height()), (64, 48));
+        let finite: Vec<f32> = z.iter().copied().filter(|v| v.is_finite()).collect();
+        assert!(finite.len() > 100, "{} pixels with a depth", finite.len());
+        // The shell has radius 1 around the origin and the camera stands 3 away.
+        assert!(
+            finite.iter().all(|&v| (1.5..=4.5).contains(&v)),
+            "{finite:?}"
+        );
+        let lo = finite.iter().copied().fold(f32::MAX, f32::min);
+        let hi = finite.iter().copied().fold(f32::MIN, f32::max);
+        let levels = image::open(&depth_png).unwrap().to_luma16();
+        for (v, l) in z.iter().zip(levels.pixels()) {
+            let want = if v.is_finite() {
+                ((v - lo) / (hi - lo) * 65534.0).round() as u16
+            } else {
+                65535
+            };
+            assert_eq!(l.0[0], want, "depth {v}");
+        }
+        depths.push(z);
+    }
+    let (gpu, cpu) = (&depths[0], &depths[1]);
+    let close = gpu
+        .iter()
+        .zip(cpu)
+        .filter(|(a, b)| a == b || (*a - *b).abs() <= 1e-4 * b.abs())
+        .count();
+    assert!(
+        close * 100 >= gpu.len() * 99,
+        "{close} of {} agree",
+        gpu.len()
+    );
+
+    let mut args = render_args(scene, cams, png);
+    args.extend(["--depth", "d.tiff"]);
+    assert_error(&rara(&args), &["d.tiff"]);
+    let mut args = render_args(scene, cams, png);
+    args.extend(["--depth", "d.exr", "--tracer", "ray"]);
+    assert_error(&rara(&args), &["--depth", "ray tracer"]);
+}

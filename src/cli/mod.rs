@@ -4,6 +4,7 @@ pub mod bench;
 pub mod clip_args;
 pub mod convert;
 pub mod demo;
+pub mod depth;
 pub mod flatten;
 pub mod mesh;
 pub mod output;
