@@ -70,7 +70,7 @@ pub use depth::{DepthMode, DepthOutput, DepthProjection, DepthSource, DepthTarge
 pub use error::{Error, Result};
 pub use frame::{FrameMemory, FrameSlot};
 pub use precision::ShPrecision;
-pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer, Tracer};
+pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer, Tracer, View};
 pub use scene::Scene;
 pub use target::{Composite, Target, TargetFormat};
 pub use timing::PassTimer;

@@ -691,6 +691,63 @@ impl Renderer {
     }
 }
 
+/// One view of [`Renderer::record_views`]: a camera, the target it is drawn into (the camera's
+/// size) and the frame slot that holds its working buffers.
+pub struct View<'a> {
+    /// The view's camera.
+    pub camera: Camera,
+    /// Where it is drawn.
+    pub target: Target,
+    /// Its working buffers (one slot per view and frame in flight).
+    pub slot: &'a mut FrameSlot,
+    /// Its pass timings, when wanted.
+    pub timer: Option<&'a mut PassTimer>,
+    /// Its depth test against the engine's depth of this view ([`RenderOptions::depth_test`]).
+    pub depth_test: Option<DepthTest>,
+    /// Its depth output ([`RenderOptions::depth_output`]).
+    pub depth_output: Option<DepthOutput>,
+}
+
+impl Renderer {
+    /// Records several views of one scene (stereo eyes, cube faces) into `cmd`, each exactly as
+    /// [`Renderer::record`] records it alone, one after the other. The views share the scene on
+    /// the device and the renderer's kernels; every stage from project on depends on the camera
+    /// (the projection, the SH colour's view direction, the depth order, the tiles), so each
+    /// view has its own slot and passes. `options` applies to every view but for the depth
+    /// test and the depth output, which each view names for itself (those of `options` must be
+    /// `None`). The synchronisation contract is `record`'s, per view and target.
+    pub fn record_views(
+        &self,
+        cmd: vk::CommandBuffer,
+        scene: &GpuScene,
+        views: &mut [View],
+        options: &RenderOptions,
+    ) -> Result<()> {
+        if options.depth_test.is_some() || options.depth_output.is_some() {
+            return Err(Error::InvalidInput(
+                "record_views: a depth test or depth output names one view's image; give each \
+                 view its own (View::depth_test, View::depth_output)"
+                    .into(),
+            ));
+        }
+        let mut per_view = options.clone();
+        for view in views.iter_mut() {
+            per_view.depth_test = view.depth_test;
+            per_view.depth_output = view.depth_output;
+            self.record(
+                cmd,
+                view.slot,
+                scene,
+                &view.camera,
+                &per_view,
+                &view.target,
+                view.timer.as_deref_mut(),
+            )?;
+        }
+        Ok(())
+    }
+}
+
 /// What a frame with a depth test or a depth output binds: the engine's depth (a buffer
 /// address, or a descriptor set of its image) and the depth output's target (likewise).
 struct DepthBindings {

@@ -500,3 +500,131 @@ fn depth_images_test_as_their_buffers_do() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+/// Several views in one `record_views` call (two stereo eyes 6 cm apart and a cube face, each
+/// into a buffer target of its own, the second eye depth-tested against a surface) equal the
+/// same views rendered one at a time, bit for bit.
+#[test]
+fn several_views_equal_single_renders() {
+    use rara::{FrameSlot, Target, TargetFormat, View};
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let (scene, base) = scene_and_camera();
+    let gpu = renderer.upload(&scene).unwrap();
+    let right = base.rotation * Vec3::X;
+    let eye = |dx: f32| Camera {
+        position: base.position + dx * right,
+        ..base
+    };
+    let face = Camera::look_at(
+        base.position,
+        Vec3::new(0.3, 0.0, 0.0),
+        Vec3::NEG_Y,
+        90.0,
+        96,
+        96,
+    )
+    .unwrap();
+    let cameras = [eye(-0.03), eye(0.03), face];
+    let projection = DepthProjection {
+        near: 0.05,
+        far: 50.0,
+        reversed: false,
+        infinite: false,
+    };
+    let surface = device_floats(
+        &ctx,
+        &vec![projection.depth_value(3.0); (base.width * base.height) as usize],
+    );
+    let depth_test = DepthTest {
+        source: DepthSource::Buffer {
+            buffer: surface.raw,
+            offset: 0,
+        },
+        projection,
+    };
+    let targets: Vec<Buffer> = cameras
+        .iter()
+        .map(|c| {
+            Buffer::new(
+                &ctx,
+                "view target",
+                (c.width * c.height * 4) as u64,
+                MemoryLocation::GpuToCpu,
+            )
+            .unwrap()
+        })
+        .collect();
+    let mut slots: Vec<FrameSlot> = cameras
+        .iter()
+        .map(|_| FrameSlot::new(&ctx).unwrap())
+        .collect();
+    let options = RenderOptions {
+        background: Vec3::new(0.1, 0.2, 0.3),
+        ..RenderOptions::default()
+    };
+    ctx.run_commands(|cmd| {
+        let mut views: Vec<View> = slots
+            .iter_mut()
+            .zip(&cameras)
+            .zip(&targets)
+            .enumerate()
+            .map(|(k, ((slot, camera), target))| View {
+                camera: *camera,
+                target: Target::Buffer {
+                    buffer: target.raw,
+                    offset: 0,
+                    format: TargetFormat::Rgba8Unorm,
+                    width: camera.width,
+                    height: camera.height,
+                },
+                slot,
+                timer: None,
+                depth_test: (k == 1).then_some(depth_test),
+                depth_output: None,
+            })
+            .collect();
+        renderer
+            .record_views(cmd, &gpu, &mut views, &options)
+            .unwrap();
+        // Make the writes visible to the host.
+        unsafe {
+            let barrier = vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+                .dst_access_mask(vk::AccessFlags::HOST_READ);
+            ctx.device().cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::HOST,
+                vk::DependencyFlags::empty(),
+                &[barrier],
+                &[],
+                &[],
+            );
+        }
+    })
+    .unwrap();
+    for (k, camera) in cameras.iter().enumerate() {
+        assert!(slots[k].stats().unwrap().complete);
+        let single = RenderOptions {
+            depth_test: (k == 1).then_some(depth_test),
+            ..options.clone()
+        };
+        let (alone, _) = renderer.render(&gpu, camera, &single).unwrap();
+        let bytes = (camera.width * camera.height * 4) as usize;
+        let together = image::RgbaImage::from_raw(
+            camera.width,
+            camera.height,
+            targets[k].mapped()[..bytes].to_vec(),
+        )
+        .unwrap();
+        assert_eq!(together, alone, "view {k} differs from its single render");
+    }
+    let (left, right_eye) = (
+        renderer.render(&gpu, &cameras[0], &options).unwrap().0,
+        renderer.render(&gpu, &cameras[1], &options).unwrap().0,
+    );
+    assert_ne!(left, right_eye, "the eyes see the same image");
+    drop(slots);
+    common::assert_no_validation_messages(&ctx);
+}

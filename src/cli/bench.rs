@@ -71,6 +71,14 @@ pub enum BenchMode {
     Hard,
     /// RaRa clipping by the sweeping plane.
     Rara,
+    /// No clipping, depth-tested against an engine surface (SPEC section 9) behind every
+    /// Gaussian (a flat depth buffer at twice the farthest centre's view depth, standard
+    /// projection, near 0.01, far 1000): every splat is tested and none hidden, so the row
+    /// shows what the test costs.
+    Depth,
+    /// No clipping, two views (the camera and a second eye 6.4 cm to its right), their frame
+    /// times added: what `Renderer::record_views` costs for a stereo pair.
+    Views2,
 }
 
 impl BenchMode {
@@ -79,6 +87,8 @@ impl BenchMode {
             BenchMode::Original => "original",
             BenchMode::Hard => "hard",
             BenchMode::Rara => "rara",
+            BenchMode::Depth => "depth",
+            BenchMode::Views2 => "2 views",
         }
     }
 }
@@ -229,6 +239,43 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         normal.y,
         normal.z
     );
+    // The engine surface of the depth mode, and the second eye of the two-view mode.
+    let projection = rara::DepthProjection {
+        near: 0.01,
+        far: 1000.0,
+        reversed: false,
+        infinite: false,
+    };
+    let surface = {
+        let z: Vec<f32> = scene
+            .means
+            .iter()
+            .map(|m| (camera.rotation.transpose() * (*m - camera.position)).z)
+            .filter(|z| *z > 0.2)
+            .collect();
+        let behind = 2.0 * z.iter().copied().fold(1.0, f32::max);
+        let pixels = (camera.width * camera.height) as usize;
+        let values = vec![projection.depth_value(behind); pixels];
+        let buffer = rara::vk::Buffer::new(
+            &ctx,
+            "bench engine depth",
+            pixels as u64 * 4,
+            rara::vk::MemoryLocation::GpuOnly,
+        )?;
+        buffer.upload(bytemuck::cast_slice(&values))?;
+        buffer
+    };
+    let depth_test = rara::DepthTest {
+        source: rara::DepthSource::Buffer {
+            buffer: surface.raw,
+            offset: 0,
+        },
+        projection,
+    };
+    let second_eye = rara::Camera {
+        position: camera.position + 0.064 * (camera.rotation * glam::Vec3::X),
+        ..camera
+    };
     let tracers: &[rara::Tracer] = match args.tracer {
         crate::TracerArg::Raster => &[rara::Tracer::Raster],
         crate::TracerArg::Ray => &[rara::Tracer::Raster, rara::Tracer::Ray],
@@ -266,9 +313,25 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let options = RenderOptions {
                 clip: clip_for(result.mode, &base, moving),
                 tracer: result.tracer,
+                depth_test: (result.mode == BenchMode::Depth).then_some(depth_test),
                 ..RenderOptions::default()
             };
-            let (_, stats) = renderer.render(&gpu_scene, &camera, &options)?;
+            if result.mode == BenchMode::Depth && result.tracer == rara::Tracer::Ray {
+                return Err(Error::InvalidInput(
+                    "bench: the depth mode is the rasterizer's (--tracer raster)".into(),
+                ));
+            }
+            let (_, mut stats) = renderer.render(&gpu_scene, &camera, &options)?;
+            if result.mode == BenchMode::Views2 {
+                // The second view's frame, the same work for another camera: its passes and
+                // times add to the first's.
+                let (_, other) = renderer.render(&gpu_scene, &second_eye, &options)?;
+                stats.gpu_ms += other.gpu_ms;
+                stats.wall_ms += other.wall_ms;
+                for (mine, theirs) in stats.passes.iter_mut().zip(&other.passes) {
+                    mine.ms += theirs.ms;
+                }
+            }
             if k >= args.warmup {
                 result.frames.push(stats);
             }
@@ -299,7 +362,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 fn clip_for(mode: BenchMode, base: &Clip, moving: Plane) -> Clip {
     let mut clip = with_moving_plane(base, moving);
     clip.mode = match mode {
-        BenchMode::Original => ClipMode::None,
+        BenchMode::Original | BenchMode::Depth | BenchMode::Views2 => ClipMode::None,
         BenchMode::Hard => ClipMode::Hard,
         BenchMode::Rara => ClipMode::Rara,
     };
@@ -392,6 +455,14 @@ fn print_table(
     }
     if let Some(paired) = paired_ratio(results, BenchMode::Rara, BenchMode::Hard) {
         println!("rara / hard, median of the per-frame ratios (same plane position): {paired:.3}");
+    }
+    for (mode, what) in [
+        (BenchMode::Depth, "depth-tested / original"),
+        (BenchMode::Views2, "2 views / original"),
+    ] {
+        if let Some(paired) = paired_ratio(results, mode, BenchMode::Original) {
+            println!("{what}, median of the per-frame ratios: {paired:.3}");
+        }
     }
     print_trace_table(results);
     if let Some(r) = raster(BenchMode::Rara) {
