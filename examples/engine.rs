@@ -1,11 +1,13 @@
 //! rara inside an engine that owns everything: this program plays the engine.
 //!
 //! It creates its own Vulkan instance (with the validation layer when installed), device,
-//! queue, command pool and storage images, lends the device to rara with
+//! queue, command pool, colour and depth images, lends the device to rara with
 //! `Context::borrowed`, and renders frames with two in flight. Each frame, in one command
-//! buffer of the engine's: clear the image, a rara draw composited over it with a clip plane
-//! that moves from frame to frame, a small compute pass of the engine's own (a vignette), and a
-//! copy for read-back. Each finished frame is written as `engine_frame_<i>.png`.
+//! buffer of the engine's: a mesh pass of its own (a lit cube, drawn by a graphics pipeline
+//! into colour and depth attachments, depth-tested), a rara draw composited over it with the
+//! depth test against the cube's depth (SPEC section 9) and a clip plane that moves from frame
+//! to frame, a small compute pass of the engine's own (a vignette), and copies for read-back.
+//! Each finished frame is written as `engine_frame_<i>.png`.
 //!
 //! Run: `cargo run --release --example engine [OUTPUT_DIR] [--ray]` (default
 //! `target/engine-out`, so that nothing lands in the checkout; `--ray` draws with the ray
@@ -33,6 +35,11 @@ const IN_FLIGHT: usize = 2;
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 240;
 const FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// The engine's projection planes (standard depth: 0 at the near plane, 1 at the far plane).
+pub const NEAR: f32 = 0.1;
+/// See [`NEAR`].
+pub const FAR: f32 = 20.0;
 /// The engine's clear colour: the rara draw goes over it.
 const CLEAR: [f32; 4] = [0.10, 0.12, 0.20, 1.0];
 
@@ -51,6 +58,76 @@ void main() {
 }
 "#;
 
+/// The engine's mesh pass: a cube of half size 1 made from the vertex index (36 vertices, no
+/// vertex buffer), transformed by the push constants.
+const CUBE_VERT_GLSL: &str = r#"
+#version 450
+layout(push_constant) uniform Push { mat4 clip_from_model; mat4 world_from_model; } pc;
+layout(location = 0) out vec3 normal;
+const vec3 NORMALS[6] = vec3[](vec3(1, 0, 0), vec3(-1, 0, 0), vec3(0, 1, 0), vec3(0, -1, 0),
+                               vec3(0, 0, 1), vec3(0, 0, -1));
+const vec2 CORNERS[6] = vec2[](vec2(-1, -1), vec2(1, -1), vec2(1, 1), vec2(-1, -1), vec2(1, 1),
+                               vec2(-1, 1));
+void main() {
+    vec3 n = NORMALS[gl_VertexIndex / 6];
+    vec2 c = CORNERS[gl_VertexIndex % 6];
+    vec3 a = abs(n.x) > 0.5 ? vec3(0, 1, 0) : vec3(1, 0, 0);
+    vec3 b = cross(n, a);
+    vec3 p = n + c.x * a + c.y * b;
+    gl_Position = pc.clip_from_model * vec4(p, 1.0);
+    normal = mat3(pc.world_from_model) * n;
+}
+"#;
+
+/// Lambert shading of the cube under one directional light, plus ambient.
+const CUBE_FRAG_GLSL: &str = r#"
+#version 450
+layout(location = 0) in vec3 normal;
+layout(location = 0) out vec4 color;
+void main() {
+    vec3 light = normalize(vec3(-0.4, -0.8, -0.45));
+    float lit = 0.25 + 0.75 * max(dot(normalize(normal), light), 0.0);
+    color = vec4(vec3(0.35, 0.75, 0.9) * lit, 1.0);
+}
+"#;
+
+/// The cube's model matrix: half size 0.3, turned 35 degrees about y and 20 about x, its
+/// centre inside the demo scene's shell, beside its core.
+pub fn cube_model() -> glam::Mat4 {
+    glam::Mat4::from_scale_rotation_translation(
+        Vec3::splat(0.3),
+        glam::Quat::from_rotation_y(35f32.to_radians())
+            * glam::Quat::from_rotation_x(20f32.to_radians()),
+        Vec3::new(0.35, 0.1, 0.05),
+    )
+}
+
+/// The engine's projection for rara's camera (SPEC section 2): camera space is x right, y
+/// down, z forward, which is Vulkan's clip space up to the focal lengths; depth is standard,
+/// `d = FAR (z - NEAR) / (z (FAR - NEAR))`, what `rara::DepthProjection` undoes.
+pub fn clip_from_world(camera: &Camera) -> glam::Mat4 {
+    let (w, h) = (camera.width as f32, camera.height as f32);
+    let projection = glam::Mat4::from_cols(
+        glam::Vec4::new(2.0 * camera.fx / w, 0.0, 0.0, 0.0),
+        glam::Vec4::new(0.0, 2.0 * camera.fy / h, 0.0, 0.0),
+        glam::Vec4::new(0.0, 0.0, FAR / (FAR - NEAR), 1.0),
+        glam::Vec4::new(0.0, 0.0, -FAR * NEAR / (FAR - NEAR), 0.0),
+    );
+    let r = camera.rotation.transpose();
+    let view = glam::Mat4::from_mat3(r) * glam::Mat4::from_translation(-camera.position);
+    projection * view
+}
+
+/// The depth projection rara is told of.
+pub fn depth_projection() -> rara::DepthProjection {
+    rara::DepthProjection {
+        near: NEAR,
+        far: FAR,
+        reversed: false,
+        infinite: false,
+    }
+}
+
 /// What a run did, for the caller (and the test that runs this example).
 pub struct EngineReport {
     /// The PNGs written, in frame order.
@@ -66,6 +143,9 @@ pub struct EngineReport {
     pub validation_messages: Vec<String>,
     /// Whether the validation layer was on.
     pub validation: bool,
+    /// Per frame, what the mesh pass left before rara drew: the colour image and the depth
+    /// values (D32, rows top first).
+    pub mesh: Vec<(image::RgbaImage, Vec<f32>)>,
 }
 
 static MESSAGES: Mutex<Vec<String>> = Mutex::new(Vec::new());
@@ -98,7 +178,7 @@ pub struct Engine {
     pub physical_device: vk::PhysicalDevice,
     /// The device.
     pub device: ash::Device,
-    /// A compute queue family.
+    /// A graphics and compute queue family.
     pub queue_family: u32,
     /// Its first queue.
     pub queue: vk::Queue,
@@ -146,17 +226,18 @@ impl Engine {
             None
         };
 
-        // The first device that meets rara's requirements, and a compute queue on it.
+        // The first device that meets rara's requirements, and a graphics and compute queue on
+        // it.
         let mut chosen = None;
         for pd in unsafe { instance.enumerate_physical_devices()? } {
             if unsafe { requirements.check_physical_device(&instance, pd) }.is_err() {
                 continue;
             }
             let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-            if let Some(f) = families
-                .iter()
-                .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            {
+            if let Some(f) = families.iter().position(|f| {
+                f.queue_flags
+                    .contains(vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS)
+            }) {
                 chosen = Some((pd, f as u32));
                 break;
             }
@@ -241,10 +322,16 @@ struct FrameObjects {
     view: vk::ImageView,
     readback: vk::Buffer,
     readback_memory: vk::DeviceMemory,
+    depth_image: vk::Image,
+    depth_memory: vk::DeviceMemory,
+    depth_view: vk::ImageView,
+    framebuffer: vk::Framebuffer,
+    /// The mesh pass's colour and depth, copied out before rara draws.
+    mesh_readback: vk::Buffer,
+    mesh_readback_memory: vk::DeviceMemory,
     vignette_set: vk::DescriptorSet,
     /// The frame index this slot last rendered, not yet written out.
     pending: Option<usize>,
-    initialised: bool,
 }
 
 /// Runs the engine for `frame_count` frames, writing PNGs to `out_dir`.
@@ -344,6 +431,175 @@ pub fn run(
         )?
     };
 
+    // The mesh pass: a render pass that clears colour and depth and leaves both in GENERAL for
+    // the compute passes and copies after it, and the cube's graphics pipeline.
+    let render_pass = unsafe {
+        let attachments = [
+            vk::AttachmentDescription::default()
+                .format(FORMAT)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .initial_layout(vk::ImageLayout::UNDEFINED)
+                .final_layout(vk::ImageLayout::GENERAL),
+            vk::AttachmentDescription::default()
+                .format(DEPTH_FORMAT)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .initial_layout(vk::ImageLayout::UNDEFINED)
+                .final_layout(vk::ImageLayout::GENERAL),
+        ];
+        let color_ref = [vk::AttachmentReference {
+            attachment: 0,
+            layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        }];
+        let depth_ref = vk::AttachmentReference {
+            attachment: 1,
+            layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+        };
+        let subpasses = [vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&color_ref)
+            .depth_stencil_attachment(&depth_ref)];
+        // In: the previous frame's copies and compute passes on these images are done before
+        // the attachments are cleared. Out: the attachments' writes are visible to rara's
+        // compute passes (the depth prepare pass reads the depth, write target the colour) and
+        // to the copies.
+        let dependencies = [
+            vk::SubpassDependency::default()
+                .src_subpass(vk::SUBPASS_EXTERNAL)
+                .dst_subpass(0)
+                .src_stage_mask(
+                    vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER,
+                )
+                .src_access_mask(vk::AccessFlags::empty())
+                .dst_stage_mask(
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS,
+                )
+                .dst_access_mask(
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                ),
+            vk::SubpassDependency::default()
+                .src_subpass(0)
+                .dst_subpass(vk::SUBPASS_EXTERNAL)
+                .src_stage_mask(
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                        | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS,
+                )
+                .src_access_mask(
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                )
+                .dst_stage_mask(
+                    vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+                )
+                .dst_access_mask(
+                    vk::AccessFlags::SHADER_READ
+                        | vk::AccessFlags::SHADER_WRITE
+                        | vk::AccessFlags::TRANSFER_READ,
+                ),
+        ];
+        device.create_render_pass(
+            &vk::RenderPassCreateInfo::default()
+                .attachments(&attachments)
+                .subpasses(&subpasses)
+                .dependencies(&dependencies),
+            None,
+        )?
+    };
+    let mesh_layout = unsafe {
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::VERTEX)
+            .offset(0)
+            .size(128)];
+        device.create_pipeline_layout(
+            &vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges),
+            None,
+        )?
+    };
+    let mesh_pipeline = {
+        let compiler = shaderc::Compiler::new()?;
+        let mut modules = Vec::new();
+        for (source, kind, name) in [
+            (CUBE_VERT_GLSL, shaderc::ShaderKind::Vertex, "cube.vert"),
+            (CUBE_FRAG_GLSL, shaderc::ShaderKind::Fragment, "cube.frag"),
+        ] {
+            let spirv = compiler.compile_into_spirv(source, kind, name, "main", None)?;
+            modules.push(unsafe {
+                device.create_shader_module(
+                    &vk::ShaderModuleCreateInfo::default().code(spirv.as_binary()),
+                    None,
+                )?
+            });
+        }
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(modules[0])
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(modules[1])
+                .name(c"main"),
+        ];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewports = [vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: WIDTH as f32,
+            height: HEIGHT as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }];
+        let scissors = [vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: WIDTH,
+                height: HEIGHT,
+            },
+        }];
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewports(&viewports)
+            .scissors(&scissors);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS);
+        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let info = [vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .layout(mesh_layout)
+            .render_pass(render_pass)
+            .subpass(0)];
+        let pipeline =
+            unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
+        for m in modules {
+            unsafe { device.destroy_shader_module(m, None) };
+        }
+        pipeline.map_err(|(_, e)| e)?[0]
+    };
+
     let mut frames = Vec::new();
     for &cmd in &cmds {
         let image = unsafe {
@@ -362,6 +618,7 @@ pub fn run(
                     .tiling(vk::ImageTiling::OPTIMAL)
                     .usage(
                         vk::ImageUsageFlags::STORAGE
+                            | vk::ImageUsageFlags::COLOR_ATTACHMENT
                             | vk::ImageUsageFlags::TRANSFER_SRC
                             | vk::ImageUsageFlags::TRANSFER_DST,
                     ),
@@ -396,6 +653,69 @@ pub fn run(
             vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
         )?;
         unsafe { device.bind_buffer_memory(readback, readback_memory, 0)? };
+        // The depth attachment, sampled by rara's depth test and copied out for the test.
+        let depth_image = unsafe {
+            device.create_image(
+                &vk::ImageCreateInfo::default()
+                    .image_type(vk::ImageType::TYPE_2D)
+                    .format(DEPTH_FORMAT)
+                    .extent(vk::Extent3D {
+                        width: WIDTH,
+                        height: HEIGHT,
+                        depth: 1,
+                    })
+                    .mip_levels(1)
+                    .array_layers(1)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .tiling(vk::ImageTiling::OPTIMAL)
+                    .usage(
+                        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                            | vk::ImageUsageFlags::SAMPLED
+                            | vk::ImageUsageFlags::TRANSFER_SRC,
+                    ),
+                None,
+            )?
+        };
+        let depth_memory = engine.allocate(
+            unsafe { device.get_image_memory_requirements(depth_image) },
+            vk::MemoryPropertyFlags::DEVICE_LOCAL,
+        )?;
+        unsafe { device.bind_image_memory(depth_image, depth_memory, 0)? };
+        let depth_view = unsafe {
+            device.create_image_view(
+                &vk::ImageViewCreateInfo::default()
+                    .image(depth_image)
+                    .view_type(vk::ImageViewType::TYPE_2D)
+                    .format(DEPTH_FORMAT)
+                    .subresource_range(depth_range()),
+                None,
+            )?
+        };
+        let framebuffer = unsafe {
+            let attachments = [view, depth_view];
+            device.create_framebuffer(
+                &vk::FramebufferCreateInfo::default()
+                    .render_pass(render_pass)
+                    .attachments(&attachments)
+                    .width(WIDTH)
+                    .height(HEIGHT)
+                    .layers(1),
+                None,
+            )?
+        };
+        let mesh_readback = unsafe {
+            device.create_buffer(
+                &vk::BufferCreateInfo::default()
+                    .size(WIDTH as u64 * HEIGHT as u64 * 8)
+                    .usage(vk::BufferUsageFlags::TRANSFER_DST),
+                None,
+            )?
+        };
+        let mesh_readback_memory = engine.allocate(
+            unsafe { device.get_buffer_memory_requirements(mesh_readback) },
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
+        )?;
+        unsafe { device.bind_buffer_memory(mesh_readback, mesh_readback_memory, 0)? };
         let vignette_set = unsafe {
             let layouts = [set_layout];
             device.allocate_descriptor_sets(
@@ -431,9 +751,14 @@ pub fn run(
             view,
             readback,
             readback_memory,
+            depth_image,
+            depth_memory,
+            depth_view,
+            framebuffer,
+            mesh_readback,
+            mesh_readback_memory,
             vignette_set,
             pending: None,
-            initialised: false,
         });
     }
 
@@ -446,6 +771,7 @@ pub fn run(
         leaks: Vec::new(),
         validation_messages: Vec::new(),
         validation,
+        mesh: Vec::new(),
     };
     {
         let ctx = unsafe {
@@ -500,6 +826,22 @@ pub fn run(
                 device.unmap_memory(f.readback_memory);
                 bytes
             };
+            let mesh = unsafe {
+                let ptr = device.map_memory(
+                    f.mesh_readback_memory,
+                    0,
+                    vk::WHOLE_SIZE,
+                    vk::MemoryMapFlags::empty(),
+                )?;
+                let len = WIDTH as usize * HEIGHT as usize * 4;
+                let bytes = std::slice::from_raw_parts(ptr as *const u8, 2 * len);
+                let color = image::RgbaImage::from_raw(WIDTH, HEIGHT, bytes[..len].to_vec())
+                    .ok_or("image size")?;
+                let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes[len..]);
+                device.unmap_memory(f.mesh_readback_memory);
+                (color, depth)
+            };
+            report.mesh.push(mesh);
             let path = out_dir.join(format!("engine_frame_{index}.png"));
             image::RgbaImage::from_raw(WIDTH, HEIGHT, bytes)
                 .ok_or("image size")?
@@ -549,48 +891,107 @@ pub fn run(
                     &vk::CommandBufferBeginInfo::default()
                         .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                 )?;
-                // Clear: UNDEFINED (first use) or last frame's copy source -> GENERAL.
+                // The mesh pass: the cube into the cleared colour and depth attachments, both
+                // left in GENERAL (the render pass's dependency makes its writes visible to the
+                // compute passes and copies that follow).
+                let clears = [
+                    vk::ClearValue {
+                        color: vk::ClearColorValue { float32: CLEAR },
+                    },
+                    vk::ClearValue {
+                        depth_stencil: vk::ClearDepthStencilValue {
+                            depth: 1.0,
+                            stencil: 0,
+                        },
+                    },
+                ];
+                device.cmd_begin_render_pass(
+                    cmd,
+                    &vk::RenderPassBeginInfo::default()
+                        .render_pass(render_pass)
+                        .framebuffer(f.framebuffer)
+                        .render_area(vk::Rect2D {
+                            offset: vk::Offset2D { x: 0, y: 0 },
+                            extent: vk::Extent2D {
+                                width: WIDTH,
+                                height: HEIGHT,
+                            },
+                        })
+                        .clear_values(&clears),
+                    vk::SubpassContents::INLINE,
+                );
+                device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, mesh_pipeline);
+                let model = cube_model();
+                let push = [clip_from_world(&camera) * model, model];
+                device.cmd_push_constants(
+                    cmd,
+                    mesh_layout,
+                    vk::ShaderStageFlags::VERTEX,
+                    0,
+                    bytemuck::cast_slice(&push),
+                );
+                device.cmd_draw(cmd, 36, 1, 0, 0);
+                device.cmd_end_render_pass(cmd);
+                // What the mesh pass drew, copied out for the test (colour, then depth).
+                let region = |aspect, offset| {
+                    vk::BufferImageCopy::default()
+                        .buffer_offset(offset)
+                        .image_subresource(vk::ImageSubresourceLayers {
+                            aspect_mask: aspect,
+                            mip_level: 0,
+                            base_array_layer: 0,
+                            layer_count: 1,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: WIDTH,
+                            height: HEIGHT,
+                            depth: 1,
+                        })
+                };
+                device.cmd_copy_image_to_buffer(
+                    cmd,
+                    f.image,
+                    vk::ImageLayout::GENERAL,
+                    f.mesh_readback,
+                    &[region(vk::ImageAspectFlags::COLOR, 0)],
+                );
+                device.cmd_copy_image_to_buffer(
+                    cmd,
+                    f.depth_image,
+                    vk::ImageLayout::GENERAL,
+                    f.mesh_readback,
+                    &[region(
+                        vk::ImageAspectFlags::DEPTH,
+                        WIDTH as u64 * HEIGHT as u64 * 4,
+                    )],
+                );
+                // rara's contract: the target in GENERAL with the engine's writes visible to
+                // compute; the copies' reads done before rara writes the colour.
                 image_barrier(
                     device,
                     cmd,
                     f.image,
-                    if f.initialised {
-                        vk::ImageLayout::GENERAL
-                    } else {
-                        vk::ImageLayout::UNDEFINED
-                    },
+                    vk::ImageLayout::GENERAL,
                     (
                         vk::PipelineStageFlags::TRANSFER,
                         vk::AccessFlags::TRANSFER_READ,
-                    ),
-                    (
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                    ),
-                );
-                f.initialised = true;
-                device.cmd_clear_color_image(
-                    cmd,
-                    f.image,
-                    vk::ImageLayout::GENERAL,
-                    &vk::ClearColorValue { float32: CLEAR },
-                    &[color_range()],
-                );
-                // rara's contract: the target in GENERAL, the clear visible to compute.
-                image_barrier(
-                    device,
-                    cmd,
-                    f.image,
-                    vk::ImageLayout::GENERAL,
-                    (
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::AccessFlags::TRANSFER_WRITE,
                     ),
                     (
                         vk::PipelineStageFlags::COMPUTE_SHADER,
                         vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
                     ),
                 );
+            }
+            let mut options = options;
+            // The ray tracer has no depth test (yet): it draws over the cube.
+            if tracer == rara::Tracer::Raster {
+                options.depth_test = Some(rara::DepthTest {
+                    source: rara::DepthSource::Image {
+                        view: f.depth_view,
+                        layout: vk::ImageLayout::GENERAL,
+                    },
+                    projection: depth_projection(),
+                });
             }
             renderer.record(
                 cmd,
@@ -713,7 +1114,16 @@ pub fn run(
             device.free_memory(f.image_memory, None);
             device.destroy_buffer(f.readback, None);
             device.free_memory(f.readback_memory, None);
+            device.destroy_framebuffer(f.framebuffer, None);
+            device.destroy_image_view(f.depth_view, None);
+            device.destroy_image(f.depth_image, None);
+            device.free_memory(f.depth_memory, None);
+            device.destroy_buffer(f.mesh_readback, None);
+            device.free_memory(f.mesh_readback_memory, None);
         }
+        device.destroy_pipeline(mesh_pipeline, None);
+        device.destroy_pipeline_layout(mesh_layout, None);
+        device.destroy_render_pass(render_pass, None);
         device.destroy_query_pool(query_pool, None);
         device.destroy_pipeline(vignette, None);
         device.destroy_pipeline_layout(pipeline_layout, None);
@@ -766,6 +1176,16 @@ pub fn vignette_factor(x: u32, y: u32) -> f32 {
 
 /// The engine's clear colour.
 pub const CLEAR_COLOR: [f32; 4] = CLEAR;
+
+fn depth_range() -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange {
+        aspect_mask: vk::ImageAspectFlags::DEPTH,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: 1,
+    }
+}
 
 fn color_range() -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange {

@@ -14,19 +14,24 @@ use rara::{
     Target, TargetFormat,
 };
 
-/// The example renders 4 frames with 2 in flight, over its cleared image, with a moving rara
-/// clip plane and its own vignette pass: every frame must equal the headless renderer's image
-/// over the same background, times the vignette; the engine's objects outlive rara's teardown
-/// and are destroyed by the engine with no validation message; rara's allocator ends empty.
+/// The example renders 4 frames with 2 in flight: its mesh pass (a lit cube, depth-tested, into
+/// colour and depth attachments), rara over it with the depth test against the cube's depth and
+/// a moving rara clip plane, then its own vignette pass. Every frame must equal the CPU
+/// compositor over the GPU's projected splats, depth-tested against the same cube depth and
+/// composited over the same cube colour, times the vignette (within 1/255 but for ties); the
+/// cube must hide splats behind it and show splats in front of it; the engine's objects outlive
+/// rara's teardown and are destroyed by the engine with no validation message; rara's
+/// allocator ends empty.
 #[test]
-fn engine_example_frames_match_the_headless_renderer() {
+fn engine_example_frames_match_the_reference_over_its_cube() {
     engine_example_matches(rara::Tracer::Raster, 4);
 }
 
 /// The same with the ray tracer recorded into the engine's command buffer (SPEC section 7):
-/// the same synchronisation contract, the same teardown.
+/// the same synchronisation contract, the same teardown; it has no depth test yet, so it draws
+/// over the cube, and the frames are compared away from the cube.
 #[test]
-fn engine_example_ray_traced_frames_match_the_headless_renderer() {
+fn engine_example_ray_traced_frames_match_the_headless_renderer_beside_the_cube() {
     engine_example_matches(rara::Tracer::Ray, 3);
 }
 
@@ -57,46 +62,144 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
 
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
-    let scene = renderer.upload(&rara::synth::demo_scene()).unwrap();
+    let cpu_scene = rara::synth::demo_scene();
+    let scene = renderer.upload(&cpu_scene).unwrap();
     let camera = engine_example::camera().unwrap();
-    // The image holds the clear colour in rgba8, and that is what the draw goes over.
-    let clear = engine_example::CLEAR_COLOR.map(|c| (c * 255.0).round() / 255.0);
+    let projection = engine_example::depth_projection();
+    let (w, h) = (camera.width, camera.height);
+    // Over all frames: cube pixels where a splat in front of the cube shows, and cube pixels
+    // where the cube hides a splat that lies behind it.
+    let (mut in_front, mut hidden) = (0usize, 0usize);
     for (index, path) in report.frames.iter().enumerate() {
-        let mut options = engine_example::frame_options(&camera, index, frames, tracer).unwrap();
-        options.composite = Composite::Background;
-        options.background = Vec3::new(clear[0], clear[1], clear[2]);
-        let (expected, _) = renderer.render(&scene, &camera, &options).unwrap();
+        let options = engine_example::frame_options(&camera, index, frames, tracer).unwrap();
+        let (mesh, mesh_depth) = &report.mesh[index];
         let actual = image::open(path).unwrap().to_rgba8();
+        let cube = |x: u32, y: u32| mesh_depth[(y * w + x) as usize] < 1.0;
+        assert!(
+            (0..w * h).any(|p| cube(p % w, p / w)),
+            "frame {index}: the mesh pass drew no cube"
+        );
+        // The expected pixel before the vignette: for the rasterizer, the CPU compositor over
+        // the GPU's own projected splats, depth-tested against the cube's depth and over the
+        // mesh pass's colour; for the ray tracer (no depth test), the headless frame over the
+        // clear colour, away from the cube.
+        let expected: Box<dyn Fn(u32, u32) -> Option<[f32; 3]>> = match tracer {
+            rara::Tracer::Raster => {
+                let mut headless = options.clone();
+                headless.composite = Composite::Background;
+                let (_, stats) = renderer.render(&scene, &camera, &headless).unwrap();
+                let mid = renderer.intermediates(&scene, &stats).unwrap();
+                let splats: Vec<_> =
+                    rara::reference::project::project_all(&cpu_scene, &camera, &options.clip)
+                        .into_iter()
+                        .map(|c| {
+                            let g = &mid.splats[c.index as usize];
+                            rara::reference::project::ProjectedSplat {
+                                uv: g.uv.into(),
+                                depth: g.depth,
+                                opacity: g.opacity,
+                                conic: g.conic.into(),
+                                color: g.color.into(),
+                                ..c
+                            }
+                        })
+                        .collect();
+                let lists = rara::reference::rasterize::tile_lists(&splats, &camera);
+                let gx = w.div_ceil(rara::constants::TILE_SIZE);
+                let clip = options.clip.clone();
+                let composite = move |x: u32, y: u32, limit: f32| {
+                    let tile =
+                        (y / rara::constants::TILE_SIZE) * gx + x / rara::constants::TILE_SIZE;
+                    let under = mesh.get_pixel(x, y);
+                    let under =
+                        Vec3::new(under[0] as f32, under[1] as f32, under[2] as f32) / 255.0;
+                    rara::reference::rasterize::composite_pixel_depth(
+                        &splats,
+                        &lists[tile as usize],
+                        glam::Vec2::new(x as f32, y as f32),
+                        under,
+                        rara::reference::rasterize::PixelClip::new(&clip, &camera, x, y).as_ref(),
+                        limit,
+                    )
+                    .color
+                };
+                // Occlusion both ways, on the cube's pixels.
+                for y in 0..h {
+                    for x in 0..w {
+                        if !cube(x, y) {
+                            continue;
+                        }
+                        let limit = projection.view_depth(mesh_depth[(y * w + x) as usize]);
+                        let tested = composite(x, y, limit);
+                        let untested = composite(x, y, f32::INFINITY);
+                        let m = mesh.get_pixel(x, y);
+                        let mesh_rgb = Vec3::new(m[0] as f32, m[1] as f32, m[2] as f32) / 255.0;
+                        hidden += ((tested - untested).abs().max_element() > 2.0 / 255.0) as usize;
+                        in_front +=
+                            ((tested - mesh_rgb).abs().max_element() > 2.0 / 255.0) as usize;
+                    }
+                }
+                Box::new(move |x, y| {
+                    let limit = projection.view_depth(mesh_depth[(y * w + x) as usize]);
+                    let c = rara::reference::rasterize::to_rgba8(composite(x, y, limit));
+                    Some([c[0] as f32, c[1] as f32, c[2] as f32])
+                })
+            }
+            rara::Tracer::Ray => {
+                // The image holds the clear colour in rgba8 away from the cube.
+                let clear = engine_example::CLEAR_COLOR.map(|c| (c * 255.0).round() / 255.0);
+                let mut headless = options.clone();
+                headless.composite = Composite::Background;
+                headless.background = Vec3::new(clear[0], clear[1], clear[2]);
+                let (e, _) = renderer.render(&scene, &camera, &headless).unwrap();
+                Box::new(move |x, y| {
+                    (!cube(x, y)).then(|| {
+                        let p = e.get_pixel(x, y);
+                        [p[0] as f32, p[1] as f32, p[2] as f32]
+                    })
+                })
+            }
+        };
         let mut worst = 0f32;
         let mut ties = 0;
-        for (x, y, e) in expected.enumerate_pixels() {
-            let a = actual.get_pixel(x, y);
+        let mut compared = 0;
+        for (x, y, a) in actual.enumerate_pixels() {
+            assert_eq!(a[3], 255, "opaque over an opaque clear");
+            let Some(e) = expected(x, y) else { continue };
+            compared += 1;
             let v = engine_example::vignette_factor(x, y);
             for c in 0..3 {
-                // The image is rgba8: rounded once before the vignette (as the headless image
-                // is) and once after it.
-                let want = e[c] as f32 * v;
+                // The image is rgba8: rounded once before the vignette (as the reference's
+                // 8-bit pixel is) and once after it.
+                let want = e[c] * v;
                 let diff = (a[c] as f32 - want).abs();
                 worst = worst.max(diff);
                 if diff > 1.0 {
                     ties += 1;
                 }
             }
-            assert_eq!(a[3], 255, "opaque over an opaque clear");
         }
         println!(
-            "engine frame {index} ({tracer:?}): largest difference from the headless render \
+            "engine frame {index} ({tracer:?}): {compared} pixels compared, largest difference \
              {worst:.2}/255, {ties} channels past 1/255"
         );
         // A value exactly halfway between two levels (the synthetic scene's quantised colours
-        // make some: 154.5/255 in the ray-traced frame 1) is rounded up by the buffer path
-        // (floor(x * 255 + 0.5)) and to even by lavapipe's store to the unorm image: one level
-        // before the vignette, so up to 0.5 + v after it, in a handful of channels.
+        // make some) is rounded up by the reference (floor(x * 255 + 0.5)) and to even by
+        // lavapipe's store to the unorm image: one level before the vignette, so up to 0.5 + v
+        // after it, in a handful of channels.
         assert!(worst <= 1.5, "frame {index} differs by {worst}/255");
         assert!(
             ties <= 8,
             "frame {index}: {ties} channels differ by more than 1/255"
         );
+    }
+    if tracer == rara::Tracer::Raster {
+        println!(
+            "engine example: over the frames, {in_front} cube pixels show splats in front of the \
+             cube, {hidden} cube pixels hide splats behind it"
+        );
+        assert!(in_front > 0, "no splat in front of the cube");
+        assert!(hidden > 0, "the cube hid no splat");
     }
     common::assert_no_validation_messages(&ctx);
     let _ = std::fs::remove_dir_all(&dir);
