@@ -63,6 +63,9 @@ pub struct FrameSlot {
     trace_rounds: u32,
     /// Rounds the last recorded frame had, when it was ray traced.
     recorded_trace: Option<u32>,
+    /// With several objects ([`crate::Renderer::record_objects`]): the merged scene the
+    /// objects are transformed into, and their parameters.
+    pub(crate) objects: Option<(crate::gpu_scene::GpuScene, Buffer)>,
 }
 
 /// The device memory of a [`FrameSlot`], grouped by what it scales with: the per-frame
@@ -221,6 +224,7 @@ impl FrameSlot {
             trace: None,
             trace_rounds: FIRST_TRACE_ROUNDS,
             recorded_trace: None,
+            objects: None,
         })
     }
 
@@ -261,6 +265,10 @@ impl FrameSlot {
             if let Some((sums, limit)) = &r.depth {
                 m.per_pixel += sums.size + limit.size;
             }
+        }
+        if let Some((merged, params)) = &self.objects {
+            // The merged scene of several objects is per-Gaussian memory of the frame.
+            m.per_gaussian += merged.device_bytes() + params.size;
         }
         if let Some(t) = &self.trace {
             m.bvh = t.bvh_bytes();

@@ -85,6 +85,37 @@ impl GpuScene {
         Ok(gpu_scene)
     }
 
+    /// A scene of `count` Gaussians of SH degree `sh_degree` (f32 coefficients) whose buffers
+    /// the GPU fills: the merged scene of several objects (`crate::objects`).
+    pub(crate) fn for_gpu_writes(ctx: &Context, count: u32, sh_degree: u32) -> Result<Self> {
+        if count as u64 > MAX_GAUSSIANS {
+            return Err(Error::InvalidInput(format!(
+                "{count} Gaussians in all exceed the {MAX_GAUSSIANS} one frame may have"
+            )));
+        }
+        let n = count as u64;
+        let sh_floats = n * 3 * crate::scene::sh_coeffs(sh_degree) as u64;
+        let gpu = MemoryLocation::GpuOnly;
+        Ok(GpuScene {
+            gaussians: Buffer::new(
+                ctx,
+                "merged objects' gaussians",
+                (n * std::mem::size_of::<GpuGaussian>() as u64).max(16),
+                gpu,
+            )?,
+            sh: Buffer::new(
+                ctx,
+                "merged objects' SH",
+                (sh_floats * 4 + GpuScene::SH_TAIL_BYTES).max(16),
+                gpu,
+            )?,
+            count,
+            sh_degree,
+            sh_precision: ShPrecision::F32,
+            id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+        })
+    }
+
     /// Bytes of device memory per Gaussian of a scene of `sh_degree` stored at `precision`.
     pub fn bytes_per_gaussian(sh_degree: u32, precision: ShPrecision) -> u64 {
         std::mem::size_of::<GpuGaussian>() as u64

@@ -48,6 +48,7 @@ pub mod input;
 pub mod mesh;
 pub mod metrics;
 pub mod mixed;
+pub mod objects;
 pub mod ply;
 pub mod precision;
 pub mod reference;
@@ -69,8 +70,11 @@ pub use clip::{Clip, ClipMode, ClipRegion, ClipWeight, Plane};
 pub use depth::{DepthMode, DepthOutput, DepthProjection, DepthSource, DepthTarget, DepthTest};
 pub use error::{Error, Result};
 pub use frame::{FrameMemory, FrameSlot};
+pub use objects::ObjectTransform;
 pub use precision::ShPrecision;
-pub use renderer::{FrameStats, GpuScene, Intermediates, RenderOptions, Renderer, Tracer, View};
+pub use renderer::{
+    FrameStats, GpuScene, Intermediates, RenderOptions, Renderer, SceneObject, Tracer, View,
+};
 pub use scene::Scene;
 pub use target::{Composite, Target, TargetFormat};
 pub use timing::PassTimer;

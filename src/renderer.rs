@@ -16,11 +16,13 @@ pub use crate::frame::FrameStats;
 use crate::frame::{FrameMemory, FrameSlot};
 pub use crate::gpu_scene::GpuScene;
 use crate::gpu_types::GpuFrameParams;
+use crate::objects::ObjectTransform;
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
 use crate::stages::depth::DepthStages;
 use crate::stages::depth_order::{DepthOrder, DEPTH_KEY_BITS};
 use crate::stages::emit::Emit;
+use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
 use crate::stages::project::Project;
 use crate::stages::rasterize::{RasterLayout, Rasterize};
@@ -117,6 +119,8 @@ pub struct Renderer {
     write_target: WriteTarget,
     /// The depth test's and depth output's kernels (SPEC section 9).
     depth: DepthStages,
+    /// The object-transform kernel of several objects in one frame (SPEC section 9).
+    objects: ObjectTransformStage,
     timer: PassTimer,
     /// The slot and rgba8 image (+ host copy) of the headless path, [`Renderer::render`].
     headless: Option<HeadlessFrame>,
@@ -125,6 +129,13 @@ pub struct Renderer {
     /// The layout of the frame's texel views, for the kernels that read through them (with the
     /// strips rasterizer, i.e. on CPU drivers).
     _frame_texels_layout: Option<FrameTexelsLayout>,
+}
+
+/// What a headless frame draws: one scene, or several objects ([`Renderer::render_objects`]).
+#[derive(Clone, Copy)]
+enum Drawn<'a> {
+    Scene(&'a GpuScene),
+    Objects(&'a [SceneObject<'a>]),
 }
 
 /// What [`Renderer::render`] renders into and reads back from.
@@ -174,6 +185,7 @@ impl Renderer {
             rasterize: Rasterize::new(ctx, layout, texels)?,
             write_target: WriteTarget::new(ctx, texels)?,
             depth: DepthStages::new(ctx)?,
+            objects: ObjectTransformStage::new(ctx)?,
             timer: PassTimer::new(ctx)?,
             headless: None,
             ray_tracer: std::sync::OnceLock::new(),
@@ -239,7 +251,18 @@ impl Renderer {
         camera: &Camera,
         options: &RenderOptions,
     ) -> Result<(image::RgbaImage, FrameStats)> {
-        self.render_inner(scene, camera, options, None)
+        self.render_inner(Drawn::Scene(scene), camera, options, None)
+            .map(|(image, _, stats)| (image, stats))
+    }
+
+    /// [`Renderer::render`] of several objects in one frame ([`Renderer::record_objects`]).
+    pub fn render_objects(
+        &mut self,
+        objects: &[SceneObject],
+        camera: &Camera,
+        options: &RenderOptions,
+    ) -> Result<(image::RgbaImage, FrameStats)> {
+        self.render_inner(Drawn::Objects(objects), camera, options, None)
             .map(|(image, _, stats)| (image, stats))
     }
 
@@ -252,12 +275,12 @@ impl Renderer {
         options: &RenderOptions,
         mode: DepthMode,
     ) -> Result<(image::RgbaImage, Vec<f32>, FrameStats)> {
-        self.render_inner(scene, camera, options, Some(mode))
+        self.render_inner(Drawn::Scene(scene), camera, options, Some(mode))
     }
 
     fn render_inner(
         &mut self,
-        scene: &GpuScene,
+        scene: Drawn,
         camera: &Camera,
         options: &RenderOptions,
         depth_mode: Option<DepthMode>,
@@ -296,7 +319,7 @@ impl Renderer {
     fn render_headless(
         &mut self,
         headless: &mut HeadlessFrame,
-        scene: &GpuScene,
+        scene: Drawn,
         camera: &Camera,
         options: &RenderOptions,
         depth_mode: Option<DepthMode>,
@@ -368,15 +391,26 @@ impl Renderer {
         let result = loop {
             let start = std::time::Instant::now();
             let recorded = self.ctx.run_commands(|cmd| -> Result<()> {
-                self.record(
-                    cmd,
-                    &mut headless.slot,
-                    scene,
-                    camera,
-                    &options,
-                    &target,
-                    Some(&mut timer),
-                )?;
+                match scene {
+                    Drawn::Scene(scene) => self.record(
+                        cmd,
+                        &mut headless.slot,
+                        scene,
+                        camera,
+                        &options,
+                        &target,
+                        Some(&mut timer),
+                    )?,
+                    Drawn::Objects(objects) => self.record_objects(
+                        cmd,
+                        &mut headless.slot,
+                        objects,
+                        camera,
+                        &options,
+                        &target,
+                        Some(&mut timer),
+                    )?,
+                }
                 copy_to_host(&self.ctx, cmd, image, readback, image_bytes);
                 if let Some((buffer, readback)) = depth {
                     copy_to_host(&self.ctx, cmd, buffer, readback, image_bytes);
@@ -745,6 +779,81 @@ impl Renderer {
             )?;
         }
         Ok(())
+    }
+}
+
+/// One object of [`Renderer::record_objects`]: a scene and where it stands in the world.
+#[derive(Clone, Copy)]
+pub struct SceneObject<'a> {
+    /// The object's Gaussians (f32 SH coefficients).
+    pub scene: &'a GpuScene,
+    /// Its rigid transform and uniform scale.
+    pub transform: ObjectTransform,
+}
+
+impl Renderer {
+    /// Records one frame of several objects (SPEC section 9), sorted and composited together
+    /// as one scene: each object's Gaussians are transformed on the GPU (centres, rotations,
+    /// scales, and the SH coefficients, which turn with the object) into a merged scene that
+    /// `slot` keeps, which the frame's stages then draw exactly as [`Renderer::record`] draws
+    /// a scene, so the frame equals the merged, pre-transformed scene rendered alone
+    /// ([`crate::objects::merge`] is the CPU twin). `options.clip` applies to the merged scene
+    /// in world space; a clip of each object's own is not supported yet. The objects' scenes
+    /// must stay alive until the frame completed; the synchronisation contract is `record`'s.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_objects(
+        &self,
+        cmd: vk::CommandBuffer,
+        slot: &mut FrameSlot,
+        objects: &[SceneObject],
+        camera: &Camera,
+        options: &RenderOptions,
+        target: &Target,
+        timings: Option<&mut PassTimer>,
+    ) -> Result<()> {
+        let mut count = 0u64;
+        for o in objects {
+            o.transform.validate()?;
+            if o.scene.sh_precision() != crate::ShPrecision::F32 {
+                return Err(Error::InvalidInput(
+                    "several objects need f32 SH coefficients (not --sh-half) so far".into(),
+                ));
+            }
+            count += o.scene.len() as u64;
+        }
+        let count = u32::try_from(count).map_err(|_| {
+            Error::InvalidInput(format!(
+                "{count} Gaussians in all are too many for one frame"
+            ))
+        })?;
+        let degree = objects
+            .iter()
+            .map(|o| o.scene.sh_degree())
+            .max()
+            .unwrap_or(0);
+        let params_bytes = (objects.len().max(1) * std::mem::size_of::<GpuObjectParams>()) as u64;
+        let fits = slot.objects.as_ref().is_some_and(|(m, p)| {
+            m.len() == count && m.sh_degree() == degree && p.size >= params_bytes
+        });
+        if !fits {
+            slot.objects = None; // free the old buffers first
+            slot.objects = Some((
+                GpuScene::for_gpu_writes(&self.ctx, count, degree)?,
+                Buffer::new(
+                    &self.ctx,
+                    "object params",
+                    params_bytes,
+                    MemoryLocation::GpuOnly,
+                )?,
+            ));
+        }
+        let (merged, params) = slot.objects.take().expect("made above");
+        let list: Vec<(&GpuScene, ObjectTransform)> =
+            objects.iter().map(|o| (o.scene, o.transform)).collect();
+        self.objects.record(&self.ctx, cmd, &list, &merged, &params);
+        let recorded = self.record(cmd, slot, &merged, camera, options, target, timings);
+        slot.objects = Some((merged, params));
+        recorded
     }
 }
 

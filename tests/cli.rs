@@ -1255,3 +1255,126 @@ fn render_writes_depth_as_exr_and_16_bit_png() {
     args.extend(["--depth", "d.exr", "--tracer", "ray"]);
     assert_error(&rara(&args), &["--depth", "ray tracer"]);
 }
+
+/// `render --object` and `sweep --object`: several objects in one frame equal their merged,
+/// pre-transformed scene (written as a PLY by the library's `objects::merge`) rendered alone,
+/// bit for bit; a bad transform is a clear error.
+#[test]
+fn objects_render_as_their_merged_scene() {
+    use rara::objects::{merge, ObjectTransform};
+    let d = dir();
+    let shell = rara::synth::shell(800, 2, 7);
+    let hair = rara::synth::hair(600, 1, 8);
+    let (shell_path, hair_path) = (d.join("obj_shell.ply"), d.join("obj_hair.ply"));
+    for (s, p) in [(&shell, &shell_path), (&hair, &hair_path)] {
+        rara::ply::write_ply(s, p, rara::ply::PlyEncoding::BinaryLittleEndian).unwrap();
+    }
+    let cams = rara::synth::orbit_cameras(2, 3.0, 64, 48, 50.0).unwrap();
+    let cams_path = d.join("obj.cameras.json");
+    rara::Camera::save_all(&cams, &cams_path).unwrap();
+    // The transforms the arguments below give.
+    let r = |x: f32, y: f32, z: f32| {
+        glam::Quat::from_rotation_z(z.to_radians())
+            * glam::Quat::from_rotation_y(y.to_radians())
+            * glam::Quat::from_rotation_x(x.to_radians())
+    };
+    let merged = merge(&[
+        (&shell, ObjectTransform::default()),
+        (
+            &hair,
+            ObjectTransform {
+                rotation: r(10.0, 90.0, -20.0),
+                translation: glam::Vec3::new(0.4, 0.1, 0.0),
+                scale: 0.7,
+            },
+        ),
+        (
+            &hair,
+            ObjectTransform {
+                translation: glam::Vec3::new(-0.5, 0.0, 0.2),
+                ..ObjectTransform::default()
+            },
+        ),
+    ]);
+    let merged_path = d.join("obj_merged.ply");
+    rara::ply::write_ply(
+        &merged,
+        &merged_path,
+        rara::ply::PlyEncoding::BinaryLittleEndian,
+    )
+    .unwrap();
+    let (cams_s, shell_s, hair_s) = (
+        cams_path.to_str().unwrap(),
+        shell_path.to_str().unwrap(),
+        hair_path.to_str().unwrap(),
+    );
+    let first = format!("{hair_s}:0.4,0.1,0,10,90,-20,0.7");
+    let second = format!("{hair_s}:-0.5,0,0.2");
+    let objects_png = d.join("objects.png");
+    let merged_png = d.join("objects_merged.png");
+    let o = rara(&[
+        "render",
+        shell_s,
+        "--object",
+        &first,
+        "--object",
+        &second,
+        "--cameras",
+        cams_s,
+        "-o",
+        objects_png.to_str().unwrap(),
+    ]);
+    assert_success(&o);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("3 objects, 2000 Gaussians in one sort"));
+    assert_success(&rara(&render_args(
+        merged_path.to_str().unwrap(),
+        cams_s,
+        merged_png.to_str().unwrap(),
+    )));
+    let (a, b) = (
+        image::open(&objects_png).unwrap().to_rgba8(),
+        image::open(&merged_png).unwrap().to_rgba8(),
+    );
+    assert_eq!(a, b, "render --object differs from the merged scene");
+
+    // sweep: the same frames as the merged scene's sweep.
+    let (so, sm) = (d.join("sweep_objects"), d.join("sweep_merged"));
+    let sweep = |scene_args: &[&str], out: &std::path::Path| {
+        let mut args = vec!["sweep"];
+        args.extend(scene_args);
+        args.extend([
+            "--cameras",
+            cams_s,
+            "--plane-normal",
+            "1,0,0",
+            "--frames",
+            "3",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_success(&rara(&args));
+    };
+    sweep(&[shell_s, "--object", &first, "--object", &second], &so);
+    sweep(&[merged_path.to_str().unwrap()], &sm);
+    for k in 0..3 {
+        let name = format!("frame_{k:04}.png");
+        let (a, b) = (
+            image::open(so.join(&name)).unwrap().to_rgba8(),
+            image::open(sm.join(&name)).unwrap().to_rgba8(),
+        );
+        assert_eq!(a, b, "sweep frame {k} differs");
+    }
+    let bad = format!("{hair_s}:1,2");
+    assert_error(
+        &rara(&[
+            "render",
+            "--object",
+            &bad,
+            "--cameras",
+            cams_s,
+            "-o",
+            "x.png",
+        ]),
+        &["TX,TY,TZ"],
+    );
+}

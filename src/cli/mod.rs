@@ -7,6 +7,7 @@ pub mod demo;
 pub mod depth;
 pub mod flatten;
 pub mod mesh;
+pub mod objects;
 pub mod output;
 pub mod scene;
 pub mod sweep;

@@ -17,8 +17,13 @@ use crate::{load_scene, resolve_camera, save_png, CameraArgs};
 #[derive(Args)]
 pub struct SweepArgs {
     /// The scene (PLY, compressed PLY, SPZ, glTF, SOG or .splat, told apart by content); or give --scene.
-    #[arg(required_unless_present = "scene_file", conflicts_with = "scene_file")]
+    #[arg(required_unless_present_any = ["scene_file", "objects"], conflicts_with = "scene_file")]
     scene: Option<PathBuf>,
+    /// A splat object, repeatable: SCENE[:TX,TY,TZ[,RX,RY,RZ[,S]]] (translation, rotations in
+    /// degrees about x then y then z, uniform scale), all drawn in one frame with one sort
+    /// (SPEC section 9); the moving plane clips them in world space.
+    #[arg(long = "object", value_name = "SCENE[:TRANSFORM]", value_parser = super::objects::parse_object, conflicts_with = "scene_file")]
+    objects: Vec<super::objects::ObjectArg>,
     /// A mixed scene (SPEC section 8, JSON), ray traced: the moving plane clips every splat
     /// object, in the world's frame, in place of the file's clips.
     #[arg(long = "scene", value_name = "SCENE.json")]
@@ -127,16 +132,32 @@ pub fn default_range(scene: &Scene, n: Vec3) -> (f32, f32) {
 /// Runs the sweep.
 pub fn run(args: &SweepArgs) -> Result<()> {
     let camera = resolve_camera(&args.camera)?;
+    let objects_path = PathBuf::from(format!(
+        "{} objects",
+        args.objects.len() + args.scene.is_some() as usize
+    ));
     let (scene_path, mixed) = match &args.scene_file {
         Some(file) => (
             file,
             Some(super::scene::load_mixed(file, Some(args.background))?),
         ),
+        None if !args.objects.is_empty() => (&objects_path, None),
         None => (args.scene.as_ref().expect("clap requires a scene"), None),
+    };
+    // With --object, the objects and their merged scene (for the plane's default range).
+    let objects = if args.objects.is_empty() {
+        Vec::new()
+    } else {
+        super::objects::load(args.scene.as_ref(), &args.objects)?
     };
     let loaded;
     let scene = match &mixed {
         Some(m) => &m.gaussians,
+        None if !objects.is_empty() => {
+            let list: Vec<_> = objects.iter().map(|(s, t)| (s, *t)).collect();
+            loaded = rara::objects::merge(&list);
+            &loaded
+        }
         None => {
             loaded = load_scene(scene_path)?;
             &loaded
@@ -172,8 +193,21 @@ pub fn run(args: &SweepArgs) -> Result<()> {
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
+    let uploaded: Vec<rara::GpuScene> = objects
+        .iter()
+        .map(|(s, _)| renderer.upload(s))
+        .collect::<Result<_>>()?;
+    let scene_objects: Vec<rara::SceneObject> = uploaded
+        .iter()
+        .zip(&objects)
+        .map(|(scene, (_, transform))| rara::SceneObject {
+            scene,
+            transform: *transform,
+        })
+        .collect();
     let (gpu_scene, mut mixed_gpu) = match &mixed {
         Some(m) => (None, Some(super::scene::MixedGpu::new(&ctx, m, false)?)),
+        None if !scene_objects.is_empty() => (None, None),
         None => (Some(renderer.upload(scene)?), None),
     };
     let target = match (&gpu_scene, &mut mixed_gpu) {
@@ -182,7 +216,10 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             scene: g,
         },
         (None, Some(m)) => SweepTarget::Mixed(m),
-        (None, None) => unreachable!("one of the two is made above"),
+        (None, None) => SweepTarget::Objects {
+            renderer: &mut renderer,
+            objects: &scene_objects,
+        },
     };
     let gif_path = args.output.join("sweep.gif");
     let mut gif = GifWriter::create(&gif_path, args.delay_ms)?;
@@ -291,6 +328,13 @@ pub enum SweepTarget<'a> {
     },
     /// A mixed scene, ray traced.
     Mixed(&'a mut super::scene::MixedGpu),
+    /// Several objects in one frame (`--object`).
+    Objects {
+        /// The renderer.
+        renderer: &'a mut Renderer,
+        /// The objects.
+        objects: &'a [rara::SceneObject<'a>],
+    },
 }
 
 impl Sweep<'_> {
@@ -332,6 +376,18 @@ impl Sweep<'_> {
                             ..RenderOptions::default()
                         };
                         let (img, frame) = renderer.render(scene, self.camera, &options)?;
+                        stats.add(&img, frame.cutoff, frame.gpu_ms);
+                        img
+                    }
+                    SweepTarget::Objects { renderer, objects } => {
+                        let options = RenderOptions {
+                            background: self.background,
+                            clip,
+                            tracer: self.tracer,
+                            ..RenderOptions::default()
+                        };
+                        let (img, frame) =
+                            renderer.render_objects(objects, self.camera, &options)?;
                         stats.add(&img, frame.cutoff, frame.gpu_ms);
                         img
                     }

@@ -86,6 +86,7 @@ pub mod depth;
 pub mod depth_order;
 pub mod emit;
 pub mod mixed;
+pub mod objects;
 pub mod prefix_sum;
 pub mod project;
 pub mod rasterize;
