@@ -298,6 +298,70 @@ impl Engine {
         })
     }
 
+    /// A `WIDTH` x `HEIGHT` 2D image of `format` and `usage` in device memory, and a view of
+    /// `range`.
+    fn image(
+        &self,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        range: vk::ImageSubresourceRange,
+    ) -> Result<(vk::Image, vk::DeviceMemory, vk::ImageView), Box<dyn Error>> {
+        let device = &self.device;
+        let image = unsafe {
+            device.create_image(
+                &vk::ImageCreateInfo::default()
+                    .image_type(vk::ImageType::TYPE_2D)
+                    .format(format)
+                    .extent(vk::Extent3D {
+                        width: WIDTH,
+                        height: HEIGHT,
+                        depth: 1,
+                    })
+                    .mip_levels(1)
+                    .array_layers(1)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .tiling(vk::ImageTiling::OPTIMAL)
+                    .usage(usage),
+                None,
+            )?
+        };
+        let memory = self.allocate(
+            unsafe { device.get_image_memory_requirements(image) },
+            vk::MemoryPropertyFlags::DEVICE_LOCAL,
+        )?;
+        unsafe { device.bind_image_memory(image, memory, 0)? };
+        let view = unsafe {
+            device.create_image_view(
+                &vk::ImageViewCreateInfo::default()
+                    .image(image)
+                    .view_type(vk::ImageViewType::TYPE_2D)
+                    .format(format)
+                    .subresource_range(range),
+                None,
+            )?
+        };
+        Ok((image, memory, view))
+    }
+
+    /// A host-visible buffer of `size` bytes that copies land in.
+    fn host_buffer(&self, size: u64) -> Result<(vk::Buffer, vk::DeviceMemory), Box<dyn Error>> {
+        let device = &self.device;
+        let buffer = unsafe {
+            device.create_buffer(
+                &vk::BufferCreateInfo::default()
+                    .size(size)
+                    .usage(vk::BufferUsageFlags::TRANSFER_DST),
+                None,
+            )?
+        };
+        let memory = self.allocate(
+            unsafe { device.get_buffer_memory_requirements(buffer) },
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
+        )?;
+        unsafe { device.bind_buffer_memory(buffer, memory, 0)? };
+        Ok((buffer, memory))
+    }
+
     fn allocate(
         &self,
         requirements: vk::MemoryRequirements,
@@ -602,95 +666,23 @@ pub fn run(
 
     let mut frames = Vec::new();
     for &cmd in &cmds {
-        let image = unsafe {
-            device.create_image(
-                &vk::ImageCreateInfo::default()
-                    .image_type(vk::ImageType::TYPE_2D)
-                    .format(FORMAT)
-                    .extent(vk::Extent3D {
-                        width: WIDTH,
-                        height: HEIGHT,
-                        depth: 1,
-                    })
-                    .mip_levels(1)
-                    .array_layers(1)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .tiling(vk::ImageTiling::OPTIMAL)
-                    .usage(
-                        vk::ImageUsageFlags::STORAGE
-                            | vk::ImageUsageFlags::COLOR_ATTACHMENT
-                            | vk::ImageUsageFlags::TRANSFER_SRC
-                            | vk::ImageUsageFlags::TRANSFER_DST,
-                    ),
-                None,
-            )?
-        };
-        let image_memory = engine.allocate(
-            unsafe { device.get_image_memory_requirements(image) },
-            vk::MemoryPropertyFlags::DEVICE_LOCAL,
+        let (image, image_memory, view) = engine.image(
+            FORMAT,
+            vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST,
+            color_range(),
         )?;
-        unsafe { device.bind_image_memory(image, image_memory, 0)? };
-        let view = unsafe {
-            device.create_image_view(
-                &vk::ImageViewCreateInfo::default()
-                    .image(image)
-                    .view_type(vk::ImageViewType::TYPE_2D)
-                    .format(FORMAT)
-                    .subresource_range(color_range()),
-                None,
-            )?
-        };
-        let readback = unsafe {
-            device.create_buffer(
-                &vk::BufferCreateInfo::default()
-                    .size(WIDTH as u64 * HEIGHT as u64 * 4)
-                    .usage(vk::BufferUsageFlags::TRANSFER_DST),
-                None,
-            )?
-        };
-        let readback_memory = engine.allocate(
-            unsafe { device.get_buffer_memory_requirements(readback) },
-            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
-        )?;
-        unsafe { device.bind_buffer_memory(readback, readback_memory, 0)? };
+        let (readback, readback_memory) = engine.host_buffer(WIDTH as u64 * HEIGHT as u64 * 4)?;
         // The depth attachment, sampled by rara's depth test and copied out for the test.
-        let depth_image = unsafe {
-            device.create_image(
-                &vk::ImageCreateInfo::default()
-                    .image_type(vk::ImageType::TYPE_2D)
-                    .format(DEPTH_FORMAT)
-                    .extent(vk::Extent3D {
-                        width: WIDTH,
-                        height: HEIGHT,
-                        depth: 1,
-                    })
-                    .mip_levels(1)
-                    .array_layers(1)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .tiling(vk::ImageTiling::OPTIMAL)
-                    .usage(
-                        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                            | vk::ImageUsageFlags::SAMPLED
-                            | vk::ImageUsageFlags::TRANSFER_SRC,
-                    ),
-                None,
-            )?
-        };
-        let depth_memory = engine.allocate(
-            unsafe { device.get_image_memory_requirements(depth_image) },
-            vk::MemoryPropertyFlags::DEVICE_LOCAL,
+        let (depth_image, depth_memory, depth_view) = engine.image(
+            DEPTH_FORMAT,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC,
+            depth_range(),
         )?;
-        unsafe { device.bind_image_memory(depth_image, depth_memory, 0)? };
-        let depth_view = unsafe {
-            device.create_image_view(
-                &vk::ImageViewCreateInfo::default()
-                    .image(depth_image)
-                    .view_type(vk::ImageViewType::TYPE_2D)
-                    .format(DEPTH_FORMAT)
-                    .subresource_range(depth_range()),
-                None,
-            )?
-        };
         let framebuffer = unsafe {
             let attachments = [view, depth_view];
             device.create_framebuffer(
@@ -703,19 +695,8 @@ pub fn run(
                 None,
             )?
         };
-        let mesh_readback = unsafe {
-            device.create_buffer(
-                &vk::BufferCreateInfo::default()
-                    .size(WIDTH as u64 * HEIGHT as u64 * 8)
-                    .usage(vk::BufferUsageFlags::TRANSFER_DST),
-                None,
-            )?
-        };
-        let mesh_readback_memory = engine.allocate(
-            unsafe { device.get_buffer_memory_requirements(mesh_readback) },
-            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
-        )?;
-        unsafe { device.bind_buffer_memory(mesh_readback, mesh_readback_memory, 0)? };
+        let (mesh_readback, mesh_readback_memory) =
+            engine.host_buffer(WIDTH as u64 * HEIGHT as u64 * 8)?;
         let vignette_set = unsafe {
             let layouts = [set_layout];
             device.allocate_descriptor_sets(
@@ -933,34 +914,19 @@ pub fn run(
                 device.cmd_draw(cmd, 36, 1, 0, 0);
                 device.cmd_end_render_pass(cmd);
                 // What the mesh pass drew, copied out for the test (colour, then depth).
-                let region = |aspect, offset| {
-                    vk::BufferImageCopy::default()
-                        .buffer_offset(offset)
-                        .image_subresource(vk::ImageSubresourceLayers {
-                            aspect_mask: aspect,
-                            mip_level: 0,
-                            base_array_layer: 0,
-                            layer_count: 1,
-                        })
-                        .image_extent(vk::Extent3D {
-                            width: WIDTH,
-                            height: HEIGHT,
-                            depth: 1,
-                        })
-                };
                 device.cmd_copy_image_to_buffer(
                     cmd,
                     f.image,
                     vk::ImageLayout::GENERAL,
                     f.mesh_readback,
-                    &[region(vk::ImageAspectFlags::COLOR, 0)],
+                    &[copy_region(vk::ImageAspectFlags::COLOR, 0)],
                 );
                 device.cmd_copy_image_to_buffer(
                     cmd,
                     f.depth_image,
                     vk::ImageLayout::GENERAL,
                     f.mesh_readback,
-                    &[region(
+                    &[copy_region(
                         vk::ImageAspectFlags::DEPTH,
                         WIDTH as u64 * HEIGHT as u64 * 4,
                     )],
@@ -1052,18 +1018,7 @@ pub fn run(
                     f.image,
                     vk::ImageLayout::GENERAL,
                     f.readback,
-                    &[vk::BufferImageCopy::default()
-                        .image_subresource(vk::ImageSubresourceLayers {
-                            aspect_mask: vk::ImageAspectFlags::COLOR,
-                            mip_level: 0,
-                            base_array_layer: 0,
-                            layer_count: 1,
-                        })
-                        .image_extent(vk::Extent3D {
-                            width: WIDTH,
-                            height: HEIGHT,
-                            depth: 1,
-                        })],
+                    &[copy_region(vk::ImageAspectFlags::COLOR, 0)],
                 );
                 device.cmd_pipeline_barrier(
                     cmd,
@@ -1176,6 +1131,23 @@ pub fn vignette_factor(x: u32, y: u32) -> f32 {
 
 /// The engine's clear colour.
 pub const CLEAR_COLOR: [f32; 4] = CLEAR;
+
+/// The copy of a whole image's `aspect` into a buffer from byte `offset`.
+fn copy_region(aspect: vk::ImageAspectFlags, offset: u64) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: aspect,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D {
+            width: WIDTH,
+            height: HEIGHT,
+            depth: 1,
+        })
+}
 
 fn depth_range() -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange {

@@ -380,18 +380,8 @@ fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
     }
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let uploaded: Vec<rara::GpuScene> = loaded
-        .iter()
-        .map(|(s, _)| renderer.upload(s))
-        .collect::<Result<_>>()?;
-    let objects: Vec<rara::SceneObject> = uploaded
-        .iter()
-        .zip(&loaded)
-        .map(|(scene, (_, transform))| rara::SceneObject {
-            scene,
-            transform: *transform,
-        })
-        .collect();
+    let uploaded = cli::objects::upload(&renderer, &loaded)?;
+    let objects = cli::objects::scene_objects(&uploaded, &loaded);
     let (img, stats) = renderer.render_objects(&objects, camera, &options)?;
     output.write_png(&img)?;
     println!(

@@ -6,11 +6,13 @@
 //!
 //! The SH coefficients turn with the object: for a rotation `R`, the object's colour seen along
 //! world direction `d` is its SH evaluated at `R^T d`, which equals rotated coefficients
-//! `c' = D c` evaluated at `d`, band by band. `D` is computed here in f64, against the very
-//! basis functions the renderer evaluates (SPEC section 3's, signs included), by least squares
-//! over 64 fixed directions, then rounded to f32 for both sides.
+//! `c' = D c` evaluated at `d`, band by band. `D` is the f64 least-squares fit of
+//! [`crate::mesh::sh_rotation`] (against the very basis functions the renderer evaluates),
+//! rounded to f32 for both sides.
 
-use glam::{DMat3, DVec3, Quat, Vec3};
+use glam::{DMat3, Quat, Vec3};
+
+use crate::mesh::sh_rotation::ShRotation;
 
 use crate::error::{Error, Result};
 use crate::scene::{sh_coeffs, Scene};
@@ -50,73 +52,6 @@ pub fn quat_product(r: Quat, q: Quat) -> Quat {
     Quat::from_xyzw(x, y, z, w)
 }
 
-/// The SH basis functions of bands 1 to 3 at `d`, as the renderer weights the coefficients
-/// (SPEC section 3, INRIA order and signs), in f64.
-fn sh_basis(d: DVec3) -> [f64; 15] {
-    const C1: f64 = 0.4886025119029199;
-    const C2: [f64; 5] = [
-        1.0925484305920792,
-        -1.0925484305920792,
-        0.31539156525252005,
-        -1.0925484305920792,
-        0.5462742152960396,
-    ];
-    const C3: [f64; 7] = [
-        -0.5900435899266435,
-        2.890611442640554,
-        -0.4570457994644658,
-        0.3731763325901154,
-        -0.4570457994644658,
-        1.445305721320277,
-        -0.5900435899266435,
-    ];
-    let (x, y, z) = (d.x, d.y, d.z);
-    let (xx, yy, zz) = (x * x, y * y, z * z);
-    [
-        -C1 * y,
-        C1 * z,
-        -C1 * x,
-        C2[0] * x * y,
-        C2[1] * y * z,
-        C2[2] * (2.0 * zz - xx - yy),
-        C2[3] * x * z,
-        C2[4] * (xx - yy),
-        C3[0] * y * (3.0 * xx - yy),
-        C3[1] * x * y * z,
-        C3[2] * y * (4.0 * zz - xx - yy),
-        C3[3] * z * (2.0 * zz - 3.0 * xx - 3.0 * yy),
-        C3[4] * x * (4.0 * zz - xx - yy),
-        C3[5] * z * (xx - yy),
-        C3[6] * x * (xx - 3.0 * yy),
-    ]
-}
-
-/// Solves `m x = b` for a small dense system (Gaussian elimination with partial pivoting).
-fn solve(mut m: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
-    let n = b.len();
-    for col in 0..n {
-        let pivot = (col..n)
-            .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
-            .unwrap();
-        m.swap(col, pivot);
-        b.swap(col, pivot);
-        for row in col + 1..n {
-            let f = m[row][col] / m[col][col];
-            let pivot_row = m[col].clone();
-            for (x, p) in m[row][col..].iter_mut().zip(&pivot_row[col..]) {
-                *x -= f * p;
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for row in (0..n).rev() {
-        let s: f64 = (row + 1..n).map(|k| m[row][k] * x[k]).sum();
-        x[row] = (b[row] - s) / m[row][row];
-    }
-    x
-}
-
 impl ObjectTransform {
     /// Checks the transform.
     pub fn validate(&self) -> Result<()> {
@@ -152,44 +87,18 @@ impl ObjectTransform {
     }
 
     /// The SH rotation of bands 1 to 3 ([`SH_ROTATION_FLOATS`] values): `D` such that the
-    /// coefficients `D c` seen along `d` give what `c` gives along `R^T d`.
+    /// coefficients `D c` seen along `d` give what `c` gives along `R^T d`
+    /// ([`crate::mesh::sh_rotation::ShRotation`]'s matrices, rounded to f32).
     pub fn sh_rotation(&self) -> [f32; SH_ROTATION_FLOATS] {
         let r = DMat3::from_quat(self.unit_rotation().as_dquat());
-        // 64 fixed directions spread over the sphere (a Fibonacci lattice).
-        let dirs: Vec<DVec3> = (0..64)
-            .map(|i| {
-                let z = 1.0 - (2 * i + 1) as f64 / 64.0;
-                let rho = (1.0 - z * z).sqrt();
-                let phi = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
-                DVec3::new(rho * phi.cos(), rho * phi.sin(), z)
-            })
-            .collect();
+        let bands = ShRotation::new(3, r);
         let mut out = [0f32; SH_ROTATION_FLOATS];
         let mut at = 0;
-        for (first, n) in [(0usize, 3usize), (3, 5), (8, 7)] {
-            // A[i][m] = B_m(d_i), T[i][k] = B_k(R^T d_i); D = (A^T A)^-1 A^T T.
-            let a: Vec<Vec<f64>> = dirs
-                .iter()
-                .map(|&d| sh_basis(d)[first..first + n].to_vec())
-                .collect();
-            let t: Vec<Vec<f64>> = dirs
-                .iter()
-                .map(|&d| sh_basis(r.transpose() * d)[first..first + n].to_vec())
-                .collect();
-            let ata: Vec<Vec<f64>> = (0..n)
-                .map(|i| {
-                    (0..n)
-                        .map(|j| a.iter().map(|row| row[i] * row[j]).sum())
-                        .collect()
-                })
-                .collect();
-            for k in 0..n {
-                let rhs: Vec<f64> = (0..n)
-                    .map(|i| a.iter().zip(&t).map(|(ar, tr)| ar[i] * tr[k]).sum())
-                    .collect();
-                let column = solve(ata.clone(), rhs);
-                for (m, v) in column.into_iter().enumerate() {
-                    out[at + m * n + k] = v as f32;
+        for l in 1..=3 {
+            let n = 2 * l + 1;
+            for (row, values) in bands.band(l).iter().take(n).enumerate() {
+                for (k, v) in values.iter().take(n).enumerate() {
+                    out[at + row * n + k] = *v as f32;
                 }
             }
             at += n * n;

@@ -29,20 +29,7 @@ fn gpu_as_cpu(
     clip: &Clip,
 ) -> Vec<ProjectedSplat> {
     let mid = renderer.intermediates(gpu, stats).unwrap();
-    reference::project::project_all(scene, cam, clip)
-        .into_iter()
-        .map(|c| {
-            let g = &mid.splats[c.index as usize];
-            ProjectedSplat {
-                uv: g.uv.into(),
-                depth: g.depth,
-                opacity: g.opacity,
-                conic: g.conic.into(),
-                color: g.color.into(),
-                ..c
-            }
-        })
-        .collect()
+    common::with_gpu_values(reference::project::project_all(scene, cam, clip), &mid)
 }
 
 /// How many of `gpu`'s depths differ from `cpu`'s by more than `rel` relatively (an infinite
@@ -342,55 +329,71 @@ fn depth_image(
     )
     .unwrap();
     staging.upload(bytes).unwrap();
-    ctx.run_commands(|cmd| unsafe {
-        let to_dst = vk::ImageMemoryBarrier::default()
+    // A layout transition of the whole depth image between two stages.
+    let transition = |cmd, (from, src_stage, src_access), (to, dst_stage, dst_access)| unsafe {
+        let barrier = vk::ImageMemoryBarrier::default()
             .image(image)
             .subresource_range(range)
-            .old_layout(vk::ImageLayout::UNDEFINED)
-            .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
+            .old_layout(from)
+            .new_layout(to)
+            .src_access_mask(src_access)
+            .dst_access_mask(dst_access);
         device.cmd_pipeline_barrier(
             cmd,
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::PipelineStageFlags::TRANSFER,
+            src_stage,
+            dst_stage,
             vk::DependencyFlags::empty(),
             &[],
             &[],
-            &[to_dst],
+            &[barrier],
         );
-        device.cmd_copy_buffer_to_image(
+    };
+    ctx.run_commands(|cmd| {
+        transition(
             cmd,
-            staging.raw,
-            image,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            &[vk::BufferImageCopy::default()
-                .image_subresource(vk::ImageSubresourceLayers {
-                    aspect_mask: vk::ImageAspectFlags::DEPTH,
-                    mip_level: 0,
-                    base_array_layer: 0,
-                    layer_count: 1,
-                })
-                .image_extent(vk::Extent3D {
-                    width: w,
-                    height: h,
-                    depth: 1,
-                })],
+            (
+                vk::ImageLayout::UNDEFINED,
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::AccessFlags::empty(),
+            ),
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
         );
-        let to_read = vk::ImageMemoryBarrier::default()
-            .image(image)
-            .subresource_range(range)
-            .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-            .new_layout(vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL)
-            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(vk::AccessFlags::SHADER_READ);
-        device.cmd_pipeline_barrier(
+        unsafe {
+            device.cmd_copy_buffer_to_image(
+                cmd,
+                staging.raw,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[vk::BufferImageCopy::default()
+                    .image_subresource(vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::DEPTH,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    })
+                    .image_extent(vk::Extent3D {
+                        width: w,
+                        height: h,
+                        depth: 1,
+                    })],
+            )
+        };
+        transition(
             cmd,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[to_read],
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+            (
+                vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            ),
         );
     })
     .unwrap();

@@ -89,21 +89,10 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
                 headless.composite = Composite::Background;
                 let (_, stats) = renderer.render(&scene, &camera, &headless).unwrap();
                 let mid = renderer.intermediates(&scene, &stats).unwrap();
-                let splats: Vec<_> =
-                    rara::reference::project::project_all(&cpu_scene, &camera, &options.clip)
-                        .into_iter()
-                        .map(|c| {
-                            let g = &mid.splats[c.index as usize];
-                            rara::reference::project::ProjectedSplat {
-                                uv: g.uv.into(),
-                                depth: g.depth,
-                                opacity: g.opacity,
-                                conic: g.conic.into(),
-                                color: g.color.into(),
-                                ..c
-                            }
-                        })
-                        .collect();
+                let splats = common::with_gpu_values(
+                    rara::reference::project::project_all(&cpu_scene, &camera, &options.clip),
+                    &mid,
+                );
                 let lists = rara::reference::rasterize::tile_lists(&splats, &camera);
                 let gx = w.div_ceil(rara::constants::TILE_SIZE);
                 let clip = options.clip.clone();

@@ -73,6 +73,29 @@ pub fn load(
     Ok(out)
 }
 
+/// The loaded objects' scenes on the device of `renderer`, in order.
+pub fn upload(
+    renderer: &rara::Renderer,
+    loaded: &[(Scene, ObjectTransform)],
+) -> Result<Vec<rara::GpuScene>> {
+    loaded.iter().map(|(s, _)| renderer.upload(s)).collect()
+}
+
+/// The objects to draw: each uploaded scene with its transform.
+pub fn scene_objects<'a>(
+    uploaded: &'a [rara::GpuScene],
+    loaded: &[(Scene, ObjectTransform)],
+) -> Vec<rara::SceneObject<'a>> {
+    uploaded
+        .iter()
+        .zip(loaded)
+        .map(|(scene, (_, transform))| rara::SceneObject {
+            scene,
+            transform: *transform,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

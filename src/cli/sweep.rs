@@ -193,18 +193,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let uploaded: Vec<rara::GpuScene> = objects
-        .iter()
-        .map(|(s, _)| renderer.upload(s))
-        .collect::<Result<_>>()?;
-    let scene_objects: Vec<rara::SceneObject> = uploaded
-        .iter()
-        .zip(&objects)
-        .map(|(scene, (_, transform))| rara::SceneObject {
-            scene,
-            transform: *transform,
-        })
-        .collect();
+    let uploaded = super::objects::upload(&renderer, &objects)?;
+    let scene_objects = super::objects::scene_objects(&uploaded, &objects);
     let (gpu_scene, mut mixed_gpu) = match &mixed {
         Some(m) => (None, Some(super::scene::MixedGpu::new(&ctx, m, false)?)),
         None if !scene_objects.is_empty() => (None, None),

@@ -149,6 +149,12 @@ impl ShRotation {
         ShRotation { degree, bands }
     }
 
+    /// Band `l`'s matrix (1 to the degree, at most 3): `(2l + 1) x (2l + 1)` entries of the
+    /// 7 x 7 array, rows first.
+    pub fn band(&self, l: usize) -> &[[f64; 7]; 7] {
+        &self.bands[l - 1]
+    }
+
     /// Turns one Gaussian's coefficients in place.
     pub fn apply(&self, sh: &mut [f32]) {
         for l in 1..=self.degree.min(3) as usize {

@@ -413,3 +413,24 @@ pub fn subset(s: &rara::Scene, keep: &[usize]) -> rara::Scene {
         sh: keep.iter().flat_map(|&i| s.sh_of(i).to_vec()).collect(),
     }
 }
+
+/// The CPU's projected splats with the GPU's values (centre, depth, opacity, conic, colour)
+/// from `mid` (a frame's intermediates), so the CPU compositor sees what the GPU did.
+pub fn with_gpu_values(
+    cpu: Vec<rara::reference::project::ProjectedSplat>,
+    mid: &rara::Intermediates,
+) -> Vec<rara::reference::project::ProjectedSplat> {
+    cpu.into_iter()
+        .map(|c| {
+            let g = &mid.splats[c.index as usize];
+            rara::reference::project::ProjectedSplat {
+                uv: g.uv.into(),
+                depth: g.depth,
+                opacity: g.opacity,
+                conic: g.conic.into(),
+                color: g.color.into(),
+                ..c
+            }
+        })
+        .collect()
+}
