@@ -33,6 +33,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bake;
 pub mod camera;
 pub mod clip;
 /// Integer constants shared by the host and the GLSL kernels (tile size, workgroup sizes,

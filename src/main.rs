@@ -63,6 +63,9 @@ enum Command {
     /// Convert a scene to PLY, SPZ (v4 or v3), glTF (.glb, KHR_gaussian_splatting) or .splat,
     /// warning about what the target format drops.
     Convert(cli::convert::ConvertArgs),
+    /// Bake a clip into a scene (SPEC section 10): cut Gaussians replaced by their visible
+    /// part, so any viewer shows the scene cut.
+    Bake(cli::bake::BakeArgs),
     /// Print what a scene holds: count, SH degree, bounds, per-property ranges.
     Info {
         /// The scene (PLY, compressed PLY, SPZ, glTF, SOG or .splat, told apart by content).
@@ -793,6 +796,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => cli::sweep::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Convert(args) => cli::convert::run(args),
+        Command::Bake(args) => cli::bake::run(args),
         Command::Info { scene, json } => cmd_info(scene, *json),
         Command::Compare { a, b, diff, json } => cmd_compare(a, b, diff.as_deref(), *json),
         Command::Synth {

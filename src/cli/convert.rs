@@ -41,11 +41,15 @@ pub struct ConvertArgs {
 }
 
 fn target_of(args: &ConvertArgs) -> Result<Target> {
-    if let Some(t) = args.to {
+    target_for(&args.output, args.to)
+}
+
+/// The format to write `output` in: `to` when given, else its extension's.
+pub fn target_for(output: &std::path::Path, to: Option<Target>) -> Result<Target> {
+    if let Some(t) = to {
         return Ok(t);
     }
-    let ext = args
-        .output
+    let ext = output
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     match ext.as_deref() {
@@ -55,7 +59,7 @@ fn target_of(args: &ConvertArgs) -> Result<Target> {
         Some("splat") => Ok(Target::Splat),
         _ => Err(Error::InvalidInput(format!(
             "{}: name the format with --to (ply, spz, glb, splat), or end the name with one",
-            args.output.display()
+            output.display()
         ))),
     }
 }
@@ -107,6 +111,33 @@ pub fn losses(scene: &rara::Scene, target: Target, version: u32) -> Vec<String> 
     out
 }
 
+/// Writes `scene` to `output` as `target` (SPZ of `spz_version`, in the axes `--spz-axes`
+/// names).
+pub fn write(
+    scene: &rara::Scene,
+    output: &std::path::Path,
+    target: Target,
+    spz_version: u32,
+) -> Result<()> {
+    match target {
+        Target::Ply => {
+            rara::ply::write_ply(scene, output, rara::ply::PlyEncoding::BinaryLittleEndian)
+        }
+        Target::Spz => rara::formats::spz::write_spz(
+            scene,
+            output,
+            if spz_version == 3 {
+                SpzVersion::V3
+            } else {
+                SpzVersion::V4
+            },
+            crate::spz_axes(),
+        ),
+        Target::Glb => rara::formats::gltf::write_glb(scene, output),
+        Target::Splat => rara::formats::splat::write_splat(scene, output),
+    }
+}
+
 /// Runs `rara convert`.
 pub fn run(args: &ConvertArgs) -> Result<()> {
     let target = target_of(args)?;
@@ -118,25 +149,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
         crate::cli::output::create_dir(dir)?;
     }
     let start = std::time::Instant::now();
-    match target {
-        Target::Ply => rara::ply::write_ply(
-            &scene,
-            &args.output,
-            rara::ply::PlyEncoding::BinaryLittleEndian,
-        )?,
-        Target::Spz => rara::formats::spz::write_spz(
-            &scene,
-            &args.output,
-            if args.spz_version == 3 {
-                SpzVersion::V3
-            } else {
-                SpzVersion::V4
-            },
-            crate::spz_axes(),
-        )?,
-        Target::Glb => rara::formats::gltf::write_glb(&scene, &args.output)?,
-        Target::Splat => rara::formats::splat::write_splat(&scene, &args.output)?,
-    }
+    write(&scene, &args.output, target, args.spz_version)?;
     let bytes = std::fs::metadata(&args.output)
         .map(|m| m.len())
         .unwrap_or(0);

@@ -1,5 +1,6 @@
 //! Subcommands of the `rara` tool that live in their own files.
 
+pub mod bake;
 pub mod bench;
 pub mod clip_args;
 pub mod convert;
