@@ -11,6 +11,7 @@
 //! after another, nearest first; a sphere uses its tangent plane at the point nearest the
 //! centre, an inverted region the face nearest the centre. `P` below 1/255 drops the Gaussian.
 //! The SH are kept; `Sigma'` goes back to scales and a rotation by its eigen-decomposition
+//! ([`crate::mesh::symmetric_eigen`])
 //! (a flat Gaussian's normal is in the null space of `Sigma'` too, so it stays flat).
 //!
 //! Where section 10 is silent: "nearest first" orders the half-spaces by the distance of the
@@ -21,6 +22,7 @@
 use glam::{DMat3, DQuat, DVec3, Vec3};
 
 use crate::clip::{Classification, Clip, ClipShape, Plane};
+use crate::mesh::symmetric_eigen;
 use crate::scene::Scene;
 
 /// How a reshaped Gaussian's opacity is set.
@@ -147,49 +149,6 @@ fn covariance(scale: Vec3, rotation: glam::Quat) -> DMat3 {
     r * s * r.transpose()
 }
 
-/// Eigen-decomposition of a symmetric 3x3 matrix by Jacobi rotations: (eigenvalues,
-/// eigenvectors as the columns of a rotation).
-fn symmetric_eigen(m: DMat3) -> (DVec3, DMat3) {
-    let mut a = m.to_cols_array_2d();
-    let mut v = DMat3::IDENTITY.to_cols_array_2d();
-    for _ in 0..64 {
-        let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
-        let scale = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
-        if off <= 1e-18 * scale.max(1e-300) {
-            break;
-        }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q] == 0.0 {
-                continue;
-            }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-            let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
-            let t = sign / (theta.abs() + (theta * theta + 1.0).sqrt());
-            let c = 1.0 / (t * t + 1.0).sqrt();
-            let s = t * c;
-            // A J (columns p and q), then J^T (A J) (rows p and q), then V J.
-            for row in a.iter_mut() {
-                let (akp, akq) = (row[p], row[q]);
-                row[p] = c * akp - s * akq;
-                row[q] = s * akp + c * akq;
-            }
-            let (row_p, row_q) = (a[p], a[q]);
-            for k in 0..3 {
-                a[p][k] = c * row_p[k] - s * row_q[k];
-                a[q][k] = s * row_p[k] + c * row_q[k];
-            }
-            for row in v.iter_mut() {
-                let (vp, vq) = (row[p], row[q]);
-                row[p] = c * vp - s * vq;
-                row[q] = s * vp + c * vq;
-            }
-        }
-    }
-    // `v` holds the eigenvectors in its rows (the transposed accumulation): as columns.
-    let vectors = DMat3::from_cols_array_2d(&v).transpose();
-    (DVec3::new(a[0][0], a[1][1], a[2][2]), vectors)
-}
-
 /// One Gaussian's visible part under half-spaces `planes` (section 10): its new centre,
 /// covariance and opacity, or `None` when less than 1/255 of it is left.
 fn cut(
@@ -282,17 +241,17 @@ pub fn bake(scene: &Scene, clip: &Clip, rule: BakeOpacity) -> (Scene, BakeReport
                 ) {
                     None => report.dropped += 1,
                     Some((mu, sigma, o)) => {
+                        // Eigenvalues ascending, unit eigenvectors (the mesh fit's Jacobi).
                         let (values, vectors) = symmetric_eigen(sigma);
-                        let mut rot = vectors;
+                        let mut rot = DMat3::from_cols(vectors[0], vectors[1], vectors[2]);
                         if rot.determinant() < 0.0 {
                             rot.z_axis = -rot.z_axis;
                         }
-                        let mut s = values.max(DVec3::ZERO).to_array().map(f64::sqrt);
+                        let mut s = values.map(|v| v.max(0.0).sqrt());
                         // A flat Gaussian stays flat: its normal is in the null space of
                         // Sigma', so the smallest eigenvalue is 0 up to rounding.
                         if scale.min_element() == 0.0 {
-                            let k = (0..3).min_by(|&a, &b| s[a].total_cmp(&s[b])).unwrap();
-                            s[k] = 0.0;
+                            s[0] = 0.0;
                         }
                         let rotation = DQuat::from_mat3(&rot).normalize().as_quat();
                         report.reshaped += 1;
@@ -330,15 +289,5 @@ mod tests {
                 "{x}: {got} {want}"
             );
         }
-    }
-
-    #[test]
-    fn eigen_decomposition_rebuilds_the_matrix() {
-        let q = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.2, 2.0);
-        let sigma = covariance(Vec3::new(0.3, 0.05, 0.01), q);
-        let (values, vectors) = symmetric_eigen(sigma);
-        let rebuilt = vectors * DMat3::from_diagonal(values) * vectors.transpose();
-        let diff = (rebuilt - sigma).to_cols_array();
-        assert!(diff.iter().all(|d| d.abs() < 1e-12), "{diff:?}");
     }
 }
