@@ -115,6 +115,17 @@ fn device_floats(ctx: &rara::Context, values: &[f32]) -> Buffer {
     b
 }
 
+/// A depth test against the engine depths in `buffer` (from its start), of `projection`.
+fn buffer_test(buffer: &Buffer, projection: DepthProjection) -> DepthTest {
+    DepthTest {
+        source: DepthSource::Buffer {
+            buffer: buffer.raw,
+            offset: 0,
+        },
+        projection,
+    }
+}
+
 /// The engine's depth test, GPU against the CPU compositor over the GPU's projected splats,
 /// for each projection (standard and reversed, finite and infinite far plane): an engine
 /// surface that covers the left half of the image at the scene's middle depth and leaves the
@@ -166,13 +177,7 @@ fn depth_test_hides_what_lies_behind_the_engine_surface() {
         let render = |renderer: &mut Renderer, values: &[f32]| {
             let buffer = device_floats(&ctx, values);
             let options = RenderOptions {
-                depth_test: Some(DepthTest {
-                    source: DepthSource::Buffer {
-                        buffer: buffer.raw,
-                        offset: 0,
-                    },
-                    projection,
-                }),
+                depth_test: Some(buffer_test(&buffer, projection)),
                 ..RenderOptions::default()
             };
             renderer
@@ -233,13 +238,7 @@ fn depth_test_hides_what_lies_behind_the_engine_surface() {
     };
     let buffer = device_floats(&ctx, &vec![projection.depth_value(z0); w * h]);
     let options = RenderOptions {
-        depth_test: Some(DepthTest {
-            source: DepthSource::Buffer {
-                buffer: buffer.raw,
-                offset: 0,
-            },
-            projection,
-        }),
+        depth_test: Some(buffer_test(&buffer, projection)),
         ..RenderOptions::default()
     };
     let (tested, _) = renderer.render(&gpu, &cam, &options).unwrap();
@@ -539,13 +538,7 @@ fn several_views_equal_single_renders() {
         &ctx,
         &vec![projection.depth_value(3.0); (base.width * base.height) as usize],
     );
-    let depth_test = DepthTest {
-        source: DepthSource::Buffer {
-            buffer: surface.raw,
-            offset: 0,
-        },
-        projection,
-    };
+    let depth_test = buffer_test(&surface, projection);
     let targets: Vec<Buffer> = cameras
         .iter()
         .map(|c| {
