@@ -23,6 +23,11 @@ layout(push_constant) uniform Push {
     U32s counters;
     ClipParamsRef clip;
     CutoffRecords cutoffs;  // out: one record per cutoff Gaussian, packed
+    U32s cutoff_regions;    // out, with several clipped objects: `region` per cutoff record
+    uint first;             // the Gaussians [first, end) this dispatch projects
+    uint end;
+    uint region;            // the index of `clip` among the frame's regions
+    uint pad;
 } pc;
 
 #ifdef SCENE_TEXELS
@@ -43,6 +48,14 @@ Gaussian fetch_gaussian(uint i) {
 shared uint wg_cutoff_count;
 shared uint wg_cutoff_base;
 #endif
+
+// With several clipped objects, which region cutoff record `index` is weighted by (the
+// rasterizer's OBJECT_CLIPS kernels read it).
+void store_cutoff_region(uint index) {
+    if (uint64_t(pc.cutoff_regions) != 0ul) {
+        pc.cutoff_regions.v[index] = pc.region;
+    }
+}
 
 // Writes the record of a Gaussian that draws nothing.
 void skip(uint i) {
@@ -175,7 +188,10 @@ void main() {
     // clip.glsl). lavapipe, playbot at 640x480: project 119 -> 94 ms for the frame parameters.
     FrameParams f = load_frame_params(pc.frame);
     ClipParams clip = load_clip_params(pc.clip);
-    uint i = linear_index();
+    // Several objects with clip regions of their own (SPEC section 9) are projected one
+    // dispatch per object, each with its region in pc.clip: per-Gaussian regions would load
+    // the parameters per lane, a scalar loop over the lanes per word on a CPU driver.
+    uint i = pc.first + linear_index();
     CutoffRecord rec;
 #ifdef SCENE_TEXELS
     // Side records are packed by one global atomic per cutoff Gaussian. A CPU driver runs the
@@ -183,10 +199,11 @@ void main() {
     // aggregation below costs three barriers, at which its 32 SIMD vectors of a workgroup take
     // turns (lavapipe, render --repeat 10, three runs each in turn: project 47.0 -> 42.0 ms on
     // playbot, 10.7 -> 9.4 ms on plant, also under rara).
-    if (i < f.scene.x && project(f, clip, i, rec)) {
+    if (i < pc.end && project(f, clip, i, rec)) {
         uint index = atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u);
         store_cutoff_record(pc.cutoffs, index, rec);
         pc.splats.v[i].cutoff = index;
+        store_cutoff_region(index);
     }
 #else
     uint lid = gl_LocalInvocationIndex;
@@ -194,7 +211,7 @@ void main() {
         wg_cutoff_count = 0u;
     }
     barrier();
-    bool cutoff = i < f.scene.x && project(f, clip, i, rec);
+    bool cutoff = i < pc.end && project(f, clip, i, rec);
     // Side records are packed: a slot within the workgroup, then one global atomic per
     // workgroup for the base.
     uint slot = cutoff ? atomicAdd(wg_cutoff_count, 1u) : 0u;
@@ -209,6 +226,7 @@ void main() {
         uint index = wg_cutoff_base + slot;
         store_cutoff_record(pc.cutoffs, index, rec);
         pc.splats.v[i].cutoff = index;
+        store_cutoff_region(index);
     }
 #endif
 }

@@ -89,6 +89,7 @@ layout(push_constant) uniform Push {
     U32s tiles;         // with ROUND_TILE_LIST: the tile ids to walk
     Vec4s depth_state;  // with DEPTH: per pixel (median depth, sum alpha T z, 0, 0)
     F32s depth_limit;   // with DEPTH: per pixel the engine's view depth (0: no depth test)
+    U32s cutoff_regions;  // with OBJECT_CLIPS: per cutoff record, its region in `clip`
     uint round_index;
     uint flags;
 } pc;
@@ -236,6 +237,24 @@ uint strip_end_count;
 vec4 px_spans[NPX];
 float band2;
 #endif
+#ifdef OBJECT_CLIPS
+// Several objects, each clipped by a region of its own (SPEC section 9): pc.clip is the array
+// of the objects' regions in world space, and each cutoff record's region is in
+// pc.cutoff_regions. The visible intervals above are those of region strip_region (none yet:
+// ~0u), worked out again when a cutoff splat of another region comes.
+vec3 strip_eye;
+uint strip_region;
+#endif
+#endif
+
+#if CUTOFF_WEIGHT != 0
+void strip_spans(vec3 eye, ClipParamsRef clip);
+#endif
+#ifdef OBJECT_CLIPS
+// Region `region` of the frame's array of regions.
+ClipParamsRef region_clip(uint region) {
+    return ClipParamsRef(uint64_t(pc.clip) + uint64_t(region) * uint64_t(CLIP_PARAMS_BYTES));
+}
 #endif
 
 #ifndef SPLAT_TEXELS
@@ -263,6 +282,14 @@ bool composite(Staged s, bool cutoff) {
     CutoffRecord rec;
     if (cutoff) {
         rec = fetch_cutoff_record(s.cutoff);
+#ifdef OBJECT_CLIPS
+        // Every lane composites the same splat: a uniform branch.
+        uint region = pc.cutoff_regions.v[s.cutoff];
+        if (region != strip_region) {
+            strip_region = region;
+            strip_spans(strip_eye, region_clip(region));
+        }
+#endif
     }
 #endif
 #if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
@@ -355,8 +382,8 @@ bool composite(Staged s, bool cutoff) {
 // over the planes is outside the loop over the strip: on lavapipe, P loops here (one per pixel)
 // made the whole rara kernel 1.9x slower on a frame with no cutoff splat (plant: 547 against
 // 290 ms of rasterize for the plain kernel; 307 ms with the one loop).
-void strip_spans(vec3 eye) {
-    uvec4 config = pc.clip.p.config;
+void strip_spans(vec3 eye, ClipParamsRef clip) {
+    uvec4 config = clip.p.config;
     float lo[NPX];
     float hi[NPX];
     [[unroll]] for (uint i = 0u; i < NPX; ++i) {
@@ -364,7 +391,7 @@ void strip_spans(vec3 eye) {
         hi[i] = UNBOUNDED;
     }
     if ((config.z & CLIP_FLAG_SPHERE) != 0u) {
-        vec4 sphere = pc.clip.p.sphere;
+        vec4 sphere = clip.p.sphere;
         [[unroll]] for (uint c = 0u; c < C; ++c) {
             [[unroll]] for (uint r = 0u; r < P; ++r) {
                 vec3 dir = ray0 + float(c) * ray_across + float(r) * ray_step;
@@ -375,7 +402,7 @@ void strip_spans(vec3 eye) {
         }
     } else {
         for (uint k = 0u; k < config.w; ++k) {
-            vec4 pl = pc.clip.p.planes[k];
+            vec4 pl = clip.p.planes[k];
             [[unroll]] for (uint c = 0u; c < C; ++c) {
                 [[unroll]] for (uint r = 0u; r < P; ++r) {
                     vec3 dir = ray0 + float(c) * ray_across + float(r) * ray_step;
@@ -504,8 +531,11 @@ void main() {
         }
 #endif
     }
-#if CUTOFF_WEIGHT != 0
-    strip_spans(f.cam_pos.xyz);
+#if CUTOFF_WEIGHT != 0 && defined(OBJECT_CLIPS)
+    strip_eye = f.cam_pos.xyz;
+    strip_region = ~0u;
+#elif CUTOFF_WEIGHT != 0
+    strip_spans(f.cam_pos.xyz, pc.clip);
 #endif
 
     uvec2 range = pc.ranges.v[tile.y * f.size.z + tile.x];

@@ -373,6 +373,78 @@ const VARIANTS: &[Variant] = &[
         ],
     },
     Variant {
+        name: "rasterize_mass_objects",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "OBJECT_CLIPS"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the mass weight by a clip region per object",
+            "(SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_mass_objects_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "OBJECT_CLIPS", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the mass weight by a clip region per object",
+            "(SPEC section 9), with the depth test and the depth outputs (see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_length_objects",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "OBJECT_CLIPS"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the length weight by a clip region per object",
+            "(SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_length_objects_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 1", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "OBJECT_CLIPS", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, GPU layout, rara clipping with the length weight by a clip region per object",
+            "(SPEC section 9), with the depth test and the depth outputs (see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_mass_objects",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "OBJECT_CLIPS"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout, rara clipping with the mass weight by a clip region per object",
+            "(SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_mass_objects_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "OBJECT_CLIPS", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout, rara clipping with the mass weight by a clip region per object",
+            "(SPEC section 9), with the depth test and the depth outputs (see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_length_objects",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "OBJECT_CLIPS"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout, rara clipping with the length weight by a clip region per object",
+            "(SPEC section 9; see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "rasterize_strips_length_objects_depth",
+        body: "rasterize_body.glsl",
+        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "OBJECT_CLIPS", "DEPTH"],
+        about: &[
+            "Stage 7, rasterize, CPU-driver layout, rara clipping with the length weight by a clip region per object",
+            "(SPEC section 9), with the depth test and the depth outputs (see rasterize_body.glsl).",
+        ],
+    },
+    Variant {
         name: "sort_count_own_counts",
         body: "sort_count_own_counts_body.glsl",
         defines: &["SORT_PAIRS_IN 0"],

@@ -65,7 +65,18 @@ pub struct FrameSlot {
     recorded_trace: Option<u32>,
     /// With several objects ([`crate::Renderer::record_objects`]): the merged scene the
     /// objects are transformed into, and their parameters.
-    pub(crate) objects: Option<(crate::gpu_scene::GpuScene, Buffer)>,
+    pub(crate) objects: Option<ObjectBuffers>,
+}
+
+/// A slot's buffers for several objects ([`crate::Renderer::record_objects`]).
+pub(crate) struct ObjectBuffers {
+    /// The merged scene the objects are transformed into.
+    pub merged: GpuScene,
+    /// The objects' transforms (`GpuObjectParams`).
+    pub params: Buffer,
+    /// With clip regions of the objects' own: the regions in world space (`GpuClipParams`
+    /// per object) and each cutoff record's region index (u32 per Gaussian).
+    pub clips: Option<(Buffer, Buffer)>,
 }
 
 /// The device memory of a [`FrameSlot`], grouped by what it scales with: the per-frame
@@ -266,9 +277,12 @@ impl FrameSlot {
                 m.per_pixel += sums.size + limit.size;
             }
         }
-        if let Some((merged, params)) = &self.objects {
+        if let Some(o) = &self.objects {
             // The merged scene of several objects is per-Gaussian memory of the frame.
-            m.per_gaussian += merged.device_bytes() + params.size;
+            m.per_gaussian += o.merged.device_bytes() + o.params.size;
+            if let Some((regions, cutoff_regions)) = &o.clips {
+                m.per_gaussian += regions.size + cutoff_regions.size;
+            }
         }
         if let Some(t) = &self.trace {
             m.bvh = t.bvh_bytes();

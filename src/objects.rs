@@ -12,6 +12,7 @@
 
 use glam::{DMat3, Quat, Vec3};
 
+use crate::clip::{ClipRegion, ClipShape, Plane};
 use crate::mesh::sh_rotation::ShRotation;
 
 use crate::error::{Error, Result};
@@ -106,6 +107,38 @@ impl ObjectTransform {
         out
     }
 
+    /// `region`, given in the object's own frame, carried into the world with the object (SPEC
+    /// section 9): a half-space `n.x + d >= 0` becomes `(R n).x + s d - (R n).t >= 0`, a
+    /// sphere's centre moves as a Gaussian's and its radius scales by `s`; inversion is kept.
+    /// Since the scale is uniform, signed distances scale by `s` like the Gaussians'
+    /// standard deviations, so every Gaussian is classified as in its own frame.
+    pub fn region_to_world(&self, region: &ClipRegion) -> ClipRegion {
+        let r = self.unit_rotation();
+        let (s, t) = (self.scale, self.translation);
+        let shape = match &region.shape {
+            ClipShape::HalfSpaces(planes) => ClipShape::HalfSpaces(
+                planes
+                    .iter()
+                    .map(|pl| {
+                        let normal = r * pl.normal;
+                        Plane {
+                            normal,
+                            d: s * pl.d - normal.dot(t),
+                        }
+                    })
+                    .collect(),
+            ),
+            ClipShape::Sphere { center, radius } => ClipShape::Sphere {
+                center: t + s * (r * *center),
+                radius: s * radius,
+            },
+        };
+        ClipRegion {
+            shape,
+            invert: region.invert,
+        }
+    }
+
     /// `scene` transformed, as the GPU transforms an object (the CPU twin, the same f32
     /// operations in the same order): centres `t + s (R x)`, rotations `r q`, scales `s x`, the
     /// SH of bands 1 to 3 multiplied by [`ObjectTransform::sh_rotation`]; opacities kept.
@@ -177,6 +210,48 @@ pub fn merge(objects: &[(&Scene, ObjectTransform)]) -> Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A region carried into the world with its object: every point's signed distance to it
+    /// is `s` times the distance of the point's place in the object's frame to the region.
+    #[test]
+    fn regions_move_and_scale_with_the_object() {
+        let t = ObjectTransform {
+            rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0),
+            translation: Vec3::new(0.5, -2.0, 1.25),
+            scale: 1.7,
+        };
+        let boxed = ClipRegion::oriented_box(
+            Vec3::new(0.2, 0.1, -0.3),
+            Vec3::new(0.5, 0.8, 0.3),
+            Quat::from_rotation_z(0.4),
+        )
+        .unwrap();
+        let regions = [
+            boxed.clone(),
+            boxed.inverted(),
+            ClipRegion::sphere(Vec3::new(-0.4, 0.3, 0.2), 0.6).unwrap(),
+            ClipRegion::sphere(Vec3::new(-0.4, 0.3, 0.2), 0.6)
+                .unwrap()
+                .inverted(),
+        ];
+        let mut rng = crate::synth::Rng::new(9);
+        for region in &regions {
+            let world = t.region_to_world(region);
+            for _ in 0..200 {
+                let local = Vec3::new(
+                    rng.range(-1.5, 1.5),
+                    rng.range(-1.5, 1.5),
+                    rng.range(-1.5, 1.5),
+                );
+                let placed = t.translation + t.scale * (t.unit_rotation() * local);
+                let (want, got) = (
+                    t.scale * region.signed_distance(local),
+                    world.signed_distance(placed),
+                );
+                assert!((want - got).abs() < 1e-5, "{region:?}: {want} against {got}");
+            }
+        }
+    }
 
     /// Rotated coefficients seen along `d` give what the original ones give along `R^T d`.
     #[test]

@@ -8,14 +8,14 @@ use ash::vk;
 use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
-use crate::clip::{Clip, ClipMode};
-use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_SLOTS};
+use crate::clip::{Clip, ClipMode, ClipRegion};
+use crate::constants::{CLIP_MODE_RARA, COUNTER_INTERSECTIONS, COUNTER_SLOTS};
 use crate::depth::{DepthMode, DepthOutput, DepthSource, DepthTarget, DepthTest};
 use crate::error::{Error, Result};
 pub use crate::frame::FrameStats;
-use crate::frame::{FrameMemory, FrameSlot};
+use crate::frame::{FrameMemory, FrameSlot, ObjectBuffers};
 pub use crate::gpu_scene::GpuScene;
-use crate::gpu_types::GpuFrameParams;
+use crate::gpu_types::{GpuClipParams, GpuFrameParams};
 use crate::objects::ObjectTransform;
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
@@ -24,7 +24,7 @@ use crate::stages::depth_order::{DepthOrder, DEPTH_KEY_BITS};
 use crate::stages::emit::Emit;
 use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
-use crate::stages::project::Project;
+use crate::stages::project::{ObjectClipRanges, Project};
 use crate::stages::rasterize::{RasterLayout, Rasterize};
 use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
@@ -519,6 +519,23 @@ impl Renderer {
         target: &Target,
         timings: Option<&mut PassTimer>,
     ) -> Result<()> {
+        self.record_frame(cmd, slot, scene, camera, options, target, timings, None)
+    }
+
+    /// [`Renderer::record`], and with `object_clips` a frame of several objects clipped by
+    /// regions of their own ([`Renderer::record_objects`]).
+    #[allow(clippy::too_many_arguments)]
+    fn record_frame(
+        &self,
+        cmd: vk::CommandBuffer,
+        slot: &mut FrameSlot,
+        scene: &GpuScene,
+        camera: &Camera,
+        options: &RenderOptions,
+        target: &Target,
+        timings: Option<&mut PassTimer>,
+        object_clips: Option<&ObjectClipsFrame>,
+    ) -> Result<()> {
         camera.validate()?;
         options.clip.validate()?;
         let (w, h) = (camera.width, camera.height);
@@ -527,6 +544,13 @@ impl Renderer {
             test.projection.validate()?;
         }
         if options.tracer == Tracer::Ray {
+            if object_clips.is_some() {
+                return Err(Error::InvalidInput(
+                    "objects with clip regions of their own are drawn by the rasterizer so far, \
+                     not the ray tracer"
+                        .into(),
+                ));
+            }
             if options.depth_test.is_some() || options.depth_output.is_some() {
                 return Err(Error::InvalidInput(
                     "the depth test and the depth output are the rasterizer's so far, not the \
@@ -545,7 +569,13 @@ impl Renderer {
             );
         }
         let (gx, gy) = tile_grid(w, h);
-        let rara = options.clip.effective_mode() == ClipMode::Rara;
+        let rara = match object_clips {
+            Some(o) => o.rara,
+            None => options.clip.effective_mode() == ClipMode::Rara,
+        };
+        if rara && object_clips.is_some() {
+            self.rasterize.prepare_object_clips(&self.ctx)?;
+        }
         self.rasterize.check_scene(&self.ctx, scene)?;
         let (_capacity, rounds) = slot.prepare(
             &self.prefix_sum,
@@ -583,8 +613,11 @@ impl Renderer {
             0
         };
         // Cutoff pairs are classified by tile only under rara clipping by planes with the mass
-        // weight (stages::cutoff_tiles).
-        let cutoff_pairs = if self.cutoff_tile_classes && options.clip.classifies_cutoff_tiles() {
+        // weight (stages::cutoff_tiles), and by the frame's one region.
+        let cutoff_pairs = if self.cutoff_tile_classes
+            && options.clip.classifies_cutoff_tiles()
+            && object_clips.is_none()
+        {
             f.cutoff_pairs.as_ref()
         } else {
             None
@@ -630,7 +663,8 @@ impl Renderer {
             texels: frame_texels,
             at: FrameAddresses {
                 params: f.params.address,
-                clip: f.clip_params.address,
+                // With several clipped objects, the array of their regions.
+                clip: object_clips.map_or(f.clip_params.address, |o| o.regions),
                 counters: f.counters.address,
                 splats: f.splats.address,
                 tiles_touched: f.tiles_touched.address,
@@ -643,7 +677,8 @@ impl Renderer {
             grid: (gx, gy),
         };
         let scan = (&self.prefix_sum, &f.slots_scan);
-        self.project.record(&mut rec, scene);
+        self.project
+            .record(&mut rec, scene, object_clips.map(|o| &o.project));
         let depth_sorted =
             self.depth_order
                 .record_sorted(&mut rec, scene.count, scan, &self.sort, &f.depth_sort);
@@ -699,6 +734,9 @@ impl Renderer {
             cutoff_weight,
             tile_lists,
             depth_buffers.map(|(sums, _)| (sums, depth_limit)),
+            object_clips
+                .filter(|_| rara)
+                .map(|o| o.project.cutoff_regions),
         );
         self.write_target.record(
             &mut rec,
@@ -782,13 +820,46 @@ impl Renderer {
     }
 }
 
-/// One object of [`Renderer::record_objects`]: a scene and where it stands in the world.
-#[derive(Clone, Copy)]
+/// One object of [`Renderer::record_objects`]: a scene, where it stands in the world, and
+/// optionally a clip region of its own.
+#[derive(Clone)]
 pub struct SceneObject<'a> {
     /// The object's Gaussians (f32 SH coefficients).
     pub scene: &'a GpuScene,
     /// Its rigid transform and uniform scale.
     pub transform: ObjectTransform,
+    /// Its clip region in its own frame (SPEC section 9), which moves with it; `None` clips
+    /// it by the frame's region (`RenderOptions::clip.region`, world space). The frame's clip
+    /// gives the mode, weight and band of every region.
+    pub clip: Option<ClipRegion>,
+}
+
+impl<'a> SceneObject<'a> {
+    /// The object `scene` at `transform`, clipped by the frame's region.
+    pub fn new(scene: &'a GpuScene, transform: ObjectTransform) -> Self {
+        SceneObject {
+            scene,
+            transform,
+            clip: None,
+        }
+    }
+
+    /// The same object clipped by `region`, given in the object's own frame.
+    pub fn with_clip(mut self, region: ClipRegion) -> Self {
+        self.clip = Some(region);
+        self
+    }
+}
+
+/// A frame of several objects of which some have clip regions of their own: what project and
+/// rasterize need to clip each object's Gaussians by its region.
+struct ObjectClipsFrame {
+    /// Per object its Gaussians and region; where the cutoff records' region indices go.
+    project: ObjectClipRanges,
+    /// The array of the objects' regions (`GpuClipParams`, world space).
+    regions: u64,
+    /// Whether any region is rara-clipped (the frame then has cutoff splats to weigh).
+    rara: bool,
 }
 
 impl Renderer {
@@ -797,9 +868,13 @@ impl Renderer {
     /// scales, and the SH coefficients, which turn with the object) into a merged scene that
     /// `slot` keeps, which the frame's stages then draw exactly as [`Renderer::record`] draws
     /// a scene, so the frame equals the merged, pre-transformed scene rendered alone
-    /// ([`crate::objects::merge`] is the CPU twin). `options.clip` applies to the merged scene
-    /// in world space; a clip of each object's own is not supported yet. The objects' scenes
-    /// must stay alive until the frame completed; the synchronisation contract is `record`'s.
+    /// ([`crate::objects::merge`] is the CPU twin). An object with a clip region of its own
+    /// ([`SceneObject::clip`], in its own frame) is clipped by that region carried into the world
+    /// by its transform ([`ObjectTransform::region_to_world`]), the others by
+    /// `options.clip`'s region; `options.clip` gives every region's mode, weight and band.
+    /// Regions of the objects' own are the rasterizer's so far (not [`Tracer::Ray`]'s), and their
+    /// frames do not classify cutoff pairs by tile. The objects' scenes must stay alive until
+    /// the frame completed; the synchronisation contract is `record`'s.
     #[allow(clippy::too_many_arguments)]
     pub fn record_objects(
         &self,
@@ -814,6 +889,13 @@ impl Renderer {
         let mut count = 0u64;
         for o in objects {
             o.transform.validate()?;
+            if let Some(region) = &o.clip {
+                Clip {
+                    region: Some(region.clone()),
+                    ..options.clip.clone()
+                }
+                .validate()?;
+            }
             if o.scene.sh_precision() != crate::ShPrecision::F32 {
                 return Err(Error::InvalidInput(
                     "several objects need f32 SH coefficients (not --sh-half) so far".into(),
@@ -832,28 +914,124 @@ impl Renderer {
             .max()
             .unwrap_or(0);
         let params_bytes = (objects.len().max(1) * std::mem::size_of::<GpuObjectParams>()) as u64;
-        let fits = slot.objects.as_ref().is_some_and(|(m, p)| {
-            m.len() == count && m.sh_degree() == degree && p.size >= params_bytes
+        let own_clips = objects.iter().any(|o| o.clip.is_some());
+        let regions_bytes = (objects.len().max(1) * std::mem::size_of::<GpuClipParams>()) as u64;
+        let fits = slot.objects.as_ref().is_some_and(|o| {
+            o.merged.len() == count
+                && o.merged.sh_degree() == degree
+                && o.params.size >= params_bytes
+                && (!own_clips
+                    || o.clips.as_ref().is_some_and(|(r, c)| {
+                        r.size >= regions_bytes && c.size >= count.max(1) as u64 * 4
+                    }))
         });
         if !fits {
             slot.objects = None; // free the old buffers first
-            slot.objects = Some((
-                GpuScene::for_gpu_writes(&self.ctx, count, degree)?,
-                Buffer::new(
+            let clips = if own_clips {
+                Some((
+                    Buffer::new(
+                        &self.ctx,
+                        "object clip regions",
+                        regions_bytes,
+                        MemoryLocation::GpuOnly,
+                    )?,
+                    Buffer::new(
+                        &self.ctx,
+                        "cutoff record regions",
+                        count.max(1) as u64 * 4,
+                        MemoryLocation::GpuOnly,
+                    )?,
+                ))
+            } else {
+                None
+            };
+            slot.objects = Some(ObjectBuffers {
+                merged: GpuScene::for_gpu_writes(&self.ctx, count, degree)?,
+                params: Buffer::new(
                     &self.ctx,
                     "object params",
                     params_bytes,
                     MemoryLocation::GpuOnly,
                 )?,
-            ));
+                clips,
+            });
         }
-        let (merged, params) = slot.objects.take().expect("made above");
+        let buffers = slot.objects.take().expect("made above");
         let list: Vec<(&GpuScene, ObjectTransform)> =
             objects.iter().map(|o| (o.scene, o.transform)).collect();
-        self.objects.record(&self.ctx, cmd, &list, &merged, &params);
-        let recorded = self.record(cmd, slot, &merged, camera, options, target, timings);
-        slot.objects = Some((merged, params));
+        self.objects
+            .record(&self.ctx, cmd, &list, &buffers.merged, &buffers.params);
+        let frame_clips = match (&buffers.clips, own_clips) {
+            (Some((regions, cutoff_regions)), true) => {
+                Some(self.record_object_regions(cmd, objects, options, regions, cutoff_regions))
+            }
+            _ => None,
+        };
+        let recorded = self.record_frame(
+            cmd,
+            slot,
+            &buffers.merged,
+            camera,
+            options,
+            target,
+            timings,
+            frame_clips.as_ref(),
+        );
+        slot.objects = Some(buffers);
         recorded
+    }
+
+    /// Writes each object's region, in world space, into `regions` (the objects without one
+    /// get the frame's), and returns what project and rasterize need to clip by them.
+    fn record_object_regions(
+        &self,
+        cmd: vk::CommandBuffer,
+        objects: &[SceneObject],
+        options: &RenderOptions,
+        regions: &Buffer,
+        cutoff_regions: &Buffer,
+    ) -> ObjectClipsFrame {
+        let params: Vec<GpuClipParams> = objects
+            .iter()
+            .map(|o| {
+                let region = match &o.clip {
+                    Some(own) => Some(o.transform.region_to_world(own)),
+                    None => options.clip.region.clone(),
+                };
+                Clip {
+                    region,
+                    ..options.clip.clone()
+                }
+                .to_gpu()
+            })
+            .collect();
+        let bytes: &[u8] = bytemuck::cast_slice(&params);
+        // vkCmdUpdateBuffer takes at most 65536 bytes at a time.
+        for (k, chunk) in bytes.chunks(65536).enumerate() {
+            unsafe {
+                self.ctx
+                    .device()
+                    .cmd_update_buffer(cmd, regions.raw, k as u64 * 65536, chunk);
+            }
+        }
+        let stride = std::mem::size_of::<GpuClipParams>() as u64;
+        let mut first = 0u32;
+        let mut ranges = Vec::with_capacity(objects.len());
+        for (k, o) in objects.iter().enumerate() {
+            let end = first + o.scene.len();
+            if end > first {
+                ranges.push((first, end, regions.address + k as u64 * stride));
+            }
+            first = end;
+        }
+        ObjectClipsFrame {
+            project: ObjectClipRanges {
+                objects: ranges,
+                cutoff_regions: cutoff_regions.address,
+            },
+            regions: regions.address,
+            rara: params.iter().any(|p| p.config[0] == CLIP_MODE_RARA),
+        }
     }
 }
 

@@ -89,10 +89,7 @@ pub fn scene_objects<'a>(
     uploaded
         .iter()
         .zip(loaded)
-        .map(|(scene, (_, transform))| rara::SceneObject {
-            scene,
-            transform: *transform,
-        })
+        .map(|(scene, (_, transform))| rara::SceneObject::new(scene, *transform))
         .collect()
 }
 

@@ -14,7 +14,7 @@ use std::path::Path;
 
 use glam::{DMat3, EulerRot, Quat, Vec3};
 
-use crate::clip::{Clip, ClipRegion, ClipShape, Plane};
+use crate::clip::{Clip, ClipRegion};
 use crate::error::{Error, Result};
 use crate::mesh::sh_rotation::ShRotation;
 use crate::scene::Scene;
@@ -133,29 +133,16 @@ impl Transform {
     }
 
     /// The clip region `r`, given in the local frame, in the world (a similarity: planes and
-    /// spheres stay planes and spheres).
+    /// spheres stay planes and spheres; [`crate::ObjectTransform::region_to_world`], as for the
+    /// objects of SPEC section 9). The scale must be uniform, as a splat object's is.
     pub fn region(&self, r: &ClipRegion) -> Result<ClipRegion> {
-        let s = self.scale.x;
-        let shape = match &r.shape {
-            ClipShape::HalfSpaces(planes) => ClipShape::HalfSpaces(
-                planes
-                    .iter()
-                    .map(|p| {
-                        // n.x + d >= 0 with x = R^T (y - t) / s: (R n).y - (R n).t + s d >= 0.
-                        let n = self.rotation * p.normal;
-                        Plane::new(n, s * p.d - n.dot(self.translation))
-                    })
-                    .collect::<Result<Vec<_>>>()?,
-            ),
-            ClipShape::Sphere { center, radius } => ClipShape::Sphere {
-                center: self.point(*center),
-                radius: s * radius,
-            },
+        let object = crate::ObjectTransform {
+            rotation: self.rotation,
+            translation: self.translation,
+            scale: self.scale.x,
         };
-        Ok(ClipRegion {
-            shape,
-            invert: r.invert,
-        })
+        object.validate()?;
+        Ok(object.region_to_world(r))
     }
 }
 

@@ -34,6 +34,27 @@ pub struct ProjectPush {
     pub clip: u64,
     /// Cutoff side records (0 when the frame is not rara-clipped).
     pub cutoffs: u64,
+    /// Out, with several objects clipped by regions of their own: `region` per cutoff record
+    /// (else 0).
+    pub cutoff_regions: u64,
+    /// The Gaussians `[first, end)` the dispatch projects.
+    pub first: u32,
+    /// See `first`.
+    pub end: u32,
+    /// The index of the region at `clip` among the frame's regions.
+    pub region: u32,
+    /// Unused.
+    pub pad: u32,
+}
+
+/// Several objects, each clipped by a region of its own (SPEC section 9), as project sees
+/// them: per object its Gaussians `[first, end)` in the merged scene and the device address
+/// of its region (`ClipParams`, world space), and where each cutoff record's region index goes.
+pub struct ObjectClipRanges {
+    /// Per object: first Gaussian, end, address of its region.
+    pub objects: Vec<(u32, u32, u64)>,
+    /// Out: the region index of each cutoff record.
+    pub cutoff_regions: u64,
 }
 
 /// What `glsl/project_touched.comp` reads and writes: project's later rounds.
@@ -145,8 +166,14 @@ impl Project {
     /// culled and projected, with a barrier after it; on images of more than
     /// [`TILE_RECT_CHUNK`](crate::constants::TILE_RECT_CHUNK) tiles, then the later rounds of
     /// the count of tiles touched ([`super::tile_rect_rounds`]). The texel kernels read the
-    /// frame's texel views.
-    pub fn record(&self, f: &mut FrameRecording, scene: &GpuScene) {
+    /// frame's texel views. With `object_clips` each object is projected by a dispatch of its
+    /// own, against its own region.
+    pub fn record(
+        &self,
+        f: &mut FrameRecording,
+        scene: &GpuScene,
+        object_clips: Option<&ObjectClipRanges>,
+    ) {
         let push = ProjectPush {
             frame: f.at.params,
             gaussians: scene.gaussians.address,
@@ -157,6 +184,11 @@ impl Project {
             counters: f.at.counters,
             clip: f.at.clip,
             cutoffs: f.at.cutoffs,
+            cutoff_regions: 0,
+            first: 0,
+            end: scene.count,
+            region: 0,
+            pad: 0,
         };
         let kernels = match scene.sh_precision {
             ShPrecision::F32 => &self.sh32,
@@ -164,8 +196,26 @@ impl Project {
         };
         let grid = super::linear_grid(scene.count);
         let rounds = super::tile_rect_rounds(f.tile_count());
+        let kernel = &kernels[scene.sh_degree.min(3) as usize];
         f.pass(c"project", |f| {
-            kernels[scene.sh_degree.min(3) as usize].dispatch_in(f.cmd, &push, f.texels, grid);
+            match object_clips {
+                None => kernel.dispatch_in(f.cmd, &push, f.texels, grid),
+                Some(clips) => {
+                    // The objects' Gaussians are disjoint: no barrier between them.
+                    for (region, &(first, end, clip)) in clips.objects.iter().enumerate() {
+                        let p = ProjectPush {
+                            clip,
+                            cutoff_regions: clips.cutoff_regions,
+                            first,
+                            end,
+                            region: region as u32,
+                            ..push
+                        };
+                        let grid = super::linear_grid(end - first);
+                        kernel.dispatch_in(f.cmd, &p, f.texels, grid);
+                    }
+                }
+            }
             f.barrier();
             for round_index in 1..rounds {
                 let touched = TouchedPush {

@@ -5,6 +5,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use std::ffi::CStr;
+use std::sync::OnceLock;
 
 use super::sh_texel;
 use super::sort::SortBuffers;
@@ -44,6 +45,9 @@ pub struct RasterizePush {
     pub depth_state: u64,
     /// With the depth kernels: per pixel the engine's view depth (0: no depth test).
     pub depth_limit: u64,
+    /// With the object-clip kernels: per cutoff record, the index of its region in the array
+    /// at `clip`.
+    pub cutoff_regions: u64,
     /// Which RASTER_CHUNK of every tile list this dispatch walks.
     pub round_index: u32,
     /// ROUND_FIRST on the first round.
@@ -112,8 +116,48 @@ pub struct Rasterize {
     length: ComputePipeline,
     /// The same three with the depth test and the depth outputs (SPEC section 9).
     depth: [ComputePipeline; 3],
+    /// The kernels for several objects each clipped by a region of its own (`OBJECT_CLIPS`):
+    /// mass, length, and the two with the depth test. Built on first use
+    /// ([`Rasterize::prepare_object_clips`]), as few frames need them.
+    object_clips: OnceLock<[ComputePipeline; 4]>,
+    texels: Option<vk::DescriptorSetLayout>,
     layout: RasterLayout,
 }
+
+/// The object-clip kernels of each layout: (name, SPIR-V) of mass, length, mass with depth,
+/// length with depth.
+const OBJECT_CLIP_KERNELS: [[(&CStr, &[u32]); 4]; 2] = [
+    [
+        (c"rasterize_mass_objects", shaders::RASTERIZE_MASS_OBJECTS),
+        (c"rasterize_length_objects", shaders::RASTERIZE_LENGTH_OBJECTS),
+        (
+            c"rasterize_mass_objects_depth",
+            shaders::RASTERIZE_MASS_OBJECTS_DEPTH,
+        ),
+        (
+            c"rasterize_length_objects_depth",
+            shaders::RASTERIZE_LENGTH_OBJECTS_DEPTH,
+        ),
+    ],
+    [
+        (
+            c"rasterize_strips_mass_objects",
+            shaders::RASTERIZE_STRIPS_MASS_OBJECTS,
+        ),
+        (
+            c"rasterize_strips_length_objects",
+            shaders::RASTERIZE_STRIPS_LENGTH_OBJECTS,
+        ),
+        (
+            c"rasterize_strips_mass_objects_depth",
+            shaders::RASTERIZE_STRIPS_MASS_OBJECTS_DEPTH,
+        ),
+        (
+            c"rasterize_strips_length_objects_depth",
+            shaders::RASTERIZE_STRIPS_LENGTH_OBJECTS_DEPTH,
+        ),
+    ],
+];
 
 impl Rasterize {
     /// Builds the kernels in `layout`; the strips kernels need `texels`, the layout of the
@@ -166,8 +210,34 @@ impl Rasterize {
             mass,
             length,
             depth,
+            object_clips: OnceLock::new(),
+            texels,
             layout,
         })
+    }
+
+    /// Builds the kernels for objects clipped by regions of their own, once: call it before
+    /// recording such a frame ([`Rasterize::record`] with `object_clips`).
+    pub fn prepare_object_clips(&self, ctx: &Context) -> Result<()> {
+        if self.object_clips.get().is_some() {
+            return Ok(());
+        }
+        let table = &OBJECT_CLIP_KERNELS[match self.layout {
+            RasterLayout::PixelPerInvocation => 0,
+            RasterLayout::Strips => 1,
+        }];
+        let build = |(name, spirv): (&'static CStr, &[u32])| {
+            ComputePipeline::with_set_layout::<RasterizePush>(ctx, name, spirv, self.texels)
+        };
+        let kernels = [
+            build(table[0])?,
+            build(table[1])?,
+            build(table[2])?,
+            build(table[3])?,
+        ];
+        // Another thread may have built them meanwhile: either set is the same kernels.
+        let _ = self.object_clips.set(kernels);
+        Ok(())
     }
 
     /// The layout the kernels were built in.
@@ -221,7 +291,11 @@ impl Rasterize {
     /// the plain list and the weighted kernel over the weighted list, as indirect dispatches;
     /// else one kernel over the whole grid. The strips kernels read the frame's texel views.
     /// With `depth` (the addresses of the per-pixel depth sums and of the engine's view depth,
-    /// 0 without a depth test) the depth kernels run (SPEC section 9).
+    /// 0 without a depth test) the depth kernels run (SPEC section 9). With `object_clips` (the
+    /// address of each cutoff record's region; the frame's clip address is then the array of
+    /// the objects' regions; no `lists`) the object-clip kernels run, which
+    /// [`Rasterize::prepare_object_clips`] must have built.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         f: &mut FrameRecording,
@@ -230,6 +304,7 @@ impl Rasterize {
         cutoff_weight: Option<ClipWeight>,
         lists: Option<(&Buffer, TileListsLayout)>,
         depth: Option<(u64, u64)>,
+        object_clips: Option<u64>,
     ) {
         let push = RasterizePush {
             frame: f.at.params,
@@ -243,12 +318,23 @@ impl Rasterize {
             tiles: 0,
             depth_state: depth.map_or(0, |d| d.0),
             depth_limit: depth.map_or(0, |d| d.1),
+            cutoff_regions: object_clips.unwrap_or(0),
             round_index: 0,
             flags: 0,
         };
-        let [plain, mass, length] = match depth {
-            Some(_) => [&self.depth[0], &self.depth[1], &self.depth[2]],
-            None => [&self.plain, &self.mass, &self.length],
+        let [plain, mass, length] = match (depth, object_clips) {
+            (Some(_), None) => [&self.depth[0], &self.depth[1], &self.depth[2]],
+            (None, None) => [&self.plain, &self.mass, &self.length],
+            (depth, Some(_)) => {
+                let k = self
+                    .object_clips
+                    .get()
+                    .expect("Rasterize::prepare_object_clips before an object-clip frame");
+                match depth {
+                    Some(_) => [&self.depth[0], &k[2], &k[3]],
+                    None => [&self.plain, &k[0], &k[1]],
+                }
+            }
         };
         let pipeline = match cutoff_weight {
             None => plain,
@@ -256,6 +342,7 @@ impl Rasterize {
             Some(ClipWeight::Length) => length,
         };
         debug_assert!(lists.is_none() || cutoff_weight == Some(ClipWeight::Mass));
+        debug_assert!(lists.is_none() || object_clips.is_none());
         let (gx, gy) = f.grid;
         f.pass(c"rasterize", |f| {
             for round in 0..rounds {
