@@ -949,16 +949,13 @@ pub fn run(
                 );
             }
             let mut options = options;
-            // The ray tracer has no depth test (yet): it draws over the cube.
-            if tracer == rara::Tracer::Raster {
-                options.depth_test = Some(rara::DepthTest {
-                    source: rara::DepthSource::Image {
-                        view: f.depth_view,
-                        layout: vk::ImageLayout::GENERAL,
-                    },
-                    projection: depth_projection(),
-                });
-            }
+            options.depth_test = Some(rara::DepthTest {
+                source: rara::DepthSource::Image {
+                    view: f.depth_view,
+                    layout: vk::ImageLayout::GENERAL,
+                },
+                projection: depth_projection(),
+            });
             renderer.record(
                 cmd,
                 &mut slots[k],

@@ -94,7 +94,8 @@ struct TraceParams {
     vec4 focal;         // fx, fy, cx, cy
     uvec4 size;         // W, H, Gaussians, SH floats per Gaussian
     vec4 options;       // Q, max hits (as float), unused, unused
-    uvec4 mixed;        // MIXED: the MixedParams' address (lo, hi), unused, unused
+    uvec4 mixed;        // MIXED: the MixedParams' address (lo, hi); else the depth test's
+                        // per-pixel view depth (lo, hi; 0: no depth test)
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer TraceParamsRef { TraceParams p; };
 
@@ -330,6 +331,15 @@ void main() {
         if ((ray_flags & MIXED_RAY_NONE) != 0u) {
             info.z |= RAY_DONE;
         }
+    }
+#else
+    // The depth test against an engine's depth (SPEC section 9), as the view depth per pixel
+    // that the depth prepare pass left at f.mixed.zw (0: none). A hit at t lies at view depth
+    // t (d . forward) and is composited only in front of the engine's surface: gaussian_hit
+    // takes t < t_hi, so nothing at the surface or behind it is found, and the ray ends there.
+    uint64_t depth_limit = packUint2x32(f.mixed.zw);
+    if (depth_limit != 0ul) {
+        t_hi = F32s(depth_limit).v[ray] / dot(d, f.forward.xyz);
     }
 #endif
     // No zero component: 0 * inf in the slab test would be NaN and lose the box.

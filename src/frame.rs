@@ -66,6 +66,8 @@ pub struct FrameSlot {
     /// With several objects ([`crate::Renderer::record_objects`]): the merged scene the
     /// objects are transformed into, and their parameters.
     pub(crate) objects: Option<ObjectBuffers>,
+    /// A ray-traced frame's depth test: the engine's view depth per pixel.
+    trace_depth_limit: Option<Buffer>,
 }
 
 /// A slot's buffers for several objects ([`crate::Renderer::record_objects`]).
@@ -236,6 +238,7 @@ impl FrameSlot {
             trace_rounds: FIRST_TRACE_ROUNDS,
             recorded_trace: None,
             objects: None,
+            trace_depth_limit: None,
         })
     }
 
@@ -588,6 +591,22 @@ impl FrameSlot {
 
     /// The descriptor set of a depth test's engine depth image: `view` as the sampled image at
     /// binding 0, in `layout`.
+    /// The address of the per-pixel view depth of a ray-traced frame's depth test, `size`
+    /// pixels (made, or remade for another size, here).
+    pub(crate) fn trace_depth_limit(&mut self, (w, h): (u32, u32)) -> Result<u64> {
+        let bytes = w as u64 * h as u64 * 4;
+        if self.trace_depth_limit.as_ref().map(|b| b.size) != Some(bytes) {
+            self.trace_depth_limit = None;
+            self.trace_depth_limit = Some(Buffer::new(
+                &self.ctx,
+                "trace depth limit",
+                bytes,
+                MemoryLocation::GpuOnly,
+            )?);
+        }
+        Ok(self.trace_depth_limit.as_ref().expect("made above").address)
+    }
+
     pub(crate) fn depth_in_set(
         &mut self,
         view: vk::ImageView,

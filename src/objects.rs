@@ -248,7 +248,10 @@ mod tests {
                     t.scale * region.signed_distance(local),
                     world.signed_distance(placed),
                 );
-                assert!((want - got).abs() < 1e-5, "{region:?}: {want} against {got}");
+                assert!(
+                    (want - got).abs() < 1e-5,
+                    "{region:?}: {want} against {got}"
+                );
             }
         }
     }

@@ -47,7 +47,7 @@ pub struct RenderOptions {
     pub clip: Clip,
     /// The tile rasterizer (SPEC sections 3-5) or the ray tracer (section 7).
     pub tracer: Tracer,
-    /// A depth test against the engine's depth buffer (SPEC section 9; rasterizer only).
+    /// A depth test against the engine's depth buffer (SPEC section 9; both tracers).
     pub depth_test: Option<DepthTest>,
     /// The splats' depth written out (SPEC section 9; rasterizer only).
     pub depth_output: Option<DepthOutput>,
@@ -551,11 +551,9 @@ impl Renderer {
                         .into(),
                 ));
             }
-            if options.depth_test.is_some() || options.depth_output.is_some() {
+            if options.depth_output.is_some() {
                 return Err(Error::InvalidInput(
-                    "the depth test and the depth output are the rasterizer's so far, not the \
-                     ray tracer's"
-                        .into(),
+                    "the depth output is the rasterizer's so far, not the ray tracer's".into(),
                 ));
             }
             return self.record_trace(
@@ -1152,6 +1150,23 @@ impl Renderer {
             Target::Image { view, .. } => Some(slot.image_target_set(view)?),
             Target::Buffer { .. } => None,
         };
+        // The depth test: the engine's depth into view depth per pixel (the rasterizer's
+        // depth prepare pass), which each ray then ends at.
+        let depth = match &options.depth_test {
+            Some(test) => {
+                let source = match test.source {
+                    DepthSource::Image { view, layout } => {
+                        (0, Some(slot.depth_in_set(view, layout)?))
+                    }
+                    DepthSource::Buffer { buffer, offset } => (
+                        self.buffer_address(buffer, offset, "the depth test's buffer")?,
+                        None,
+                    ),
+                };
+                Some((test.projection, source, slot.trace_depth_limit((w, h))?))
+            }
+            None => None,
+        };
         let (bufs, rounds) = slot.prepare_trace(tracer, (w, h), scene.len())?;
         let ctx = &self.ctx;
         let mut labels_only;
@@ -1163,6 +1178,30 @@ impl Renderer {
             }
         };
         timer.begin_frame(cmd);
+        let at = FrameAddresses {
+            params: 0,
+            clip: 0,
+            counters: 0,
+            splats: 0,
+            tiles_touched: 0,
+            slots: 0,
+            cutoffs: 0,
+            ranges: 0,
+            state: bufs.state.address,
+        };
+        if let Some((projection, source, limit)) = &depth {
+            let mut rec = FrameRecording {
+                ctx,
+                cmd,
+                timer: &mut *timer,
+                texels: None,
+                at,
+                size: (w, h),
+                grid: tile_grid(w, h),
+            };
+            self.depth
+                .record_prepare(&mut rec, *source, projection, *limit);
+        }
         let trace_options = crate::reference::raytrace::RayTraceOptions::default();
         tracer.record(
             ctx,
@@ -1176,23 +1215,14 @@ impl Renderer {
             0..bufs.batches,
             0..rounds,
             None,
+            depth.map(|(_, _, limit)| limit),
         )?;
         let mut rec = FrameRecording {
             ctx,
             cmd,
             timer,
             texels: None,
-            at: FrameAddresses {
-                params: 0,
-                clip: 0,
-                counters: 0,
-                splats: 0,
-                tiles_touched: 0,
-                slots: 0,
-                cutoffs: 0,
-                ranges: 0,
-                state: bufs.state.address,
-            },
+            at,
             size: (w, h),
             grid: tile_grid(w, h),
         };

@@ -624,3 +624,67 @@ fn several_views_equal_single_renders() {
     drop(slots);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The ray tracer's depth test (SPEC section 9; a hit's view depth is that of its point on
+/// the ray): a cleared engine depth changes nothing, bit for bit; an engine surface over the
+/// left half of the image, through the scene, matches the CPU ray tracer under the
+/// same per-pixel view depths (>= 45 dB), and hides what lies behind it.
+#[test]
+fn ray_tracer_takes_the_depth_test() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let (scene, cam) = scene_and_camera();
+    let gpu = renderer.upload(&scene).unwrap();
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let traced = RenderOptions {
+        tracer: rara::Tracer::Ray,
+        ..RenderOptions::default()
+    };
+    let (plain, _) = renderer.render(&gpu, &cam, &traced).unwrap();
+    let projection = DepthProjection {
+        near: 0.05,
+        far: 50.0,
+        reversed: true,
+        infinite: true,
+    };
+    let cleared = projection.depth_value(f32::INFINITY);
+    let surface = projection.depth_value(2.6);
+    let render = |renderer: &mut Renderer, values: &[f32]| {
+        let buffer = device_floats(&ctx, values);
+        let options = RenderOptions {
+            depth_test: Some(buffer_test(&buffer, projection)),
+            ..traced.clone()
+        };
+        renderer.render(&gpu, &cam, &options).unwrap().0
+    };
+    let image = render(&mut renderer, &vec![cleared; w * h]);
+    assert_eq!(
+        image, plain,
+        "a cleared depth buffer changed the traced image"
+    );
+    let half: Vec<f32> = (0..w * h)
+        .map(|p| if p % w < w / 2 { surface } else { cleared })
+        .collect();
+    let image = render(&mut renderer, &half);
+    let limits: Vec<f32> = half.iter().map(|&d| projection.view_depth(d)).collect();
+    let rt = rara::reference::raytrace::RayTraceOptions::default();
+    let (cpu, _) = reference::raytrace::render_depth_tested(
+        &scene,
+        &cam,
+        &RenderOptions::default(),
+        &rt,
+        &limits,
+        None,
+    );
+    common::check_images("trace_depth_test", &image, &cpu, 45.0, 16);
+    let hidden = (0..w * h)
+        .filter(|&p| image.as_raw()[4 * p..4 * p + 4] != plain.as_raw()[4 * p..4 * p + 4])
+        .collect::<Vec<_>>();
+    eprintln!("the surface changes {} pixels", hidden.len());
+    assert!(hidden.len() > w * h / 20, "{}", hidden.len());
+    assert!(
+        hidden.iter().all(|&p| p % w < w / 2),
+        "a pixel right of the surface changed"
+    );
+    common::assert_no_validation_messages(&ctx);
+}

@@ -28,10 +28,11 @@ fn engine_example_frames_match_the_reference_over_its_cube() {
 }
 
 /// The same with the ray tracer recorded into the engine's command buffer (SPEC section 7):
-/// the same synchronisation contract, the same teardown; it has no depth test yet, so it draws
-/// over the cube, and the frames are compared away from the cube.
+/// the same synchronisation contract, the same teardown, the same depth test against the
+/// cube; every frame against the CPU ray tracer over the cube's colour, depth-tested against
+/// its depth.
 #[test]
-fn engine_example_ray_traced_frames_match_the_headless_renderer_beside_the_cube() {
+fn engine_example_ray_traced_frames_match_the_reference_over_its_cube() {
     engine_example_matches(rara::Tracer::Ray, 3);
 }
 
@@ -81,9 +82,8 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
         );
         // The expected pixel before the vignette: for the rasterizer, the CPU compositor over
         // the GPU's own projected splats, depth-tested against the cube's depth and over the
-        // mesh pass's colour; for the ray tracer (no depth test), the headless frame over the
-        // clear colour, away from the cube.
-        let expected: Box<dyn Fn(u32, u32) -> Option<[f32; 3]>> = match tracer {
+        // mesh pass's colour; for the ray tracer, the CPU ray tracer likewise.
+        let expected: Box<dyn Fn(u32, u32) -> [f32; 3]> = match tracer {
             rara::Tracer::Raster => {
                 let mut headless = options.clone();
                 headless.composite = Composite::Background;
@@ -131,21 +131,50 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
                 Box::new(move |x, y| {
                     let limit = projection.view_depth(mesh_depth[(y * w + x) as usize]);
                     let c = rara::reference::rasterize::to_rgba8(composite(x, y, limit));
-                    Some([c[0] as f32, c[1] as f32, c[2] as f32])
+                    [c[0] as f32, c[1] as f32, c[2] as f32]
                 })
             }
             rara::Tracer::Ray => {
-                // The image holds the clear colour in rgba8 away from the cube.
-                let clear = engine_example::CLEAR_COLOR.map(|c| (c * 255.0).round() / 255.0);
-                let mut headless = options.clone();
-                headless.composite = Composite::Background;
-                headless.background = Vec3::new(clear[0], clear[1], clear[2]);
-                let (e, _) = renderer.render(&scene, &camera, &headless).unwrap();
+                // The CPU ray tracer over the mesh pass's colour (the clear colour away from
+                // the cube), with and without the depth test against the cube's depth.
+                let under: Vec<Vec3> = mesh
+                    .pixels()
+                    .map(|m| Vec3::new(m[0] as f32, m[1] as f32, m[2] as f32) / 255.0)
+                    .collect();
+                let limits: Vec<f32> = mesh_depth
+                    .iter()
+                    .map(|&d| projection.view_depth(d))
+                    .collect();
+                let rt = rara::reference::raytrace::RayTraceOptions::default();
+                let trace = |limits: &[f32]| {
+                    rara::reference::raytrace::render_depth_tested(
+                        &cpu_scene,
+                        &camera,
+                        &options,
+                        &rt,
+                        limits,
+                        Some(&under),
+                    )
+                    .0
+                };
+                let tested = trace(&limits);
+                let untested = trace(&vec![f32::INFINITY; limits.len()]);
+                for y in 0..h {
+                    for x in 0..w {
+                        if !cube(x, y) {
+                            continue;
+                        }
+                        let off = |a: &image::Rgba<u8>, b: &image::Rgba<u8>| {
+                            (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap() > 2
+                        };
+                        let t = tested.get_pixel(x, y);
+                        hidden += off(t, untested.get_pixel(x, y)) as usize;
+                        in_front += off(t, mesh.get_pixel(x, y)) as usize;
+                    }
+                }
                 Box::new(move |x, y| {
-                    (!cube(x, y)).then(|| {
-                        let p = e.get_pixel(x, y);
-                        [p[0] as f32, p[1] as f32, p[2] as f32]
-                    })
+                    let p = tested.get_pixel(x, y);
+                    [p[0] as f32, p[1] as f32, p[2] as f32]
                 })
             }
         };
@@ -154,7 +183,7 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
         let mut compared = 0;
         for (x, y, a) in actual.enumerate_pixels() {
             assert_eq!(a[3], 255, "opaque over an opaque clear");
-            let Some(e) = expected(x, y) else { continue };
+            let e = expected(x, y);
             compared += 1;
             let v = engine_example::vignette_factor(x, y);
             for c in 0..3 {
@@ -175,21 +204,26 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
         // A value exactly halfway between two levels (the synthetic scene's quantised colours
         // make some) is rounded up by the reference (floor(x * 255 + 0.5)) and to even by
         // lavapipe's store to the unorm image: one level before the vignette, so up to 0.5 + v
-        // after it, in a handful of channels.
-        assert!(worst <= 1.5, "frame {index} differs by {worst}/255");
+        // after it, in a handful of channels. The ray tracer's reference finds its hits in
+        // f64 where the GPU works in f32: a hit whose order or alpha threshold f32 cannot
+        // decide moves a few pixels further (the bound of tests/trace.rs, 4 levels but for
+        // such pixels).
+        let (most, most_ties) = match tracer {
+            rara::Tracer::Raster => (1.5, 8),
+            rara::Tracer::Ray => (8.0, 64),
+        };
+        assert!(worst <= most, "frame {index} differs by {worst}/255");
         assert!(
-            ties <= 8,
+            ties <= most_ties,
             "frame {index}: {ties} channels differ by more than 1/255"
         );
     }
-    if tracer == rara::Tracer::Raster {
-        println!(
-            "engine example: over the frames, {in_front} cube pixels show splats in front of the \
-             cube, {hidden} cube pixels hide splats behind it"
-        );
-        assert!(in_front > 0, "no splat in front of the cube");
-        assert!(hidden > 0, "the cube hid no splat");
-    }
+    println!(
+        "engine example ({tracer:?}): over the frames, {in_front} cube pixels show splats in \
+         front of the cube, {hidden} cube pixels hide splats behind it"
+    );
+    assert!(in_front > 0, "no splat in front of the cube");
+    assert!(hidden > 0, "the cube hid no splat");
     common::assert_no_validation_messages(&ctx);
     let _ = std::fs::remove_dir_all(&dir);
 }

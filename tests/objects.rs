@@ -164,9 +164,7 @@ fn each_object_is_clipped_by_its_own_region() {
         .inverted();
     let gpu_shell = renderer.upload(&shell).unwrap();
     let gpu_hair = renderer.upload(&hair).unwrap();
-    let merged = renderer
-        .upload(&merge(&[(&shell, a), (&hair, b)]))
-        .unwrap();
+    let merged = renderer.upload(&merge(&[(&shell, a), (&hair, b)])).unwrap();
     let objects = [
         SceneObject::new(&gpu_shell, a).with_clip(own_a.clone()),
         SceneObject::new(&gpu_hair, b).with_clip(own_b.clone()),
@@ -204,7 +202,11 @@ fn each_object_is_clipped_by_its_own_region() {
     for (name, mode, weight) in [
         ("hard", rara::ClipMode::Hard, rara::ClipWeight::Mass),
         ("rara mass", rara::ClipMode::Rara, rara::ClipWeight::Mass),
-        ("rara length", rara::ClipMode::Rara, rara::ClipWeight::Length),
+        (
+            "rara length",
+            rara::ClipMode::Rara,
+            rara::ClipWeight::Length,
+        ),
     ] {
         let options = |region: Option<ClipRegion>| RenderOptions {
             clip: Clip {
@@ -234,9 +236,15 @@ fn each_object_is_clipped_by_its_own_region() {
                 .filter(|&(x, y, p)| (x < half) == left && p != other.get_pixel(x, y))
                 .count()
         };
-        let (off_a, off_b) = (count(&together, &ref_a, true), count(&together, &ref_b, false));
+        let (off_a, off_b) = (
+            count(&together, &ref_a, true),
+            count(&together, &ref_b, false),
+        );
         // What each region changes, and what the other object's region would give instead.
-        let (cut_a, cut_b) = (count(&ref_a, &unclipped, true), count(&ref_b, &unclipped, false));
+        let (cut_a, cut_b) = (
+            count(&ref_a, &unclipped, true),
+            count(&ref_b, &unclipped, false),
+        );
         let (swap_a, swap_b) = (count(&ref_b, &ref_a, true), count(&ref_a, &ref_b, false));
         eprintln!(
             "{name}: {} cutoff; pixels off: {off_a} + {off_b}; clipped away: {cut_a} + {cut_b}; \
@@ -266,9 +274,7 @@ fn an_object_without_a_region_takes_the_frames() {
     let [a, b] = transforms();
     let gpu_shell = renderer.upload(&shell).unwrap();
     let gpu_hair = renderer.upload(&hair).unwrap();
-    let merged = renderer
-        .upload(&merge(&[(&shell, a), (&hair, b)]))
-        .unwrap();
+    let merged = renderer.upload(&merge(&[(&shell, a), (&hair, b)])).unwrap();
     let camera = rara::synth::orbit_cameras(4, 3.5, 160, 120, 50.0).unwrap()[1];
     let own = ClipRegion::oriented_box(
         Vec3::new(0.1, -0.2, 0.3),
@@ -306,7 +312,10 @@ fn an_object_without_a_region_takes_the_frames() {
         .zip(alone.pixels())
         .filter(|(x, y)| x != y)
         .count();
-    assert_eq!(differing, 0, "{differing} pixels differ from the merged scene");
+    assert_eq!(
+        differing, 0,
+        "{differing} pixels differ from the merged scene"
+    );
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -324,12 +333,12 @@ fn objects_with_their_own_regions_take_the_depth_test() {
     let [a, b] = transforms();
     let gpu_shell = renderer.upload(&shell).unwrap();
     let gpu_hair = renderer.upload(&hair).unwrap();
-    let merged = renderer
-        .upload(&merge(&[(&shell, a), (&hair, b)]))
-        .unwrap();
+    let merged = renderer.upload(&merge(&[(&shell, a), (&hair, b)])).unwrap();
     let camera = rara::synth::orbit_cameras(4, 3.5, 160, 120, 50.0).unwrap()[1];
-    let own = ClipRegion::planes(vec![rara::Plane::new(Vec3::new(0.5, -0.4, 0.6), 0.05).unwrap()])
-        .unwrap();
+    let own = ClipRegion::planes(vec![
+        rara::Plane::new(Vec3::new(0.5, -0.4, 0.6), 0.05).unwrap()
+    ])
+    .unwrap();
     let world = a.region_to_world(&own);
     let projection = DepthProjection {
         near: 0.05,
@@ -396,7 +405,11 @@ fn objects_with_their_own_regions_take_the_depth_test() {
             "{weight:?}: {} cutoff; the surface changes {hidden} pixels; {differing} differ",
             stats.cutoff
         );
-        assert!(stats.cutoff > 100 && hidden > 300, "{} {hidden}", stats.cutoff);
+        assert!(
+            stats.cutoff > 100 && hidden > 300,
+            "{} {hidden}",
+            stats.cutoff
+        );
         assert_eq!(differing, 0, "{weight:?}");
     }
     drop(buffer);
@@ -461,7 +474,12 @@ fn an_objects_region_moves_with_it() {
         stats.cutoff, good.psnr, bad.psnr
     );
     assert!(stats.cutoff > 100, "{}", stats.cutoff);
-    assert!(bad.psnr + 10.0 < good.psnr, "{} against {}", bad.psnr, good.psnr);
+    assert!(
+        bad.psnr + 10.0 < good.psnr,
+        "{} against {}",
+        bad.psnr,
+        good.psnr
+    );
     common::assert_no_validation_messages(&ctx);
 }
 

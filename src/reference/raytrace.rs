@@ -398,11 +398,15 @@ struct Frame<'a> {
     live: &'a [bool],
     options: &'a RenderOptions,
     rt: &'a RayTraceOptions,
+    /// A depth test's view depth per pixel (SPEC section 9), with the camera's forward axis.
+    depth_test: Option<(&'a [f32], DVec3)>,
+    /// Per pixel what the splats composite over, instead of the options' background.
+    under: Option<&'a [Vec3]>,
 }
 
 impl Frame<'_> {
-    /// Traces the ray `e + t d` and composites its hits.
-    fn trace(&self, e: DVec3, d: DVec3, stats: &mut TraceStats) -> Vec3 {
+    /// Traces the ray `e + t d` of pixel `pixel` and composites its hits.
+    fn trace(&self, e: DVec3, d: DVec3, pixel: usize, stats: &mut TraceStats) -> Vec3 {
         let mut hits = Vec::new();
         let mut test = |i: u32| {
             if self.live[i as usize] {
@@ -415,6 +419,12 @@ impl Frame<'_> {
             Some(b) => b.candidates(e, d, &mut test),
             None => (0..self.scene.len() as u32).for_each(&mut test),
         }
+        if let Some((limits, forward)) = self.depth_test {
+            // Only the hits in front of the engine's surface: view depth t (d . forward).
+            let limit = limits[pixel] as f64;
+            let along = d.dot(forward);
+            hits.retain(|h| h.t * along < limit);
+        }
         stats.rays += 1;
         stats.hits += hits.len() as u64;
         let (c, walked, capped) = composite(
@@ -423,7 +433,7 @@ impl Frame<'_> {
             e,
             d,
             &self.options.clip,
-            self.options.background,
+            self.under.map_or(self.options.background, |u| u[pixel]),
             self.rt.max_hits,
         );
         stats.hits_walked += walked as u64;
@@ -440,7 +450,25 @@ pub fn render(
     options: &RenderOptions,
     rt: &RayTraceOptions,
 ) -> (Rgba8Image, TraceStats) {
-    render_with(scene, camera, options, rt, true)
+    render_with(scene, camera, options, rt, true, None, None)
+}
+
+/// [`render`] with a depth test (SPEC section 9): `limits` holds the engine's view depth per
+/// pixel (rows top first, `f32::INFINITY` for none), and a ray composites only the hits whose
+/// view depth `t (d . forward)` lies in front of it; over `under` per pixel (an engine's
+/// colour) when given, else over the options' background.
+pub fn render_depth_tested(
+    scene: &Scene,
+    camera: &Camera,
+    options: &RenderOptions,
+    rt: &RayTraceOptions,
+    limits: &[f32],
+    under: Option<&[Vec3]>,
+) -> (Rgba8Image, TraceStats) {
+    let pixels = (camera.width * camera.height) as usize;
+    assert_eq!(limits.len(), pixels);
+    assert!(under.map_or(true, |u| u.len() == pixels));
+    render_with(scene, camera, options, rt, true, Some(limits), under)
 }
 
 /// [`render`] testing every Gaussian on every ray, no BVH: the brute-force check of the BVH.
@@ -450,7 +478,7 @@ pub fn render_brute_force(
     options: &RenderOptions,
     rt: &RayTraceOptions,
 ) -> (Rgba8Image, TraceStats) {
-    render_with(scene, camera, options, rt, false)
+    render_with(scene, camera, options, rt, false, None, None)
 }
 
 fn render_with(
@@ -459,6 +487,8 @@ fn render_with(
     options: &RenderOptions,
     rt: &RayTraceOptions,
     use_bvh: bool,
+    limits: Option<&[f32]>,
+    under: Option<&[Vec3]>,
 ) -> (Rgba8Image, TraceStats) {
     let bvh = use_bvh.then(|| Bvh::build(scene, rt.q));
     let live = not_culled(scene, camera);
@@ -468,12 +498,14 @@ fn render_with(
         live: &live,
         options,
         rt,
+        depth_test: limits.map(|l| (l, camera.rotation.col(2).as_dvec3())),
+        under,
     };
     render_rows(
         camera,
         |i, j, s: &mut TraceStats| {
             let (e, d) = pixel_ray(camera, i, j);
-            frame.trace(e, d, s)
+            frame.trace(e, d, (j * camera.width + i) as usize, s)
         },
         |total, s| {
             total.rays += s.rays;

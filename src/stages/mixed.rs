@@ -489,6 +489,7 @@ impl MixedTracer {
                             batch..batch + 1,
                             end..next,
                             Some(mixed),
+                            None,
                         )
                     })??;
                     add_times(&timer, &mut stats)?;

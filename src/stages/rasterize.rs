@@ -129,7 +129,10 @@ pub struct Rasterize {
 const OBJECT_CLIP_KERNELS: [[(&CStr, &[u32]); 4]; 2] = [
     [
         (c"rasterize_mass_objects", shaders::RASTERIZE_MASS_OBJECTS),
-        (c"rasterize_length_objects", shaders::RASTERIZE_LENGTH_OBJECTS),
+        (
+            c"rasterize_length_objects",
+            shaders::RASTERIZE_LENGTH_OBJECTS,
+        ),
         (
             c"rasterize_mass_objects_depth",
             shaders::RASTERIZE_MASS_OBJECTS_DEPTH,

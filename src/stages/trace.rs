@@ -61,7 +61,8 @@ struct GpuTraceParams {
     focal: [f32; 4],
     size: [u32; 4],
     options: [f32; 4],
-    /// The mixed scene's parameters' address (lo, hi) for the MIXED kernels, else 0.
+    /// The mixed scene's parameters' address (lo, hi) for the MIXED kernels, else 0; then,
+    /// without MIXED, the depth test's per-pixel view depth (lo, hi; 0: no depth test).
     mixed: [u32; 4],
 }
 
@@ -745,7 +746,9 @@ impl RayTracer {
     /// round goes on with the rays its earlier rounds left live (the per-ray buffers hold one
     /// batch: a batch must be finished before the next is started). The per-pixel state is in
     /// `bufs.state` afterwards. With `mixed`, the rays are a mixed scene's generation
-    /// ([`MixedRays`]; the camera then only culls).
+    /// ([`MixedRays`]; the camera then only culls). Else, with `depth_limit` (the address of
+    /// one f32 view depth per pixel, the depth test's, [`crate::stages::depth`]), a ray takes
+    /// only the hits in front of its pixel's depth (SPEC section 9).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -760,6 +763,7 @@ impl RayTracer {
         batches: std::ops::Range<u32>,
         rounds: std::ops::Range<u32>,
         mixed: Option<MixedRays>,
+        depth_limit: Option<u64>,
     ) -> Result<()> {
         let n = scene.len();
         let (w, h) = (camera.width, camera.height);
@@ -773,6 +777,11 @@ impl RayTracer {
             return Err(Error::InvalidInput(format!(
                 "ray tracer rounds {rounds:?}: at most {MAX_TRACE_ROUNDS}"
             )));
+        }
+        if mixed.is_some() && depth_limit.is_some() {
+            return Err(Error::InvalidInput(
+                "a mixed scene's rays take no depth test".into(),
+            ));
         }
         if mixed.is_some() && batches.len() != 1 {
             return Err(Error::InvalidInput(
@@ -788,7 +797,10 @@ impl RayTracer {
         let device = ctx.device();
         let rays = w * h;
         if rounds.start == 0 && batches.start == 0 {
-            let p = GpuTraceParams::new(camera, scene, options, mixed.map_or(0, |m| m.params));
+            let mut p = GpuTraceParams::new(camera, scene, options, mixed.map_or(0, |m| m.params));
+            if let Some(limit) = depth_limit {
+                p.mixed[2..].copy_from_slice(&[limit as u32, (limit >> 32) as u32]);
+            }
             let clip_params = clip.to_gpu();
             unsafe {
                 device.cmd_update_buffer(cmd, bufs.params.raw, 0, bytemuck::bytes_of(&p));
@@ -916,6 +928,7 @@ impl RayTracer {
                         options,
                         batch..batch + 1,
                         end..next,
+                        None,
                         None,
                     )
                 })??;
