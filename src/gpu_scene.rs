@@ -30,6 +30,9 @@ fn scene_buffer_sizes(scene: &Scene, precision: ShPrecision) -> (u64, u64) {
     )
 }
 
+/// Gaussians per chunk of [`GpuScene::load_ply`]: 15 MB of host scene at SH degree 3.
+pub const STREAM_CHUNK: usize = 65_536;
+
 /// A scene uploaded to the GPU: a resource of its own, which any number of renderers of the
 /// same device can draw. Dropping it frees its memory; frames that read it must have completed.
 ///
@@ -83,6 +86,115 @@ impl GpuScene {
         };
         gpu_scene.upload(scene)?;
         Ok(gpu_scene)
+    }
+
+    /// Loads the 3DGS PLY at `path` straight into device buffers with the SH stored at
+    /// `precision`: the file is read in chunks of [`STREAM_CHUNK`] Gaussians
+    /// ([`crate::ply::for_each_chunk`]), each written in the kernels' layout into one reused
+    /// staging buffer and copied to the device, so the host holds a chunk and never the scene
+    /// (what [`crate::ply::load_ply`] followed by [`GpuScene::with_sh_precision`] would hold).
+    /// The Gaussians are those `load_ply` loads, in its order, to the bit. `progress(done,
+    /// total)` follows the Gaussians read of the file's vertices.
+    pub fn load_ply(
+        ctx: &Context,
+        path: impl AsRef<std::path::Path>,
+        precision: ShPrecision,
+        mut progress: impl FnMut(usize, usize),
+    ) -> Result<(Self, crate::ply::LoadReport)> {
+        let path = path.as_ref();
+        let vertices = crate::ply::vertex_count(path)?;
+        if vertices as u64 > MAX_GAUSSIANS {
+            return Err(Error::InvalidInput(format!(
+                "{}: {vertices} Gaussians exceed the {MAX_GAUSSIANS} one scene may have",
+                path.display()
+            )));
+        }
+        let record = std::mem::size_of::<GpuGaussian>() as u64;
+        let mut staging = Buffer::new(
+            ctx,
+            "staging (scene stream)",
+            crate::vk::buffer::STAGING_CHUNK,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let mut loaded: Option<GpuScene> = None;
+        let report = crate::ply::for_each_chunk(path, STREAM_CHUNK, &mut |chunk, info| {
+            let s = match &mut loaded {
+                Some(s) => s,
+                None => {
+                    // Sized by the header's count; Gaussians the loader drops leave the tail
+                    // unused.
+                    let per_gaussian = chunk.sh_stride() as u64 * precision.bytes();
+                    let gpu = MemoryLocation::GpuOnly;
+                    loaded.insert(GpuScene {
+                        gaussians: Buffer::new(
+                            ctx,
+                            "scene gaussians",
+                            (vertices as u64 * record).max(16),
+                            gpu,
+                        )?,
+                        sh: Buffer::new(
+                            ctx,
+                            "scene SH",
+                            (vertices as u64 * per_gaussian + GpuScene::SH_TAIL_BYTES).max(16),
+                            gpu,
+                        )?,
+                        count: 0,
+                        sh_degree: chunk.sh_degree,
+                        sh_precision: precision,
+                        id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+                    })
+                }
+            };
+            s.write_chunk(&mut staging, chunk, info.first)?;
+            progress(info.first + chunk.len(), info.vertices_in_file);
+            Ok(())
+        })?;
+        let scene = match loaded {
+            Some(s) => s,
+            None => GpuScene::with_sh_precision(ctx, &Scene::default(), precision)?,
+        };
+        Ok((scene, report))
+    }
+
+    /// Writes `chunk` as Gaussians `first..` (through `staging`), and counts them in.
+    fn write_chunk(&mut self, staging: &mut Buffer, chunk: &Scene, first: usize) -> Result<()> {
+        let record = std::mem::size_of::<GpuGaussian>();
+        self.gaussians.upload_range_with(
+            staging,
+            (first * record) as u64,
+            (chunk.len() * record) as u64,
+            record as u64,
+            |offset, bytes| {
+                let at = offset as usize / record;
+                for (k, out) in bytes.chunks_exact_mut(record).enumerate() {
+                    out.copy_from_slice(bytemuck::bytes_of(&gpu_gaussian(chunk, at + k)));
+                }
+            },
+        )?;
+        let width = self.sh_precision.bytes();
+        let sh_at = (first * chunk.sh_stride()) as u64 * width;
+        let sh_len = chunk.sh.len() as u64 * width;
+        match self.sh_precision {
+            ShPrecision::F32 => {
+                let all: &[u8] = bytemuck::cast_slice(&chunk.sh);
+                self.sh
+                    .upload_range_with(staging, sh_at, sh_len, 4, |offset, bytes| {
+                        let offset = offset as usize;
+                        bytes.copy_from_slice(&all[offset..offset + bytes.len()]);
+                    })?
+            }
+            ShPrecision::F16 => {
+                self.sh
+                    .upload_range_with(staging, sh_at, sh_len, 2, |offset, bytes| {
+                        let at = offset as usize / 2;
+                        for (k, out) in bytes.chunks_exact_mut(2).enumerate() {
+                            out.copy_from_slice(&f32_to_f16_bits(chunk.sh[at + k]).to_le_bytes());
+                        }
+                    })?
+            }
+        }
+        self.count = (first + chunk.len()) as u32;
+        Ok(())
     }
 
     /// A scene of `count` Gaussians of SH degree `sh_degree` (f32 coefficients) whose buffers
@@ -188,5 +300,19 @@ impl GpuScene {
     /// Device bytes held by the scene.
     pub fn device_bytes(&self) -> u64 {
         self.gaussians.size + self.sh.size
+    }
+
+    /// Reads the scene back as the kernels see it: the Gaussians' bytes (48 each: centre and
+    /// opacity, rotation (w, x, y, z), scales and a zero) and the SH coefficients' bytes (f32 or
+    /// f16 by [`GpuScene::sh_precision`]), of the `len()` Gaussians. Slow; for tests.
+    pub fn download(&self) -> Result<(Vec<u8>, Vec<u8>)> {
+        let n = self.count as u64;
+        let sh_bytes =
+            n * 3 * crate::scene::sh_coeffs(self.sh_degree) as u64 * self.sh_precision.bytes();
+        Ok((
+            self.gaussians
+                .download(n * std::mem::size_of::<GpuGaussian>() as u64)?,
+            self.sh.download(sh_bytes)?,
+        ))
     }
 }

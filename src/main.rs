@@ -308,6 +308,47 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
+/// Loads the PLY at `path` straight into device memory ([`rara::GpuScene::load_ply`]), with a
+/// progress bar and the same report as [`load_scene`].
+fn stream_scene(
+    ctx: &Context,
+    path: &Path,
+    precision: rara::ShPrecision,
+) -> Result<rara::GpuScene> {
+    let bar = ProgressBar::new(0)
+        .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} Gaussians").unwrap());
+    bar.set_message(format!(
+        "loading {} into {}",
+        path.display(),
+        ctx.info().name
+    ));
+    let start = std::time::Instant::now();
+    let loaded = rara::GpuScene::load_ply(ctx, path, precision, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    });
+    bar.finish_and_clear();
+    let (scene, report) = loaded?;
+    eprintln!(
+        "loaded {}: {} Gaussians, SH degree {}, {}, streamed to the device ({:.0} ms)",
+        path.display(),
+        scene.len(),
+        scene.sh_degree(),
+        report.encoding,
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    for note in &report.notes {
+        eprintln!("note: {note}");
+    }
+    if report.dropped_non_finite > 0 {
+        eprintln!(
+            "warning: dropped {} of {} Gaussians with non-finite values",
+            report.dropped_non_finite, report.vertices_in_file
+        );
+    }
+    Ok(scene)
+}
+
 pub fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         cli::output::create_dir(dir)?;
@@ -451,13 +492,25 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     let output = Output::prepare(&args.output, &["png"])?;
     let depth_output = args.depth.as_deref().map(cli::depth::prepare).transpose()?;
     let depth_mode = rara::DepthMode::from(args.depth_mode);
-    let scene = load_scene(scene_path)?;
+    // A PLY file the GPU draws goes from the file to the device chunk by chunk: the host never
+    // holds the scene (GpuScene::load_ply).
+    let streamed = !args.reference
+        && scene_path.is_file()
+        && matches!(
+            rara::formats::detect(scene_path),
+            Ok(rara::formats::SceneFormat::Ply)
+        );
+    let scene = if streamed {
+        None
+    } else {
+        Some(load_scene(scene_path)?)
+    };
     if options.clip.region.is_some() {
         eprintln!("{}", describe(&options.clip));
     }
-    if args.reference {
+    if let (true, Some(scene)) = (args.reference, &scene) {
         let start = std::time::Instant::now();
-        let splats = rara::reference::project::project_all(&scene, &camera, &options.clip);
+        let splats = rara::reference::project::project_all(scene, &camera, &options.clip);
         let (img, median, mean) = rara::reference::rasterize::rasterize_depth(
             &splats,
             &camera,
@@ -466,7 +519,7 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             None,
         );
         warn_oversized(
-            rara::reference::project::count_oversized(&scene, &camera, &options.clip),
+            rara::reference::project::count_oversized(scene, &camera, &options.clip),
             scene.len(),
         );
         output.write_png(&img)?;
@@ -490,17 +543,27 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     }
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    // Large scenes take seconds to upload and, on a CPU device, to render: say what is going on.
-    let spinner = ProgressBar::new_spinner().with_message(format!(
-        "uploading {} Gaussians to {}",
-        scene.len(),
-        ctx.info().name
-    ));
+    let precision = cli::sh_precision(args.sh_half);
+    let gpu_scene = match scene {
+        Some(scene) => {
+            // Large scenes take seconds to upload and, on a CPU device, to render: say what is
+            // going on.
+            let spinner = ProgressBar::new_spinner().with_message(format!(
+                "uploading {} Gaussians to {}",
+                scene.len(),
+                ctx.info().name
+            ));
+            spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+            let uploaded = rara::GpuScene::with_sh_precision(&ctx, &scene, precision);
+            spinner.finish_and_clear();
+            drop(scene); // the device copy is all the GPU path needs
+            uploaded?
+        }
+        None => stream_scene(&ctx, scene_path, precision)?,
+    };
+    let spinner = ProgressBar::new_spinner()
+        .with_message(format!("rendering {}x{}", camera.width, camera.height));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
-    let uploaded = rara::GpuScene::with_sh_precision(&ctx, &scene, cli::sh_precision(args.sh_half));
-    drop(scene); // the device copy is all the GPU path needs
-    let gpu_scene = uploaded.inspect_err(|_| spinner.finish_and_clear())?;
-    spinner.set_message(format!("rendering {}x{}", camera.width, camera.height));
     let rendered = match depth_output {
         Some(_) => renderer
             .render_with_depth(&gpu_scene, &camera, &options, depth_mode)
@@ -548,6 +611,9 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         "{}",
         cli::describe_memory(&gpu_scene, &renderer.headless_memory())
     );
+    if let Some(line) = cli::describe_peak_host_memory() {
+        println!("{line}");
+    }
     if args.repeat > 0 {
         let bar = ProgressBar::new(args.repeat as u64)
             .with_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len}").unwrap())

@@ -631,6 +631,15 @@ impl Renderer {
                     tile_count: gx * gy,
                 },
             ));
+        // The kernels this frame runs, each built when a frame first needs it.
+        self.project.prepare(scene)?;
+        if !(rara && object_clips.is_some()) {
+            self.rasterize.prepare(
+                rara.then_some(options.clip.weight),
+                depth.is_some(),
+                tile_lists.is_some(),
+            )?;
+        }
         let ctx = &self.ctx;
         let mut labels_only;
         let timer: &mut PassTimer = match timings {

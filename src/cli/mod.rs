@@ -50,6 +50,25 @@ pub fn describe_memory(scene: &GpuScene, frame: &FrameMemory) -> String {
     ) + &describe_trace_memory(frame)
 }
 
+/// The process's peak resident memory so far, from Linux's `/proc/self/status` (`VmHWM`), as
+/// a line for the render summary (on a CPU device, device memory is host memory too); `None`
+/// where there is no such file.
+pub fn describe_peak_host_memory() -> Option<String> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: u64 = status
+        .lines()
+        .find(|l| l.starts_with("VmHWM:"))?
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()?;
+    Some(format!(
+        "host memory: peak resident {} ({} bytes)",
+        mb(kb * 1024),
+        kb * 1024
+    ))
+}
+
 /// The ray tracer's part of [`describe_memory`], empty before its first frame.
 fn describe_trace_memory(frame: &FrameMemory) -> String {
     if frame.bvh == 0 {

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::precision::ShPrecision;
 use crate::shaders;
-use crate::vk::{ComputePipeline, Context};
+use crate::vk::{ComputePipeline, Context, LazyPipeline};
 
 /// Device addresses the project kernel reads and writes.
 #[repr(C)]
@@ -73,10 +73,10 @@ struct TouchedPush {
 /// driver runs every band's code under a mask whatever the scene's degree, so each scene gets
 /// the kernel that holds only its own bands.
 pub struct Project {
+    /// Indexed by SH degree; each built when a frame first needs it ([`Project::prepare`]).
+    sh32: [LazyPipeline; 4],
     /// Indexed by SH degree.
-    sh32: [ComputePipeline; 4],
-    /// Indexed by SH degree.
-    sh16: [ComputePipeline; 4],
+    sh16: [LazyPipeline; 4],
     /// The later rounds' count of tiles touched (`project_touched.comp`).
     touched: ComputePipeline,
 }
@@ -141,25 +141,32 @@ impl Project {
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let build = |(name, loads, fetches): &Variant| {
             let spirv = if texels.is_some() { fetches } else { loads };
-            ComputePipeline::with_set_layout::<ProjectPush>(ctx, name, spirv, texels)
+            LazyPipeline::new::<ProjectPush>(ctx, name, spirv, texels)
         };
-        let build_all = |table: &[Variant; 4]| -> Result<[ComputePipeline; 4]> {
-            Ok([
-                build(&table[0])?,
-                build(&table[1])?,
-                build(&table[2])?,
-                build(&table[3])?,
-            ])
-        };
+        let build_all = |table: &[Variant; 4]| table.each_ref().map(build);
         Ok(Project {
-            sh32: build_all(&SH32_KERNELS)?,
-            sh16: build_all(&SH16_KERNELS)?,
+            sh32: build_all(&SH32_KERNELS),
+            sh16: build_all(&SH16_KERNELS),
             touched: ComputePipeline::new::<TouchedPush>(
                 ctx,
                 c"project_touched",
                 shaders::PROJECT_TOUCHED,
             )?,
         })
+    }
+
+    /// The kernel for `scene`'s SH degree and precision.
+    fn kernel(&self, scene: &GpuScene) -> &LazyPipeline {
+        let kernels = match scene.sh_precision {
+            ShPrecision::F32 => &self.sh32,
+            ShPrecision::F16 => &self.sh16,
+        };
+        &kernels[scene.sh_degree.min(3) as usize]
+    }
+
+    /// Builds the kernel `scene` needs, if it was not yet: call it before [`Project::record`].
+    pub fn prepare(&self, scene: &GpuScene) -> Result<()> {
+        self.kernel(scene).get().map(|_| ())
     }
 
     /// Records stage 1 of a frame, the pass "project": every Gaussian of `scene` classified,
@@ -174,6 +181,7 @@ impl Project {
         scene: &GpuScene,
         object_clips: Option<&ObjectClipRanges>,
     ) {
+        let kernel = self.kernel(scene).built();
         let push = ProjectPush {
             frame: f.at.params,
             gaussians: scene.gaussians.address,
@@ -190,13 +198,8 @@ impl Project {
             region: 0,
             pad: 0,
         };
-        let kernels = match scene.sh_precision {
-            ShPrecision::F32 => &self.sh32,
-            ShPrecision::F16 => &self.sh16,
-        };
         let grid = super::linear_grid(scene.count);
         let rounds = super::tile_rect_rounds(f.tile_count());
-        let kernel = &kernels[scene.sh_degree.min(3) as usize];
         f.pass(c"project", |f| {
             match object_clips {
                 None => kernel.dispatch_in(f.cmd, &push, f.texels, grid),

@@ -16,7 +16,7 @@ use crate::constants::MAX_INTERSECTIONS;
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::shaders;
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, ComputePipeline, Context, LazyPipeline};
 
 /// Device addresses and round of the rasterizer.
 #[repr(C)]
@@ -111,11 +111,12 @@ impl RasterLayout {
 /// CPU drivers execute both sides of every branch, so each frame runs the kernel that holds
 /// only the code it needs.
 pub struct Rasterize {
-    plain: ComputePipeline,
-    mass: ComputePipeline,
-    length: ComputePipeline,
-    /// The same three with the depth test and the depth outputs (SPEC section 9).
-    depth: [ComputePipeline; 3],
+    plain: LazyPipeline,
+    mass: LazyPipeline,
+    length: LazyPipeline,
+    /// The same three with the depth test and the depth outputs (SPEC section 9). All six are
+    /// built when a frame first needs them ([`Rasterize::prepare`]).
+    depth: [LazyPipeline; 3],
     /// The kernels for several objects each clipped by a region of its own (`OBJECT_CLIPS`):
     /// mass, length, and the two with the depth test. Built on first use
     /// ([`Rasterize::prepare_object_clips`]), as few frames need them.
@@ -170,18 +171,18 @@ impl Rasterize {
         layout: RasterLayout,
         texels: Option<vk::DescriptorSetLayout>,
     ) -> Result<Self> {
-        let build = |name: &'static CStr, spirv: &[u32]| {
-            ComputePipeline::with_set_layout::<RasterizePush>(ctx, name, spirv, texels)
+        let build = |name: &'static CStr, spirv: &'static [u32]| {
+            LazyPipeline::new::<RasterizePush>(ctx, name, spirv, texels)
         };
         let (plain, mass, length, depth) = match layout {
             RasterLayout::PixelPerInvocation => (
-                build(c"rasterize", shaders::RASTERIZE)?,
-                build(c"rasterize_mass", shaders::RASTERIZE_MASS)?,
-                build(c"rasterize_length", shaders::RASTERIZE_LENGTH)?,
+                build(c"rasterize", shaders::RASTERIZE),
+                build(c"rasterize_mass", shaders::RASTERIZE_MASS),
+                build(c"rasterize_length", shaders::RASTERIZE_LENGTH),
                 [
-                    build(c"rasterize_depth", shaders::RASTERIZE_DEPTH)?,
-                    build(c"rasterize_mass_depth", shaders::RASTERIZE_MASS_DEPTH)?,
-                    build(c"rasterize_length_depth", shaders::RASTERIZE_LENGTH_DEPTH)?,
+                    build(c"rasterize_depth", shaders::RASTERIZE_DEPTH),
+                    build(c"rasterize_mass_depth", shaders::RASTERIZE_MASS_DEPTH),
+                    build(c"rasterize_length_depth", shaders::RASTERIZE_LENGTH_DEPTH),
                 ],
             ),
             RasterLayout::Strips => {
@@ -191,19 +192,19 @@ impl Rasterize {
                     ));
                 }
                 (
-                    build(c"rasterize_strips", shaders::RASTERIZE_STRIPS)?,
-                    build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS)?,
-                    build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH)?,
+                    build(c"rasterize_strips", shaders::RASTERIZE_STRIPS),
+                    build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS),
+                    build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH),
                     [
-                        build(c"rasterize_strips_depth", shaders::RASTERIZE_STRIPS_DEPTH)?,
+                        build(c"rasterize_strips_depth", shaders::RASTERIZE_STRIPS_DEPTH),
                         build(
                             c"rasterize_strips_mass_depth",
                             shaders::RASTERIZE_STRIPS_MASS_DEPTH,
-                        )?,
+                        ),
                         build(
                             c"rasterize_strips_length_depth",
                             shaders::RASTERIZE_STRIPS_LENGTH_DEPTH,
-                        )?,
+                        ),
                     ],
                 )
             }
@@ -217,6 +218,33 @@ impl Rasterize {
             texels,
             layout,
         })
+    }
+
+    /// The kernel without object clips for `weight` (`None`: no rara clipping), with or without
+    /// the depth test.
+    fn lazy_kernel(&self, weight: Option<ClipWeight>, depth: bool) -> &LazyPipeline {
+        let k = match weight {
+            None => 0,
+            Some(ClipWeight::Mass) => 1,
+            Some(ClipWeight::Length) => 2,
+        };
+        match (depth, k) {
+            (true, k) => &self.depth[k],
+            (false, 0) => &self.plain,
+            (false, 1) => &self.mass,
+            (false, _) => &self.length,
+        }
+    }
+
+    /// Builds what a frame of `weight` (with or without `depth`) records, if it was not built
+    /// yet: its kernel, and with `plain_too` (tile lists) the plain one beside it. Call it
+    /// before [`Rasterize::record`].
+    pub fn prepare(&self, weight: Option<ClipWeight>, depth: bool, plain_too: bool) -> Result<()> {
+        self.lazy_kernel(weight, depth).get()?;
+        if plain_too {
+            self.lazy_kernel(None, depth).get()?;
+        }
+        Ok(())
     }
 
     /// Builds the kernels for objects clipped by regions of their own, once: call it before
@@ -325,25 +353,24 @@ impl Rasterize {
             round_index: 0,
             flags: 0,
         };
-        let [plain, mass, length] = match (depth, object_clips) {
-            (Some(_), None) => [&self.depth[0], &self.depth[1], &self.depth[2]],
-            (None, None) => [&self.plain, &self.mass, &self.length],
-            (depth, Some(_)) => {
-                let k = self
-                    .object_clips
-                    .get()
-                    .expect("Rasterize::prepare_object_clips before an object-clip frame");
-                match depth {
-                    Some(_) => [&self.depth[0], &k[2], &k[3]],
-                    None => [&self.plain, &k[0], &k[1]],
+        let object_kernels = || {
+            self.object_clips
+                .get()
+                .expect("Rasterize::prepare_object_clips before an object-clip frame")
+        };
+        // The kernel of the frame's weight; with tile lists, the plain one too.
+        let kernel = |weight: Option<ClipWeight>| -> &ComputePipeline {
+            let with_depth = depth.is_some() as usize;
+            match (weight, object_clips) {
+                (None, _) => self.lazy_kernel(None, depth.is_some()).built(),
+                (Some(w), Some(_)) => {
+                    let k = (w == ClipWeight::Length) as usize;
+                    &object_kernels()[2 * with_depth + k]
                 }
+                (Some(w), None) => self.lazy_kernel(Some(w), depth.is_some()).built(),
             }
         };
-        let pipeline = match cutoff_weight {
-            None => plain,
-            Some(ClipWeight::Mass) => mass,
-            Some(ClipWeight::Length) => length,
-        };
+        let pipeline = kernel(cutoff_weight);
         debug_assert!(lists.is_none() || cutoff_weight == Some(ClipWeight::Mass));
         debug_assert!(lists.is_none() || object_clips.is_none());
         let (gx, gy) = f.grid;
@@ -355,10 +382,11 @@ impl Rasterize {
                 match lists {
                     Some((buffer, layout)) => {
                         p.flags |= ROUND_TILE_LIST;
-                        // The two lists hold disjoint tiles: no barrier between them.
+                        // The two lists hold disjoint tiles: no barrier between them. (Tile lists
+                        // come with the mass weight: `pipeline` is its kernel.)
                         for (kernel, list, args) in [
-                            (plain, layout.plain(), TileListsLayout::PLAIN_ARGS),
-                            (mass, layout.weighted(), TileListsLayout::WEIGHTED_ARGS),
+                            (kernel(None), layout.plain(), TileListsLayout::PLAIN_ARGS),
+                            (pipeline, layout.weighted(), TileListsLayout::WEIGHTED_ARGS),
                         ] {
                             p.tiles = buffer.address + list;
                             kernel.dispatch_indirect_in(f.cmd, &p, f.texels, buffer.raw, args);

@@ -159,7 +159,7 @@ impl Buffer {
         &self,
         len: u64,
         granule: u64,
-        mut fill: impl FnMut(u64, &mut [u8]),
+        fill: impl FnMut(u64, &mut [u8]),
     ) -> Result<()> {
         if len == 0 {
             return Ok(());
@@ -173,6 +173,28 @@ impl Buffer {
             chunk.min(len),
             MemoryLocation::CpuToGpu,
         )?;
+        self.upload_range_with(&mut staging, 0, len, granule, fill)
+    }
+
+    /// [`Buffer::upload_with`] of bytes `at..at + len` through the caller's host-visible
+    /// `staging` buffer (reused across calls, as a streaming loader does): `fill(offset,
+    /// chunk)` writes the bytes from `at + offset`, in chunks of at most the staging buffer's
+    /// size, each but the last a multiple of `granule` bytes. Waits for each copy.
+    pub fn upload_range_with(
+        &self,
+        staging: &mut Buffer,
+        at: u64,
+        len: u64,
+        granule: u64,
+        mut fill: impl FnMut(u64, &mut [u8]),
+    ) -> Result<()> {
+        assert!(at + len <= self.size, "upload past the end of the buffer");
+        let granule = granule.max(1);
+        let chunk = (staging.size / granule).max(1) * granule;
+        assert!(
+            chunk <= staging.size,
+            "a staging buffer smaller than one record"
+        );
         let mut offset = 0;
         while offset < len {
             let n = chunk.min(len - offset);
@@ -180,7 +202,7 @@ impl Buffer {
             self.ctx.run_commands(|cmd| unsafe {
                 let region = vk::BufferCopy {
                     src_offset: 0,
-                    dst_offset: offset,
+                    dst_offset: at + offset,
                     size: n,
                 };
                 self.ctx

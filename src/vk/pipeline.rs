@@ -47,6 +47,23 @@ impl ComputePipeline {
         spirv: &[u32],
         set_layouts: &[vk::DescriptorSetLayout],
     ) -> Result<Self> {
+        Self::with_push_bytes(
+            ctx,
+            name,
+            spirv,
+            set_layouts,
+            std::mem::size_of::<P>() as u32,
+        )
+    }
+
+    /// Like [`ComputePipeline::with_set_layouts`], with a push-constant block of `push_bytes`.
+    fn with_push_bytes(
+        ctx: &Context,
+        name: &'static CStr,
+        spirv: &[u32],
+        set_layouts: &[vk::DescriptorSetLayout],
+        push_bytes: u32,
+    ) -> Result<Self> {
         let device = ctx.device();
         let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
         let module = unsafe { device.create_shader_module(&module_info, None) }
@@ -54,7 +71,7 @@ impl ComputePipeline {
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .offset(0)
-            .size(std::mem::size_of::<P>() as u32)];
+            .size(push_bytes)];
         let layout_info = vk::PipelineLayoutCreateInfo::default()
             .push_constant_ranges(&ranges)
             .set_layouts(set_layouts);
@@ -210,6 +227,63 @@ impl ComputePipeline {
     ) {
         self.bind(cmd, bytemuck::bytes_of(push));
         unsafe { self.ctx.device().cmd_dispatch_indirect(cmd, args, offset) };
+    }
+}
+
+/// A compute pipeline built on first use ([`LazyPipeline::get`]). A CPU driver keeps each
+/// pipeline's compiled code resident (lavapipe: about 2 MB a pipeline, 78 MB for a renderer's
+/// kernels), and a frame runs one variant of each stage (one SH degree, one cutoff weight), so
+/// the variants are built when a frame first needs them.
+pub struct LazyPipeline {
+    ctx: Context,
+    name: &'static CStr,
+    spirv: &'static [u32],
+    set_layout: Option<vk::DescriptorSetLayout>,
+    push_bytes: u32,
+    built: std::sync::OnceLock<ComputePipeline>,
+}
+
+impl LazyPipeline {
+    /// The pipeline of [`ComputePipeline::with_set_layout`], not built yet.
+    pub fn new<P: bytemuck::Pod>(
+        ctx: &Context,
+        name: &'static CStr,
+        spirv: &'static [u32],
+        set_layout: Option<vk::DescriptorSetLayout>,
+    ) -> Self {
+        LazyPipeline {
+            ctx: ctx.clone(),
+            name,
+            spirv,
+            set_layout,
+            push_bytes: std::mem::size_of::<P>() as u32,
+            built: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// The pipeline, built now if it was not.
+    pub fn get(&self) -> Result<&ComputePipeline> {
+        if let Some(p) = self.built.get() {
+            return Ok(p);
+        }
+        let layouts: Vec<vk::DescriptorSetLayout> = self.set_layout.into_iter().collect();
+        let p = ComputePipeline::with_push_bytes(
+            &self.ctx,
+            self.name,
+            self.spirv,
+            &layouts,
+            self.push_bytes,
+        )?;
+        // Another thread may have built it meanwhile: either is the same pipeline.
+        let _ = self.built.set(p);
+        Ok(self.built.get().expect("set above"))
+    }
+
+    /// The pipeline, which [`LazyPipeline::get`] must have built (a stage's `prepare`).
+    pub fn built(&self) -> &ComputePipeline {
+        self.built
+            .get()
+            .unwrap_or_else(|| panic!("{:?} used before it was built", self.name))
     }
 }
 
