@@ -103,12 +103,6 @@ impl GpuScene {
     ) -> Result<(Self, crate::ply::LoadReport)> {
         let path = path.as_ref();
         let vertices = crate::ply::vertex_count(path)?;
-        if vertices as u64 > MAX_GAUSSIANS {
-            return Err(Error::InvalidInput(format!(
-                "{}: {vertices} Gaussians exceed the {MAX_GAUSSIANS} one scene may have",
-                path.display()
-            )));
-        }
         let record = std::mem::size_of::<GpuGaussian>() as u64;
         let mut staging = Buffer::new(
             ctx,
@@ -121,6 +115,15 @@ impl GpuScene {
             let s = match &mut loaded {
                 Some(s) => s,
                 None => {
+                    // The reader has checked the header against the file by now, so an error
+                    // here is about the scene, not a broken file.
+                    if vertices as u64 > MAX_GAUSSIANS {
+                        return Err(Error::InvalidInput(format!(
+                            "{}: {vertices} Gaussians exceed the {MAX_GAUSSIANS} one scene may \
+                             have",
+                            path.display()
+                        )));
+                    }
                     // Sized by the header's count; Gaussians the loader drops leave the tail
                     // unused.
                     let per_gaussian = chunk.sh_stride() as u64 * precision.bytes();
