@@ -288,11 +288,22 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     let loaded = rara::formats::load_scene_with(path, &read_options());
     spinner.finish_and_clear();
     let (scene, report) = loaded?;
+    print_load_report(path, (scene.len(), scene.sh_degree), &report, "", start);
+    Ok(scene)
+}
+
+/// The "loaded" line of a scene of (count, SH degree) read from `path` since `start` (`how`
+/// says where it went, after the encoding), then the reader's notes and dropped Gaussians.
+fn print_load_report(
+    path: &Path,
+    (count, degree): (usize, u32),
+    report: &rara::ply::LoadReport,
+    how: &str,
+    start: std::time::Instant,
+) {
     eprintln!(
-        "loaded {}: {} Gaussians, SH degree {}, {} ({:.0} ms)",
+        "loaded {}: {count} Gaussians, SH degree {degree}, {}{how} ({:.0} ms)",
         path.display(),
-        scene.len(),
-        scene.sh_degree,
         report.encoding,
         start.elapsed().as_secs_f64() * 1e3
     );
@@ -305,7 +316,6 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
             report.dropped_non_finite, report.vertices_in_file
         );
     }
-    Ok(scene)
 }
 
 /// Loads the PLY at `path` straight into device memory ([`rara::GpuScene::load_ply`]), with a
@@ -329,23 +339,13 @@ fn stream_scene(
     });
     bar.finish_and_clear();
     let (scene, report) = loaded?;
-    eprintln!(
-        "loaded {}: {} Gaussians, SH degree {}, {}, streamed to the device ({:.0} ms)",
-        path.display(),
-        scene.len(),
-        scene.sh_degree(),
-        report.encoding,
-        start.elapsed().as_secs_f64() * 1e3
+    print_load_report(
+        path,
+        (scene.len() as usize, scene.sh_degree()),
+        &report,
+        ", streamed to the device",
+        start,
     );
-    for note in &report.notes {
-        eprintln!("note: {note}");
-    }
-    if report.dropped_non_finite > 0 {
-        eprintln!(
-            "warning: dropped {} of {} Gaussians with non-finite values",
-            report.dropped_non_finite, report.vertices_in_file
-        );
-    }
     Ok(scene)
 }
 

@@ -7,7 +7,7 @@ mod common;
 
 use glam::{EulerRot, Quat, Vec3};
 use rara::objects::{merge, ObjectTransform};
-use rara::{Camera, Clip, ClipRegion, RenderOptions, Renderer, SceneObject};
+use rara::{Camera, Clip, ClipRegion, GpuScene, RenderOptions, Renderer, SceneObject};
 
 fn transforms() -> [ObjectTransform; 2] {
     [
@@ -24,6 +24,36 @@ fn transforms() -> [ObjectTransform; 2] {
     ]
 }
 
+/// The two overlapping objects of these tests on the device (a shell of SH degree 3 and hair of
+/// degree 1, at `transforms()`), their merged scene, and the camera that sees them.
+struct TwoObjects {
+    shell: GpuScene,
+    hair: GpuScene,
+    merged: GpuScene,
+    transforms: [ObjectTransform; 2],
+    camera: Camera,
+}
+
+fn two_objects(renderer: &Renderer) -> TwoObjects {
+    let shell = rara::synth::shell(3000, 3, 5);
+    let hair = rara::synth::hair(2000, 1, 6);
+    let [a, b] = transforms();
+    let merged = merge(&[(&shell, a), (&hair, b)]);
+    assert_eq!((merged.len(), merged.sh_degree), (5000, 3));
+    TwoObjects {
+        shell: renderer.upload(&shell).unwrap(),
+        hair: renderer.upload(&hair).unwrap(),
+        merged: renderer.upload(&merged).unwrap(),
+        transforms: [a, b],
+        camera: rara::synth::orbit_cameras(4, 3.5, 160, 120, 50.0).unwrap()[1],
+    }
+}
+
+/// How many pixels of `a` and `b` differ.
+fn differing(a: &image::RgbaImage, b: &image::RgbaImage) -> usize {
+    a.pixels().zip(b.pixels()).filter(|(x, y)| x != y).count()
+}
+
 /// A shell (SH degree 3) and a head of hair (SH degree 1) overlapping, each turned, moved and
 /// scaled, drawn as two objects in one frame, equal their merged pre-transformed scene (made
 /// on the host by `objects::merge`) rendered alone: unclipped and under a rara plane.
@@ -31,16 +61,13 @@ fn transforms() -> [ObjectTransform; 2] {
 fn two_overlapping_objects_equal_their_merged_scene_bit_for_bit() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
-    let shell = rara::synth::shell(3000, 3, 5);
-    let hair = rara::synth::hair(2000, 1, 6);
-    let [a, b] = transforms();
-    let gpu_shell = renderer.upload(&shell).unwrap();
-    let gpu_hair = renderer.upload(&hair).unwrap();
-    let merged = merge(&[(&shell, a), (&hair, b)]);
-    assert_eq!(merged.len(), 5000);
-    assert_eq!(merged.sh_degree, 3);
-    let gpu_merged = renderer.upload(&merged).unwrap();
-    let camera = rara::synth::orbit_cameras(4, 3.5, 160, 120, 50.0).unwrap()[1];
+    let TwoObjects {
+        shell: gpu_shell,
+        hair: gpu_hair,
+        merged: gpu_merged,
+        transforms: [a, b],
+        camera,
+    } = two_objects(&renderer);
     let plane = rara::Plane::new(Vec3::new(0.2, 0.3, 1.0).normalize(), 0.1).unwrap();
     let objects = [
         SceneObject::new(&gpu_shell, a),
@@ -64,15 +91,8 @@ fn two_overlapping_objects_equal_their_merged_scene_bit_for_bit() {
             stats.visible, stats.intersections, alone_stats.visible, alone_stats.intersections
         );
         assert!(stats.visible > 2000, "{}", stats.visible);
-        let differing = together
-            .pixels()
-            .zip(alone.pixels())
-            .filter(|(x, y)| x != y)
-            .count();
-        assert_eq!(
-            differing, 0,
-            "{name}: {differing} pixels differ from the merged scene"
-        );
+        let off = differing(&together, &alone);
+        assert_eq!(off, 0, "{name}: {off} pixels differ from the merged scene");
     }
     common::assert_no_validation_messages(&ctx);
 }
@@ -269,13 +289,13 @@ fn an_object_without_a_region_takes_the_frames() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
     renderer.set_cutoff_tile_classes(false);
-    let shell = rara::synth::shell(3000, 3, 5);
-    let hair = rara::synth::hair(2000, 1, 6);
-    let [a, b] = transforms();
-    let gpu_shell = renderer.upload(&shell).unwrap();
-    let gpu_hair = renderer.upload(&hair).unwrap();
-    let merged = renderer.upload(&merge(&[(&shell, a), (&hair, b)])).unwrap();
-    let camera = rara::synth::orbit_cameras(4, 3.5, 160, 120, 50.0).unwrap()[1];
+    let TwoObjects {
+        shell: gpu_shell,
+        hair: gpu_hair,
+        merged,
+        transforms: [a, b],
+        camera,
+    } = two_objects(&renderer);
     let own = ClipRegion::oriented_box(
         Vec3::new(0.1, -0.2, 0.3),
         Vec3::new(0.6, 0.5, 0.7),
@@ -307,15 +327,8 @@ fn an_object_without_a_region_takes_the_frames() {
         (stats.cutoff, stats.visible),
         (alone_stats.cutoff, alone_stats.visible)
     );
-    let differing = together
-        .pixels()
-        .zip(alone.pixels())
-        .filter(|(x, y)| x != y)
-        .count();
-    assert_eq!(
-        differing, 0,
-        "{differing} pixels differ from the merged scene"
-    );
+    let off = differing(&together, &alone);
+    assert_eq!(off, 0, "{off} pixels differ from the merged scene");
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -328,13 +341,13 @@ fn objects_with_their_own_regions_take_the_depth_test() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
     renderer.set_cutoff_tile_classes(false);
-    let shell = rara::synth::shell(3000, 3, 5);
-    let hair = rara::synth::hair(2000, 1, 6);
-    let [a, b] = transforms();
-    let gpu_shell = renderer.upload(&shell).unwrap();
-    let gpu_hair = renderer.upload(&hair).unwrap();
-    let merged = renderer.upload(&merge(&[(&shell, a), (&hair, b)])).unwrap();
-    let camera = rara::synth::orbit_cameras(4, 3.5, 160, 120, 50.0).unwrap()[1];
+    let TwoObjects {
+        shell: gpu_shell,
+        hair: gpu_hair,
+        merged,
+        transforms: [a, b],
+        camera,
+    } = two_objects(&renderer);
     let own = ClipRegion::planes(vec![
         rara::Plane::new(Vec3::new(0.5, -0.4, 0.6), 0.05).unwrap()
     ])
@@ -391,18 +404,10 @@ fn objects_with_their_own_regions_take_the_depth_test() {
                 },
             )
             .unwrap();
-        let hidden = untested
-            .pixels()
-            .zip(alone.pixels())
-            .filter(|(x, y)| x != y)
-            .count();
-        let differing = together
-            .pixels()
-            .zip(alone.pixels())
-            .filter(|(x, y)| x != y)
-            .count();
+        let hidden = differing(&untested, &alone);
+        let off = differing(&together, &alone);
         eprintln!(
-            "{weight:?}: {} cutoff; the surface changes {hidden} pixels; {differing} differ",
+            "{weight:?}: {} cutoff; the surface changes {hidden} pixels; {off} differ",
             stats.cutoff
         );
         assert!(
@@ -410,7 +415,7 @@ fn objects_with_their_own_regions_take_the_depth_test() {
             "{} {hidden}",
             stats.cutoff
         );
-        assert_eq!(differing, 0, "{weight:?}");
+        assert_eq!(off, 0, "{weight:?}");
     }
     drop(buffer);
     common::assert_no_validation_messages(&ctx);
