@@ -35,7 +35,7 @@ struct ProjectedSplat {
     vec3 conic;         // inverse 2D covariance (A, B, C)
     uint cutoff;        // index of the cutoff side record, or NO_CUTOFF (w = 1 everywhere)
     vec3 color;
-    uint touched;       // tiles the splat reaches (0: not drawn); project_touched adds to it
+    uint pad;
     uvec4 rect;         // touched tiles [x0, x1) x [y0, y1) as (x0, y0, x1, y1)
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer ProjectedSplats { ProjectedSplat v[]; };
@@ -119,7 +119,7 @@ Gaussian load_gaussian(Gaussians gaussians, uint i) {
 }
 
 // Byte offset of ProjectedSplat i's word block k (16 bytes each: uv, depth, opacity | conic,
-// cutoff | color, touched | rect).
+// cutoff | color, pad | rect).
 uint64_t splat_block(ProjectedSplats splats, uint i, uint k) {
     return uint64_t(splats) + uint64_t(i) * 64ul + uint64_t(k) * 16ul;
 }
@@ -135,7 +135,7 @@ ProjectedSplat load_splat(ProjectedSplats splats, uint i) {
     p.conic = uintBitsToFloat(b1.xyz);
     p.cutoff = b1.w;
     p.color = b2.xyz;
-    p.touched = floatBitsToUint(b2.w);
+    p.pad = floatBitsToUint(b2.w);
     p.rect = load_uvec4(splat_block(splats, i, 3u));
     return p;
 }
@@ -143,13 +143,8 @@ ProjectedSplat load_splat(ProjectedSplats splats, uint i) {
 void store_splat(ProjectedSplats splats, uint i, ProjectedSplat p) {
     store_vec4(splat_block(splats, i, 0u), vec4(p.uv, p.depth, p.opacity));
     store_uvec4(splat_block(splats, i, 1u), uvec4(floatBitsToUint(p.conic), p.cutoff));
-    store_vec4(splat_block(splats, i, 2u), vec4(p.color, uintBitsToFloat(p.touched)));
+    store_vec4(splat_block(splats, i, 2u), vec4(p.color, uintBitsToFloat(p.pad)));
     store_uvec4(splat_block(splats, i, 3u), p.rect);
-}
-
-// The tiles splat i touches (its `touched` word), as a one-word buffer reference.
-U32s splat_touched(ProjectedSplats splats, uint i) {
-    return U32s(splat_block(splats, i, 2u) + 12ul);
 }
 
 // World-space direction of the ray through pixel centre `pixel` (SPEC section 2): camera-space

@@ -37,6 +37,7 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 layout(push_constant) uniform Push {
     FrameParamsRef frame;
     ProjectedSplats splats;
+    U32s tiles_touched;
     U32s counters;
     U64s cutoff_pairs;      // per cutoff record: (first pair, splat index), packed
     ClipParamsRef clip;
@@ -150,11 +151,11 @@ void main() {
 #ifdef SPLAT_TEXELS
                 p = texel_splat(i);
                 rec = texel_cutoff_record(k);
-                uint touched = p.touched;
+                uint touched = texelFetch(tiles_touched, int(i)).x;
 #else
                 p = load_splat(pc.splats, i);
                 rec = load_cutoff_record(pc.cutoffs, k);
-                uint touched = p.touched;
+                uint touched = pc.tiles_touched.v[i];
 #endif
                 slot = first.x;
                 end = max(first.x, min(first.x + touched, f.scene.w));

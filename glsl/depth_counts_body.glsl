@@ -12,7 +12,7 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 layout(push_constant) uniform Push {
     U32s drawn;         // drawn.v[0] = drawn Gaussians
     U32s order;         // Gaussian indices in depth order
-    ProjectedSplats splats; // their tiles touched (ProjectedSplat.touched)
+    U32s tiles_touched; // per Gaussian
     U32s counts;        // out: tiles touched, in depth order
 } pc;
 
@@ -26,8 +26,8 @@ void main() {
         return;
     }
 #ifdef FRAME_TEXELS
-    pc.counts.v[i] = texel_splat_touched(texelFetch(depth_order, int(i)).x);
+    pc.counts.v[i] = texelFetch(tiles_touched, int(texelFetch(depth_order, int(i)).x)).x;
 #else
-    pc.counts.v[i] = pc.splats.v[pc.order.v[i]].touched;
+    pc.counts.v[i] = pc.tiles_touched.v[pc.order.v[i]];
 #endif
 }

@@ -13,6 +13,7 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 layout(push_constant) uniform Push {
     FrameParamsRef frame;
     ProjectedSplats splats;
+    U32s tiles_touched;
     U32s slots;         // exclusive scan of the drawn flags
     U32s keys;          // out: depth bits
     U32s values;        // out: Gaussian index
@@ -25,13 +26,13 @@ layout(push_constant) uniform Push {
 void main() {
     uint i = linear_index();
 #ifdef FRAME_TEXELS
-    if (i >= pc.frame.p.scene.x || texel_splat_touched(i) == 0u) {
+    if (i >= pc.frame.p.scene.x || texelFetch(tiles_touched, int(i)).x == 0u) {
         return;
     }
     uint slot = texelFetch(slot_texels, int(i)).x;
     uint depth = floatBitsToUint(texel_splat(i).depth);
 #else
-    if (i >= pc.frame.p.scene.x || pc.splats.v[i].touched == 0u) {
+    if (i >= pc.frame.p.scene.x || pc.tiles_touched.v[i] == 0u) {
         return;
     }
     uint slot = pc.slots.v[i];

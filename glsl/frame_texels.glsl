@@ -29,23 +29,20 @@ layout(set = FRAME_TEXELS_SET, binding = 3) uniform utextureBuffer depth_order;
 // order, each drawn Gaussian's first pair.
 layout(set = FRAME_TEXELS_SET, binding = 4) uniform utextureBuffer slot_texels;
 // R32_UINT.
-layout(set = FRAME_TEXELS_SET, binding = 5) uniform utextureBuffer sorted_keys;
+layout(set = FRAME_TEXELS_SET, binding = 5) uniform utextureBuffer tiles_touched;
+// R32_UINT.
+layout(set = FRAME_TEXELS_SET, binding = 6) uniform utextureBuffer sorted_keys;
 // R32_UINT, as emitted.
-layout(set = FRAME_TEXELS_SET, binding = 6) uniform utextureBuffer emitted_keys;
+layout(set = FRAME_TEXELS_SET, binding = 7) uniform utextureBuffer emitted_keys;
 // RGBA32_UINT, one per pixel: the rasterizer's per-pixel state (C, T), as floats' bits.
-layout(set = FRAME_TEXELS_SET, binding = 7) uniform utextureBuffer state_texels;
+layout(set = FRAME_TEXELS_SET, binding = 8) uniform utextureBuffer state_texels;
 // RGBA32_UINT: the frame's ClipParams (clip.glsl), texel 3 + k holding plane k.
-layout(set = FRAME_TEXELS_SET, binding = 8) uniform utextureBuffer clip_texels;
+layout(set = FRAME_TEXELS_SET, binding = 9) uniform utextureBuffer clip_texels;
 // RGBA32_UINT, 3 per Gaussian.
-layout(set = FRAME_TEXELS_SET, binding = 9) uniform utextureBuffer gaussian_texels;
+layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer gaussian_texels;
 // The scene's SH coefficients, four to a texel: RGBA32_UINT for floats, RG32_UINT for half
 // floats (sh.glsl).
-layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer sh_texels;
-
-// The tiles projected splat i touches (its `touched` word, in its third texel).
-uint texel_splat_touched(uint i) {
-    return texelFetch(splat_texels, int(i) * 4 + 2).w;
-}
+layout(set = FRAME_TEXELS_SET, binding = 11) uniform utextureBuffer sh_texels;
 
 // Projected splat i (load_splat in common.glsl, from its four texels; a kernel that does not
 // use a texel's fields does not fetch it).
@@ -61,7 +58,7 @@ ProjectedSplat texel_splat(uint i) {
     p.conic = uintBitsToFloat(b1.xyz);
     p.cutoff = b1.w;
     p.color = uintBitsToFloat(b2.xyz);
-    p.touched = b2.w;
+    p.pad = b2.w;
     p.rect = texelFetch(splat_texels, t + 3);
     return p;
 }

@@ -18,6 +18,7 @@ layout(push_constant) uniform Push {
     Gaussians gaussians;
     ShCoefficients sh;
     ProjectedSplats splats;
+    U32s tiles_touched;
     U32s drawn;         // out: 1 for a Gaussian that touches a tile, else 0 (scanned next)
     U32s counters;
     ClipParamsRef clip;
@@ -58,8 +59,8 @@ void store_cutoff_region(uint index) {
 
 // Writes the record of a Gaussian that draws nothing.
 void skip(uint i) {
+    pc.tiles_touched.v[i] = 0u;
     pc.drawn.v[i] = 0u;
-    store_uvec4(splat_block(pc.splats, i, 2u), uvec4(0u));
     store_uvec4(splat_block(pc.splats, i, 3u), uvec4(0u));
 }
 
@@ -161,9 +162,10 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     p.conic = conic;
     p.cutoff = NO_CUTOFF;
     p.color = color;
-    p.touched = touched;
+    p.pad = 0u;
     p.rect = rect;
     store_splat(pc.splats, i, p);
+    pc.tiles_touched.v[i] = touched;
     pc.drawn.v[i] = 1u;
     if (kind != CLASS_CUTOFF) {
         return false;

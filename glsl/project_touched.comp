@@ -11,7 +11,8 @@ layout(local_size_x = LINEAR_WORKGROUP) in;
 
 layout(push_constant) uniform Push {
     FrameParamsRef frame;
-    ProjectedSplats splats; // in, and out: the tiles touched (ProjectedSplat.touched)
+    ProjectedSplats splats;
+    U32s tiles_touched; // in and out
     U32s drawn;         // 1 for a drawn Gaussian
     uint round_index;
 } pc;
@@ -31,5 +32,5 @@ void main() {
     uint end = min(cells, first + TILE_RECT_CHUNK);
     uint touched = count_touched_cells(p.uv, p.conic, footprint_q_max(p.opacity), p.rect, first,
                                        end);
-    splat_touched(pc.splats, i).v[0] += touched;
+    pc.tiles_touched.v[i] += touched;
 }

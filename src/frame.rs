@@ -24,7 +24,7 @@ use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// The first binding of [`frame_texels_set_layout`] that views the scene's buffers.
-const FIRST_SCENE_BINDING: usize = 9;
+const FIRST_SCENE_BINDING: usize = 10;
 
 /// Smallest intersection capacity a slot starts with.
 const MIN_CAPACITY: u64 = 1 << 16;
@@ -147,8 +147,8 @@ pub(crate) struct FrameResources {
     /// [`crate::stages::cutoff_tiles::CUTOFF_ARGS_OFFSET`]), then per record its splat's (first pair, splat index) at
     /// [`CUTOFF_PAIRS_OFFSET`].
     pub(crate) cutoff_pairs: Option<Buffer>,
-    /// Per Gaussian its projected splat, which holds the tiles it touches too.
     pub(crate) splats: Buffer,
+    pub(crate) tiles_touched: Buffer,
     /// Per Gaussian: project's drawn flags, scanned into each drawn Gaussian's slot in the
     /// depth sort; then, in depth order, the tiles touched, scanned into each one's first pair.
     pub(crate) slots: Buffer,
@@ -267,6 +267,7 @@ impl FrameSlot {
         if let Some(r) = &self.resources {
             m.fixed += r.params.size + r.clip_params.size + r.counters.size;
             m.per_gaussian = r.splats.size
+                + r.tiles_touched.size
                 + r.slots.size
                 + r.slots_scan.device_bytes()
                 + r.depth_sort.device_bytes();
@@ -431,6 +432,7 @@ impl FrameSlot {
                 cutoffs: None,
                 cutoff_pairs: None,
                 splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
+                tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
                 slots: Buffer::new(ctx, "depth sort slots / pair offsets", n * 4, gpu)?,
                 slots_scan: prefix_sum.scratch(ctx, n)?,
                 depth_sort: sort.buffers(ctx, n)?,
@@ -530,6 +532,7 @@ impl FrameSlot {
             f.cutoffs.as_ref(),
             Some(&f.depth_sort.values[depth_sorted]),
             Some(&f.slots),
+            Some(&f.tiles_touched),
             Some(&f.sort.keys[sorted]),
             Some(&f.sort.keys[0]),
             Some(&f.state),
@@ -540,9 +543,9 @@ impl FrameSlot {
         let (r32, rgba32) = (vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT);
         let (sh_format, sh_texel_bytes) = sh_texel(scene.sh_precision());
         let formats = [
-            r32, rgba32, rgba32, r32, r32, r32, r32, rgba32, rgba32, rgba32, sh_format,
+            r32, rgba32, rgba32, r32, r32, r32, r32, r32, rgba32, rgba32, rgba32, sh_format,
         ];
-        let texel_bytes = [4u64, 16, 16, 4, 4, 4, 4, 16, 16, 16, sh_texel_bytes];
+        let texel_bytes = [4u64, 16, 16, 4, 4, 4, 4, 4, 16, 16, 16, sh_texel_bytes];
         let max_texels = self.ctx.info().max_texel_buffer_elements as u64;
         let texels = self.frame_texels.as_mut().unwrap();
         if texels.scene_id != scene_id {

@@ -35,8 +35,8 @@ pub struct GpuProjectedSplat {
     pub cutoff: u32,
     /// SH colour.
     pub color: [f32; 3],
-    /// Tiles the splat reaches (0: not drawn).
-    pub touched: u32,
+    /// Unused.
+    pub pad: u32,
     /// Touched tiles (x0, y0, x1, y1), end exclusive.
     pub rect: [u32; 4],
 }

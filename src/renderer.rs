@@ -82,7 +82,7 @@ pub enum Tracer {
 pub struct Intermediates {
     /// Output of project, per Gaussian.
     pub splats: Vec<crate::gpu_types::GpuProjectedSplat>,
-    /// Tiles touched, per Gaussian (the splats' `touched`).
+    /// Tiles touched, per Gaussian.
     pub tiles_touched: Vec<u32>,
     /// The drawn Gaussians' indices in depth order (ties: index order).
     pub depth_order: Vec<u32>,
@@ -460,10 +460,9 @@ impl Renderer {
         let m = stats.intersections as usize;
         let (gx, gy) = tile_grid(f.width, f.height);
         let depth_sorted = self.sort.passes_for(DEPTH_KEY_BITS) as usize % 2;
-        let splats: Vec<crate::gpu_types::GpuProjectedSplat> = f.splats.download_as(n)?;
         Ok(Intermediates {
-            tiles_touched: splats.iter().map(|s| s.touched).collect(),
-            splats,
+            splats: f.splats.download_as(n)?,
+            tiles_touched: f.tiles_touched.download_as(n)?,
             depth_order: f.depth_sort.values[depth_sorted].download_as(drawn)?,
             offsets: f.slots.download_as(drawn)?,
             keys: f.sort.keys[f.sorted].download_as(m)?,
@@ -675,6 +674,7 @@ impl Renderer {
                 clip: object_clips.map_or(f.clip_params.address, |o| o.regions),
                 counters: f.counters.address,
                 splats: f.splats.address,
+                tiles_touched: f.tiles_touched.address,
                 slots: f.slots.address,
                 cutoffs: cutoffs_address,
                 ranges: f.ranges.address,
@@ -1192,6 +1192,7 @@ impl Renderer {
             clip: 0,
             counters: 0,
             splats: 0,
+            tiles_touched: 0,
             slots: 0,
             cutoffs: 0,
             ranges: 0,

@@ -33,6 +33,8 @@ pub struct CutoffTilesPush {
     pub frame: u64,
     /// `ProjectedSplat[]`.
     pub splats: u64,
+    /// Tiles touched per Gaussian.
+    pub tiles_touched: u64,
     /// The frame's counters (the number of cutoff splats).
     pub counters: u64,
     /// Per cutoff record: its splat's (first pair, splat index), from emit.
@@ -86,6 +88,7 @@ impl CutoffTiles {
         let push = CutoffTilesPush {
             frame: f.at.params,
             splats: f.at.splats,
+            tiles_touched: f.at.tiles_touched,
             counters: f.at.counters,
             cutoff_pairs: pairs.address + CUTOFF_PAIRS_OFFSET,
             clip: f.at.clip,

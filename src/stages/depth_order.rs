@@ -33,8 +33,10 @@ const PARAMS_COUNT_OFFSET: u64 = 112;
 pub struct DepthKeysPush {
     /// `FrameParams`.
     pub frame: u64,
-    /// `ProjectedSplat[]` (their depths, and tiles touched: 0 for one not drawn).
+    /// `ProjectedSplat[]`.
     pub splats: u64,
+    /// Tiles touched per Gaussian.
+    pub tiles_touched: u64,
     /// Exclusive scan of the drawn flags: each drawn Gaussian's slot.
     pub slots: u64,
     /// Out: depth bits per slot.
@@ -51,8 +53,8 @@ pub struct DepthCountsPush {
     pub drawn: u64,
     /// Gaussian indices in depth order (the depth sort's values).
     pub order: u64,
-    /// `ProjectedSplat[]` (their tiles touched).
-    pub splats: u64,
+    /// Tiles touched per Gaussian.
+    pub tiles_touched: u64,
     /// Out: tiles touched in depth order.
     pub counts: u64,
 }
@@ -102,6 +104,7 @@ impl DepthOrder {
         let push = DepthKeysPush {
             frame: f.at.params,
             splats: f.at.splats,
+            tiles_touched: f.at.tiles_touched,
             slots: f.at.slots,
             keys: depth_sort.keys[0].address,
             values: depth_sort.values[0].address,
@@ -144,7 +147,7 @@ impl DepthOrder {
         let push = DepthCountsPush {
             drawn: f.at.counter(COUNTER_VISIBLE),
             order,
-            splats: f.at.splats,
+            tiles_touched: f.at.tiles_touched,
             counts: f.at.slots,
         };
         f.pass(c"prefix sum", |f| {

@@ -21,8 +21,10 @@ pub struct FrameAddresses {
     pub clip: u64,
     /// The frame's counters (`COUNTER_*` slots).
     pub counters: u64,
-    /// One `ProjectedSplat` per Gaussian (with the tiles it touches).
+    /// One `ProjectedSplat` per Gaussian.
     pub splats: u64,
+    /// Tiles touched per Gaussian.
+    pub tiles_touched: u64,
     /// The drawn flags, then each drawn Gaussian's sort slot, then its first pair.
     pub slots: u64,
     /// Cutoff side records, or 0 on frames that are not rara-clipped.
@@ -136,7 +138,7 @@ pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout>
         .vk("vkCreateDescriptorSetLayout")
 }
 
-/// Format and bytes of a texel of the SH view (binding 10 of [`frame_texels_set_layout`]): four
+/// Format and bytes of a texel of the SH view (binding 11 of [`frame_texels_set_layout`]): four
 /// coefficients at either precision.
 pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
     match precision {
@@ -146,7 +148,7 @@ pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
 }
 
 /// Bindings of [`frame_texels_set_layout`].
-pub const FRAME_TEXEL_BINDINGS: u32 = 11;
+pub const FRAME_TEXEL_BINDINGS: u32 = 12;
 
 /// [`frame_texels_set_layout`] made once for the kernels of a renderer (the frame slots make
 /// their own, compatible one for their sets); destroyed on drop.

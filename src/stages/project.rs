@@ -22,8 +22,10 @@ pub struct ProjectPush {
     pub gaussians: u64,
     /// SH coefficients.
     pub sh: u64,
-    /// Out: `ProjectedSplat[]` (with the tiles each touches).
+    /// Out: `ProjectedSplat[]`.
     pub splats: u64,
+    /// Out: tiles touched per Gaussian.
+    pub tiles_touched: u64,
     /// Out: 1 per Gaussian that touches a tile, else 0.
     pub drawn: u64,
     /// Frame counters (visible count).
@@ -61,6 +63,7 @@ pub struct ObjectClipRanges {
 struct TouchedPush {
     frame: u64,
     splats: u64,
+    tiles_touched: u64,
     drawn: u64,
     round_index: u32,
     pad: u32,
@@ -184,6 +187,7 @@ impl Project {
             gaussians: scene.gaussians.address,
             sh: scene.sh.address,
             splats: f.at.splats,
+            tiles_touched: f.at.tiles_touched,
             drawn: f.at.slots,
             counters: f.at.counters,
             clip: f.at.clip,
@@ -220,6 +224,7 @@ impl Project {
                 let touched = TouchedPush {
                     frame: push.frame,
                     splats: push.splats,
+                    tiles_touched: push.tiles_touched,
                     drawn: push.drawn,
                     round_index,
                     pad: 0,
