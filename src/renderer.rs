@@ -702,7 +702,7 @@ impl Renderer {
             &f.sort,
             cutoff_pairs,
             progress,
-        );
+        )?;
         if let Some(pairs) = cutoff_pairs {
             let flags = tile_lists.map_or(0, |(b, _)| b.address + TileListsLayout::FLAGS);
             self.cutoff_tiles.record(&mut rec, pairs, &f.sort, flags);
@@ -750,7 +750,7 @@ impl Renderer {
             (target.format(), image_set, buffer_target),
             options.background,
             options.composite,
-        );
+        )?;
         if let (Some(d), Some((sums, _)), Some(output)) =
             (&depth, depth_buffers, &options.depth_output)
         {
@@ -1240,7 +1240,7 @@ impl Renderer {
             (target.format(), image_set, buffer_target),
             options.background,
             options.composite,
-        );
+        )?;
         Ok(())
     }
 }

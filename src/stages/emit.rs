@@ -14,7 +14,7 @@ use super::FrameRecording;
 use crate::constants::COUNTER_VISIBLE;
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, Context, LazyPipeline};
 
 /// Device addresses the emit kernel reads and writes.
 #[repr(C)]
@@ -49,10 +49,11 @@ pub struct EmitPush {
     pub pad: u32,
 }
 
-/// The emit kernels: plain, and recording the cutoff splats' pairs.
+/// The emit kernels: plain, and recording the cutoff splats' pairs (each built when a frame
+/// first needs it).
 pub struct Emit {
-    plain: ComputePipeline,
-    cutoff_pairs: ComputePipeline,
+    plain: LazyPipeline,
+    cutoff_pairs: LazyPipeline,
 }
 
 impl Emit {
@@ -61,17 +62,17 @@ impl Emit {
     /// pairs and the projected splats through them (`emit*_texels`): a CPU driver loads
     /// those as gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
-        let build = |name: &'static CStr, spirv: &[u32]| {
-            ComputePipeline::with_set_layout::<EmitPush>(ctx, name, spirv, texels)
+        let build = |name: &'static CStr, spirv: &'static [u32]| {
+            LazyPipeline::new::<EmitPush>(ctx, name, spirv, texels)
         };
         Ok(match texels {
             Some(_) => Emit {
-                plain: build(c"emit_texels", shaders::EMIT_TEXELS)?,
-                cutoff_pairs: build(c"emit_rara_texels", shaders::EMIT_RARA_TEXELS)?,
+                plain: build(c"emit_texels", shaders::EMIT_TEXELS),
+                cutoff_pairs: build(c"emit_rara_texels", shaders::EMIT_RARA_TEXELS),
             },
             None => Emit {
-                plain: build(c"emit", shaders::EMIT)?,
-                cutoff_pairs: build(c"emit_rara", shaders::EMIT_RARA)?,
+                plain: build(c"emit", shaders::EMIT),
+                cutoff_pairs: build(c"emit_rara", shaders::EMIT_RARA),
             },
         })
     }
@@ -91,7 +92,7 @@ impl Emit {
         sort: &SortBuffers,
         cutoff_pairs: Option<&Buffer>,
         progress: u64,
-    ) {
+    ) -> Result<()> {
         let push = EmitPush {
             frame: f.at.params,
             splats: f.at.splats,
@@ -111,7 +112,8 @@ impl Emit {
             &self.cutoff_pairs
         } else {
             &self.plain
-        };
+        }
+        .get()?;
         let rounds = super::tile_rect_rounds(f.tile_count());
         f.pass(c"emit", |f| {
             for round_index in 0..rounds {
@@ -123,5 +125,6 @@ impl Emit {
                 f.barrier();
             }
         });
+        Ok(())
     }
 }

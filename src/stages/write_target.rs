@@ -10,7 +10,7 @@ use crate::constants::TILE_SIZE;
 use crate::error::{Result, VkContext};
 use crate::shaders;
 use crate::target::{Composite, TargetFormat};
-use crate::vk::{ComputePipeline, Context};
+use crate::vk::{Context, LazyPipeline};
 
 /// Push constants of the write-target kernels.
 #[repr(C)]
@@ -63,11 +63,12 @@ pub fn single_image_set_layout(
         .vk("vkCreateDescriptorSetLayout")
 }
 
-/// One write-target kernel per [`TargetFormat`], for one kind of target.
+/// One write-target kernel per [`TargetFormat`], for one kind of target, each built when a
+/// frame first needs it.
 struct FormatKernels {
-    rgba8: ComputePipeline,
-    rgba16f: ComputePipeline,
-    rgba32f: ComputePipeline,
+    rgba8: LazyPipeline,
+    rgba16f: LazyPipeline,
+    rgba32f: LazyPipeline,
 }
 
 impl FormatKernels {
@@ -75,22 +76,22 @@ impl FormatKernels {
     /// rgba32f), with descriptor sets of `set_layouts`.
     fn new(
         ctx: &Context,
-        kernels: [(&'static CStr, &[u32]); 3],
+        kernels: [(&'static CStr, &'static [u32]); 3],
         set_layouts: &[vk::DescriptorSetLayout],
     ) -> Result<Self> {
-        let build = |(name, spirv): (&'static CStr, &[u32])| {
-            ComputePipeline::with_set_layouts::<WriteTargetPush>(ctx, name, spirv, set_layouts)
+        let build = |(name, spirv): (&'static CStr, &'static [u32])| {
+            LazyPipeline::with_set_layouts::<WriteTargetPush>(ctx, name, spirv, set_layouts)
         };
         let [rgba8, rgba16f, rgba32f] = kernels;
         Ok(FormatKernels {
-            rgba8: build(rgba8)?,
-            rgba16f: build(rgba16f)?,
-            rgba32f: build(rgba32f)?,
+            rgba8: build(rgba8),
+            rgba16f: build(rgba16f),
+            rgba32f: build(rgba32f),
         })
     }
 
     /// The kernel for `format`.
-    fn get(&self, format: TargetFormat) -> &ComputePipeline {
+    fn get(&self, format: TargetFormat) -> &LazyPipeline {
         match format {
             TargetFormat::Rgba8Unorm => &self.rgba8,
             TargetFormat::Rgba16Float => &self.rgba16f,
@@ -226,7 +227,7 @@ impl WriteTarget {
         (format, image_set, buffer_target): (TargetFormat, Option<vk::DescriptorSet>, u64),
         background: glam::Vec3,
         composite: Composite,
-    ) {
+    ) -> Result<()> {
         let (w, h) = f.size;
         let push = WriteTargetPush {
             state: f.at.state,
@@ -238,39 +239,19 @@ impl WriteTarget {
         };
         let max_texels = f.ctx.info().max_texel_buffer_elements as u64;
         let frame_texels = f.texels.filter(|_| w as u64 * h as u64 <= max_texels);
+        let (kernels, sets): (&FormatKernels, Vec<vk::DescriptorSet>) =
+            match (image_set, self.texels.as_ref().zip(frame_texels)) {
+                (None, None) => (&self.buffer, vec![]),
+                (Some(image), None) => (&self.image, vec![image]),
+                (None, Some(((_, buffer), texels))) => (buffer, vec![texels]),
+                (Some(image), Some(((images, _), texels))) => (images, vec![image, texels]),
+            };
+        let kernel = kernels.get(format).get()?;
+        let groups = [w.div_ceil(TILE_SIZE), h.div_ceil(TILE_SIZE), 1];
         f.pass(c"write target", |f| {
-            self.dispatch(f.cmd, &push, format, image_set, frame_texels)
+            kernel.dispatch_with_sets(f.cmd, &push, &sets, groups)
         });
-    }
-
-    fn dispatch(
-        &self,
-        cmd: vk::CommandBuffer,
-        push: &WriteTargetPush,
-        format: TargetFormat,
-        image_set: Option<vk::DescriptorSet>,
-        frame_texels: Option<vk::DescriptorSet>,
-    ) {
-        let groups = [
-            push.size[0].div_ceil(TILE_SIZE),
-            push.size[1].div_ceil(TILE_SIZE),
-            1,
-        ];
-        match (image_set, self.texels.as_ref().zip(frame_texels)) {
-            (None, None) => self.buffer.get(format).dispatch(cmd, push, groups),
-            (Some(image), None) => self
-                .image
-                .get(format)
-                .dispatch_with_set(cmd, push, image, groups),
-            (None, Some(((_, buffer), texels))) => buffer
-                .get(format)
-                .dispatch_with_set(cmd, push, texels, groups),
-            (Some(image), Some(((images, _), texels))) => {
-                images
-                    .get(format)
-                    .dispatch_with_sets(cmd, push, &[image, texels], groups)
-            }
-        }
+        Ok(())
     }
 }
 

@@ -190,9 +190,11 @@ impl Buffer {
     ) -> Result<()> {
         assert!(at + len <= self.size, "upload past the end of the buffer");
         let granule = granule.max(1);
-        let chunk = (staging.size / granule).max(1) * granule;
+        // Whole records per chunk; a staging buffer smaller than a record only holds an upload
+        // that is smaller still (an empty scene's 16-byte placeholder).
+        let chunk = ((staging.size / granule).max(1) * granule).min(staging.size);
         assert!(
-            chunk <= staging.size,
+            chunk % granule == 0 || len <= staging.size,
             "a staging buffer smaller than one record"
         );
         let mut offset = 0;

@@ -122,6 +122,9 @@ impl ComputePipeline {
 
     /// Binds `sets` as descriptor sets 0, 1, ... of this pipeline's layout.
     fn bind_sets(&self, cmd: vk::CommandBuffer, sets: &[vk::DescriptorSet]) {
+        if sets.is_empty() {
+            return; // nothing to bind (descriptorSetCount must be > 0)
+        }
         unsafe {
             self.ctx.device().cmd_bind_descriptor_sets(
                 cmd,
@@ -238,7 +241,7 @@ pub struct LazyPipeline {
     ctx: Context,
     name: &'static CStr,
     spirv: &'static [u32],
-    set_layout: Option<vk::DescriptorSetLayout>,
+    set_layouts: Vec<vk::DescriptorSetLayout>,
     push_bytes: u32,
     built: std::sync::OnceLock<ComputePipeline>,
 }
@@ -251,11 +254,22 @@ impl LazyPipeline {
         spirv: &'static [u32],
         set_layout: Option<vk::DescriptorSetLayout>,
     ) -> Self {
+        let layouts: Vec<vk::DescriptorSetLayout> = set_layout.into_iter().collect();
+        Self::with_set_layouts::<P>(ctx, name, spirv, &layouts)
+    }
+
+    /// The pipeline of [`ComputePipeline::with_set_layouts`], not built yet.
+    pub fn with_set_layouts<P: bytemuck::Pod>(
+        ctx: &Context,
+        name: &'static CStr,
+        spirv: &'static [u32],
+        set_layouts: &[vk::DescriptorSetLayout],
+    ) -> Self {
         LazyPipeline {
             ctx: ctx.clone(),
             name,
             spirv,
-            set_layout,
+            set_layouts: set_layouts.to_vec(),
             push_bytes: std::mem::size_of::<P>() as u32,
             built: std::sync::OnceLock::new(),
         }
@@ -266,12 +280,11 @@ impl LazyPipeline {
         if let Some(p) = self.built.get() {
             return Ok(p);
         }
-        let layouts: Vec<vk::DescriptorSetLayout> = self.set_layout.into_iter().collect();
         let p = ComputePipeline::with_push_bytes(
             &self.ctx,
             self.name,
             self.spirv,
-            &layouts,
+            &self.set_layouts,
             self.push_bytes,
         )?;
         // Another thread may have built it meanwhile: either is the same pipeline.
