@@ -102,7 +102,6 @@ impl GpuScene {
         mut progress: impl FnMut(usize, usize),
     ) -> Result<(Self, crate::ply::LoadReport)> {
         let path = path.as_ref();
-        let vertices = crate::ply::vertex_count(path)?;
         let record = std::mem::size_of::<GpuGaussian>() as u64;
         let mut staging = Buffer::new(
             ctx,
@@ -115,6 +114,7 @@ impl GpuScene {
             let s = match &mut loaded {
                 Some(s) => s,
                 None => {
+                    let vertices = info.vertices_in_file;
                     // The reader has checked the header against the file by now, so an error
                     // here is about the scene, not a broken file.
                     if vertices as u64 > MAX_GAUSSIANS {
@@ -239,26 +239,16 @@ impl GpuScene {
 
     /// Writes `scene` into the buffers (which are large enough), chunk by chunk.
     fn upload(&mut self, scene: &Scene) -> Result<()> {
-        let (gaussian_bytes, _) = scene_buffer_sizes(scene, self.sh_precision);
+        // The whole scene as one chunk, through a staging buffer no larger than it needs.
+        let gaussian_bytes = (scene.len() * std::mem::size_of::<GpuGaussian>()) as u64;
         let sh_bytes = scene.sh.len() as u64 * self.sh_precision.bytes();
-        let record = std::mem::size_of::<GpuGaussian>();
-        self.gaussians
-            .upload_with(gaussian_bytes, record as u64, |offset, chunk| {
-                let first = offset as usize / record;
-                for (k, out) in chunk.chunks_exact_mut(record).enumerate() {
-                    out.copy_from_slice(bytemuck::bytes_of(&gpu_gaussian(scene, first + k)));
-                }
-            })?;
-        match self.sh_precision {
-            ShPrecision::F32 => self.sh.upload(bytemuck::cast_slice(&scene.sh))?,
-            ShPrecision::F16 => self.sh.upload_with(sh_bytes, 2, |offset, chunk| {
-                let first = offset as usize / 2;
-                for (k, out) in chunk.chunks_exact_mut(2).enumerate() {
-                    out.copy_from_slice(&f32_to_f16_bits(scene.sh[first + k]).to_le_bytes());
-                }
-            })?,
-        }
-        self.count = scene.len() as u32;
+        let mut staging = Buffer::new(
+            self.gaussians.context(),
+            "staging (upload)",
+            crate::vk::buffer::STAGING_CHUNK.min(gaussian_bytes.max(sh_bytes)),
+            MemoryLocation::CpuToGpu,
+        )?;
+        self.write_chunk(&mut staging, scene, 0)?;
         self.sh_degree = scene.sh_degree;
         Ok(())
     }
