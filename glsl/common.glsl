@@ -27,7 +27,9 @@ struct Gaussian {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Gaussians { Gaussian v[]; };
 
-// What the project stage leaves for the later stages, 64 bytes per Gaussian.
+// What the project stage leaves for the later stages, 48 bytes per Gaussian. The tile
+// rectangle is not stored: splat_tile_rect derives it from uv and radius, bit for bit as
+// project did (16 bytes less per Gaussian than keeping it).
 struct ProjectedSplat {
     vec2 uv;            // image coordinates of the centre (SPEC section 2)
     float depth;        // view-space z, > 0.2
@@ -35,12 +37,13 @@ struct ProjectedSplat {
     vec3 conic;         // inverse 2D covariance (A, B, C)
     uint cutoff;        // index of the cutoff side record, or NO_CUTOFF (w = 1 everywhere)
     vec3 color;
-    uint pad;
-    uvec4 rect;         // touched tiles [x0, x1) x [y0, y1) as (x0, y0, x1, y1)
+    float radius;       // 3-sigma radius in pixels (an integer); SKIPPED_RADIUS if not drawn
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer ProjectedSplats { ProjectedSplat v[]; };
 
 #define NO_CUTOFF 0xffffffffu
+// The radius of a Gaussian that project skipped: its tile rectangle is empty.
+#define SKIPPED_RADIUS -1.0
 
 // Per-frame parameters, written with vkCmdUpdateBuffer at the start of the frame's commands.
 struct FrameParams {
@@ -119,9 +122,9 @@ Gaussian load_gaussian(Gaussians gaussians, uint i) {
 }
 
 // Byte offset of ProjectedSplat i's word block k (16 bytes each: uv, depth, opacity | conic,
-// cutoff | color, pad | rect).
+// cutoff | color, radius).
 uint64_t splat_block(ProjectedSplats splats, uint i, uint k) {
-    return uint64_t(splats) + uint64_t(i) * 64ul + uint64_t(k) * 16ul;
+    return uint64_t(splats) + uint64_t(i) * 48ul + uint64_t(k) * 16ul;
 }
 
 ProjectedSplat load_splat(ProjectedSplats splats, uint i) {
@@ -135,16 +138,14 @@ ProjectedSplat load_splat(ProjectedSplats splats, uint i) {
     p.conic = uintBitsToFloat(b1.xyz);
     p.cutoff = b1.w;
     p.color = b2.xyz;
-    p.pad = floatBitsToUint(b2.w);
-    p.rect = load_uvec4(splat_block(splats, i, 3u));
+    p.radius = b2.w;
     return p;
 }
 
 void store_splat(ProjectedSplats splats, uint i, ProjectedSplat p) {
     store_vec4(splat_block(splats, i, 0u), vec4(p.uv, p.depth, p.opacity));
     store_uvec4(splat_block(splats, i, 1u), uvec4(floatBitsToUint(p.conic), p.cutoff));
-    store_vec4(splat_block(splats, i, 2u), vec4(p.color, uintBitsToFloat(p.pad)));
-    store_uvec4(splat_block(splats, i, 3u), p.rect);
+    store_vec4(splat_block(splats, i, 2u), vec4(p.color, p.radius));
 }
 
 // World-space direction of the ray through pixel centre `pixel` (SPEC section 2): camera-space
@@ -248,6 +249,25 @@ vec4 footprint_pixel_box_in_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint
     vec2 hi = lo + float(TILE_SIZE - 1u);
     vec2 half_extent = footprint_half_extent(conic, q_max);
     return vec4(max(lo, ceil(uv - half_extent)), min(hi, floor(uv + half_extent)));
+}
+
+// The tiles [x0, x1) x [y0, y1) as (x0, y0, x1, y1) of the square of half side `radius`
+// pixels around uv, in a grid of `grid` tiles: clamp(int(v), 0, g) of SPEC section 3, clamped
+// before the conversion, so the same tiles wherever int(v) is defined, and defined for a centre
+// far off screen too (int() of a float beyond the int range is undefined in GLSL). Project
+// computes it and every later reader derives it again from the stored uv and radius: the same
+// operations on the same floats (the division by the power-of-two tile size is exact), so the
+// same rectangle. Empty for SKIPPED_RADIUS.
+uvec4 splat_tile_rect(vec2 uv, float radius, uvec2 grid) {
+    if (!(radius >= 0.0)) {
+        return uvec4(0u);
+    }
+    // precise: no compiler may fuse or reorder these operations differently in two kernels.
+    precise float tile = float(TILE_SIZE);
+    vec2 g = vec2(grid);
+    precise vec2 lo = clamp((uv - radius) / tile, vec2(0.0), g);
+    precise vec2 hi = clamp((uv + radius + tile - 1.0) / tile, vec2(0.0), g);
+    return uvec4(uvec2(lo), uvec2(hi));
 }
 
 // Cells of a tile rectangle (x0, y0, x1, y1), numbered row by row from (x0, y0).

@@ -64,7 +64,7 @@ void main() {
     ProjectedSplat p = load_splat(pc.splats, i);
     uint slot = pc.offsets.v[j];
 #endif
-    uvec4 rect = p.rect;
+    uvec4 rect = splat_tile_rect(p.uv, p.radius, f.size.zw);
     float q_max = footprint_q_max(p.opacity);
     uint capacity = f.scene.w;
 #ifdef RECORD_CUTOFF_PAIRS

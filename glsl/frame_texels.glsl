@@ -19,7 +19,7 @@
 
 // R32_UINT, per pair.
 layout(set = FRAME_TEXELS_SET, binding = 0) uniform utextureBuffer sorted_values;
-// RGBA32_UINT, 4 per splat.
+// RGBA32_UINT, 3 per splat.
 layout(set = FRAME_TEXELS_SET, binding = 1) uniform utextureBuffer splat_texels;
 // RGBA32_UINT, 3 per record.
 layout(set = FRAME_TEXELS_SET, binding = 2) uniform utextureBuffer cutoff_texels;
@@ -44,10 +44,10 @@ layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer gaussian_tex
 // floats (sh.glsl).
 layout(set = FRAME_TEXELS_SET, binding = 11) uniform utextureBuffer sh_texels;
 
-// Projected splat i (load_splat in common.glsl, from its four texels; a kernel that does not
+// Projected splat i (load_splat in common.glsl, from its three texels; a kernel that does not
 // use a texel's fields does not fetch it).
 ProjectedSplat texel_splat(uint i) {
-    int t = int(i) * 4;
+    int t = int(i) * 3;
     uvec4 b0 = texelFetch(splat_texels, t);
     uvec4 b1 = texelFetch(splat_texels, t + 1);
     uvec4 b2 = texelFetch(splat_texels, t + 2);
@@ -58,8 +58,7 @@ ProjectedSplat texel_splat(uint i) {
     p.conic = uintBitsToFloat(b1.xyz);
     p.cutoff = b1.w;
     p.color = uintBitsToFloat(b2.xyz);
-    p.pad = b2.w;
-    p.rect = texelFetch(splat_texels, t + 3);
+    p.radius = uintBitsToFloat(b2.w);
     return p;
 }
 

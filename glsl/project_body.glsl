@@ -61,7 +61,7 @@ void store_cutoff_region(uint index) {
 void skip(uint i) {
     pc.tiles_touched.v[i] = 0u;
     pc.drawn.v[i] = 0u;
-    store_uvec4(splat_block(pc.splats, i, 3u), uvec4(0u));
+    store_vec4(splat_block(pc.splats, i, 2u), vec4(0.0, 0.0, 0.0, SKIPPED_RADIUS));
 }
 
 // Projects Gaussian i; returns true when it is drawn as cutoff, with its side record in rec.
@@ -124,21 +124,12 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     float lambda = mid + sqrt(max(0.1, mid * mid - det));
     float radius = ceil(3.0 * sqrt(lambda));
     vec2 uv = vec2(fx * t.x / t.z + f.focal.z, fy * t.y / t.z + f.focal.w);
-    int gx = int(f.size.z), gy = int(f.size.w);
-    // clamp(int(v), 0, g) of SPEC section 3, clamped before the conversion: the same tiles
-    // wherever int(v) is defined, and defined for a centre far off screen too (int() of a float
-    // beyond the int range is undefined in GLSL).
-    float tile = float(TILE_SIZE);
-    int x0 = int(clamp((uv.x - radius) / tile, 0.0, float(gx)));
-    int x1 = int(clamp((uv.x + radius + tile - 1.0) / tile, 0.0, float(gx)));
-    int y0 = int(clamp((uv.y - radius) / tile, 0.0, float(gy)));
-    int y1 = int(clamp((uv.y + radius + tile - 1.0) / tile, 0.0, float(gy)));
     // Tiles of the 3-sigma rectangle that the splat's visible footprint reaches (common.glsl);
     // a splat below 1/255 opacity draws nowhere. Only the first TILE_RECT_CHUNK cells are
     // counted here (lavapipe's loop cap): project_touched.comp counts the rest of a larger
     // rectangle in later rounds, so such a splat is drawn even if none of those first cells
     // is reached (and then may end with no tile at all, which draws nothing).
-    uvec4 rect = uvec4(x0, y0, x1, y1);
+    uvec4 rect = splat_tile_rect(uv, radius, f.size.zw);
     uint cells = tile_rect_cells(rect);
     float opacity = g.pos_opacity.w;
     bool visible = opacity >= 1.0 / 255.0;
@@ -162,8 +153,7 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     p.conic = conic;
     p.cutoff = NO_CUTOFF;
     p.color = color;
-    p.pad = 0u;
-    p.rect = rect;
+    p.radius = radius;
     store_splat(pc.splats, i, p);
     pc.tiles_touched.v[i] = touched;
     pc.drawn.v[i] = 1u;

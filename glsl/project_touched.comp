@@ -24,13 +24,14 @@ void main() {
         return;
     }
     ProjectedSplat p = load_splat(pc.splats, i);
-    uint cells = tile_rect_cells(p.rect);
+    uvec4 rect = splat_tile_rect(p.uv, p.radius, f.size.zw);
+    uint cells = tile_rect_cells(rect);
     uint first = pc.round_index * TILE_RECT_CHUNK;
     if (first >= cells) {
         return;
     }
     uint end = min(cells, first + TILE_RECT_CHUNK);
-    uint touched = count_touched_cells(p.uv, p.conic, footprint_q_max(p.opacity), p.rect, first,
+    uint touched = count_touched_cells(p.uv, p.conic, footprint_q_max(p.opacity), rect, first,
                                        end);
     pc.tiles_touched.v[i] += touched;
 }

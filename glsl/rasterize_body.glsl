@@ -125,7 +125,7 @@ bool handle_weighted(uint h) {
     return (h & PAIR_WEIGHTED) != 0u;
 }
 
-// The entry's splat (its rect is not fetched: unused).
+// The entry's splat.
 Staged handle_splat(uint h) {
     ProjectedSplat p = texel_splat(h & ~PAIR_WEIGHTED);
     Staged s;

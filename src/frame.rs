@@ -11,8 +11,9 @@ use crate::constants::{
 };
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams};
+use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams, GpuProjectedSplat};
 use crate::stages::cutoff_tiles::CUTOFF_PAIRS_OFFSET;
+use crate::stages::depth_order::DEPTH_ORDER_BUFFER;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_lists::TileListsLayout;
@@ -85,17 +86,17 @@ pub(crate) struct ObjectBuffers {
 /// scratch that comes on top of the scene ([`crate::GpuScene::device_bytes`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameMemory {
-    /// Per Gaussian of the scene: projected splats (64 B), tiles touched (4 B), sort slots /
-    /// pair offsets (4 B), the depth sort's keys and values (16 B; 24 B in the CPU drivers'
-    /// sort layout, whose key buffers also hold packed pairs) and histograms, plus the prefix
-    /// sum's partial sums (4 B per 1,024).
+    /// Per Gaussian of the scene: projected splats (48 B), tiles touched (4 B), sort slots /
+    /// pair offsets (4 B), the prefix sum's partial sums (4 B per 1,024), and the depth order
+    /// when kept ([`crate::Renderer::set_keep_depth_order`], 4 B). The depth sort shares the
+    /// tile pairs' sort buffers (`per_intersection`), which hold a pair per Gaussian at least.
     pub per_gaussian: u64,
     /// Cutoff side records (48 B per Gaussian) and where their pairs start (8 B), allocated by
     /// the first rara-clipped frame.
     pub cutoff_records: u64,
     /// Sort keys and values, double-buffered (16 B per pair; 24 B in the CPU drivers' sort
-    /// layout), and the sort histograms, for
-    /// `intersection_capacity` (tile, splat) pairs.
+    /// layout), and the sort histograms, for `intersection_capacity` (tile, splat) pairs; the
+    /// depth sort runs in them first.
     pub per_intersection: u64,
     /// Pairs the sort buffers hold (grown from the frames' counts).
     pub intersection_capacity: u64,
@@ -154,10 +155,13 @@ pub(crate) struct FrameResources {
     pub(crate) slots: Buffer,
     /// Scratch of both prefix sums over `slots`.
     pub(crate) slots_scan: PrefixSumScratch,
-    /// The drawn Gaussians' (depth bits, index) pairs and their sort.
-    pub(crate) depth_sort: SortBuffers,
-    /// The (tile id, splat index) pairs and their sort.
+    /// The drawn Gaussians' (depth bits, index) pairs and their sort, ending in buffer
+    /// [`DEPTH_ORDER_BUFFER`]; then the (tile id, splat index) pairs and theirs, from buffer
+    /// 0. Room for a pair per Gaussian at least.
     pub(crate) sort: SortBuffers,
+    /// The depth order copied aside for [`crate::Renderer::intermediates`], when asked for
+    /// ([`crate::Renderer::set_keep_depth_order`]).
+    pub(crate) depth_order_copy: Option<Buffer>,
     pub(crate) ranges: Buffer,
     /// The tile lists of the strips rasterizer under rara clipping ([`TileListsLayout`]).
     pub(crate) tile_lists: Buffer,
@@ -270,7 +274,7 @@ impl FrameSlot {
                 + r.tiles_touched.size
                 + r.slots.size
                 + r.slots_scan.device_bytes()
-                + r.depth_sort.device_bytes();
+                + r.depth_order_copy.as_ref().map_or(0, |b| b.size);
             m.cutoff_records = r.cutoffs.as_ref().map_or(0, |b| b.size)
                 + r.cutoff_pairs.as_ref().map_or(0, |b| b.size);
             m.per_intersection = r.sort.device_bytes();
@@ -395,6 +399,14 @@ impl FrameSlot {
             .max((gaussians as u64 * FIRST_INTERSECTIONS_PER_GAUSSIAN).min(MAX_INTERSECTIONS))
             .max(MIN_CAPACITY);
         let capacity = self.capacity.min(pair_limit);
+        // The depth sort shares the pairs' buffers: a slot per Gaussian. Scenes that the
+        // kernels' limits admit stay far below the pair limit (a third of it, or less).
+        if capacity < gaussians as u64 {
+            return Err(crate::error::Error::InvalidInput(format!(
+                "{gaussians} Gaussians exceed the {capacity} sort slots one frame may have on \
+                 this device"
+            )));
+        }
         let fits = self.resources.as_ref().is_some_and(|f| {
             f.width == width
                 && f.height == height
@@ -431,12 +443,17 @@ impl FrameSlot {
                 counters: Buffer::new(ctx, "frame counters", COUNTER_SLOTS as u64 * 4, gpu)?,
                 cutoffs: None,
                 cutoff_pairs: None,
-                splats: Buffer::new(ctx, "projected splats", n * 64, gpu)?,
+                splats: Buffer::new(
+                    ctx,
+                    "projected splats",
+                    n * std::mem::size_of::<GpuProjectedSplat>() as u64,
+                    gpu,
+                )?,
                 tiles_touched: Buffer::new(ctx, "tiles touched", n * 4, gpu)?,
                 slots: Buffer::new(ctx, "depth sort slots / pair offsets", n * 4, gpu)?,
                 slots_scan: prefix_sum.scratch(ctx, n)?,
-                depth_sort: sort.buffers(ctx, n)?,
                 sort: sort.buffers(ctx, capacity)?,
+                depth_order_copy: None,
                 ranges: Buffer::new(ctx, "tile ranges", (gx * gy) as u64 * 8, gpu)?,
                 tile_lists: Buffer::new(
                     ctx,
@@ -486,19 +503,35 @@ impl FrameSlot {
         Ok((capacity, self.rounds))
     }
 
+    /// Makes room for the depth order of `gaussians` copied aside
+    /// ([`crate::Renderer::set_keep_depth_order`]); call after `prepare`.
+    pub(crate) fn keep_depth_order(&mut self, gaussians: u32) -> Result<()> {
+        let f = self.resources.as_mut().expect("prepared");
+        let bytes = gaussians.max(1) as u64 * 4;
+        if !f.depth_order_copy.as_ref().is_some_and(|b| b.size >= bytes) {
+            f.depth_order_copy = None;
+            f.depth_order_copy = Some(Buffer::new(
+                &self.ctx,
+                "depth order (kept)",
+                bytes,
+                MemoryLocation::GpuOnly,
+            )?);
+        }
+        Ok(())
+    }
+
     /// The buffer the frame's counters are copied to for [`FrameSlot::stats`].
     pub(crate) fn counters_readback(&self) -> &Buffer {
         &self.counters_readback
     }
 
     /// The descriptor set of the frame's texel views ([`frame_texels_set_layout`]) for the
-    /// frame `prepare` sized, whose sorted pairs are in sort buffer `sorted` and drawn
-    /// Gaussians in depth order in depth-sort buffer `depth_sorted`, of `scene`: views are
+    /// frame `prepare` sized, whose sorted pairs are in sort buffer `sorted` (and drawn
+    /// Gaussians in depth order in sort buffer [`DEPTH_ORDER_BUFFER`]), of `scene`: views are
     /// remade only when the buffers changed (the slot is idle, so the set is not in use).
     pub(crate) fn frame_texels_set(
         &mut self,
         sorted: usize,
-        depth_sorted: usize,
         scene: &GpuScene,
     ) -> Result<vk::DescriptorSet> {
         let device = self.ctx.device();
@@ -530,7 +563,7 @@ impl FrameSlot {
             Some(&f.sort.values[sorted]),
             Some(&f.splats),
             f.cutoffs.as_ref(),
-            Some(&f.depth_sort.values[depth_sorted]),
+            Some(&f.sort.values[DEPTH_ORDER_BUFFER]),
             Some(&f.slots),
             Some(&f.tiles_touched),
             Some(&f.sort.keys[sorted]),

@@ -35,10 +35,35 @@ pub struct GpuProjectedSplat {
     pub cutoff: u32,
     /// SH colour.
     pub color: [f32; 3],
-    /// Unused.
-    pub pad: u32,
-    /// Touched tiles (x0, y0, x1, y1), end exclusive.
-    pub rect: [u32; 4],
+    /// 3-sigma radius in pixels (a whole number), or -1 for a Gaussian project skipped. The
+    /// tile rectangle is not stored: [`GpuProjectedSplat::tile_rect`] derives it.
+    pub radius: f32,
+}
+
+impl GpuProjectedSplat {
+    /// Whether project drew this Gaussian (else it skipped it and nothing else is written).
+    pub fn drawn(&self) -> bool {
+        self.radius >= 0.0
+    }
+
+    /// The tiles (x0, y0, x1, y1), end exclusive, of its 3-sigma square in a grid of `grid`
+    /// tiles: `splat_tile_rect` in common.glsl, the same operations on the same floats (the
+    /// division by the tile size is exact). Empty for a skipped Gaussian.
+    pub fn tile_rect(&self, grid: (u32, u32)) -> [u32; 4] {
+        if !self.drawn() {
+            return [0; 4];
+        }
+        let tile = crate::constants::TILE_SIZE as f32;
+        let lo = |c: f32, g: u32| ((c - self.radius) / tile).clamp(0.0, g as f32) as u32;
+        let hi =
+            |c: f32, g: u32| ((c + self.radius + tile - 1.0) / tile).clamp(0.0, g as f32) as u32;
+        [
+            lo(self.uv[0], grid.0),
+            lo(self.uv[1], grid.1),
+            hi(self.uv[0], grid.0),
+            hi(self.uv[1], grid.1),
+        ]
+    }
 }
 
 /// `FrameParams` in common.glsl: camera and frame constants, written each frame.
@@ -127,7 +152,7 @@ const _: () =
     assert!(std::mem::size_of::<GpuClipParams>() == crate::constants::CLIP_PARAMS_BYTES as usize);
 const _: () = assert!(std::mem::size_of::<GpuClipParams>() == 48 + 16 * MAX_CLIP_PLANES as usize);
 const _: () = assert!(std::mem::size_of::<GpuCutoffRecord>() == 48);
-const _: () = assert!(std::mem::size_of::<GpuProjectedSplat>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuProjectedSplat>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuFrameParams>() == 128);
 const _: () = assert!(std::mem::size_of::<GpuSortInfo>() == 128);
 

@@ -20,7 +20,7 @@ use crate::objects::ObjectTransform;
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
 use crate::stages::depth::DepthStages;
-use crate::stages::depth_order::{DepthOrder, DEPTH_KEY_BITS};
+use crate::stages::depth_order::{DepthOrder, DEPTH_ORDER_BUFFER};
 use crate::stages::emit::Emit;
 use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
@@ -84,7 +84,8 @@ pub struct Intermediates {
     pub splats: Vec<crate::gpu_types::GpuProjectedSplat>,
     /// Tiles touched, per Gaussian.
     pub tiles_touched: Vec<u32>,
-    /// The drawn Gaussians' indices in depth order (ties: index order).
+    /// The drawn Gaussians' indices in depth order (ties: index order); empty unless the
+    /// renderer keeps it ([`Renderer::set_keep_depth_order`]).
     pub depth_order: Vec<u32>,
     /// Exclusive prefix sum of tiles touched, in depth order: each drawn Gaussian's first
     /// pair.
@@ -122,6 +123,9 @@ pub struct Renderer {
     /// The object-transform kernel of several objects in one frame (SPEC section 9).
     objects: ObjectTransformStage,
     timer: PassTimer,
+    /// Whether frames copy their depth order aside for [`Renderer::intermediates`]
+    /// ([`Renderer::set_keep_depth_order`]).
+    keep_depth_order: bool,
     /// The slot and rgba8 image (+ host copy) of the headless path, [`Renderer::render`].
     headless: Option<HeadlessFrame>,
     /// The ray tracer, made on the first frame that asks for it.
@@ -187,6 +191,7 @@ impl Renderer {
             depth: DepthStages::new(ctx)?,
             objects: ObjectTransformStage::new(ctx)?,
             timer: PassTimer::new(ctx)?,
+            keep_depth_order: false,
             headless: None,
             ray_tracer: std::sync::OnceLock::new(),
             _frame_texels_layout: frame_texels_layout,
@@ -197,6 +202,13 @@ impl Renderer {
     /// engine's query pool ([`PassTimer::with_engine_pool`]). Returns the old one.
     pub fn set_timer(&mut self, timer: PassTimer) -> PassTimer {
         std::mem::replace(&mut self.timer, timer)
+    }
+
+    /// Makes later frames copy their depth order aside (4 B per Gaussian and a copy), for
+    /// [`Intermediates::depth_order`]: the tile pairs' sort overwrites it within the frame,
+    /// since the two sorts share their buffers. Off by default; for tests and debugging.
+    pub fn set_keep_depth_order(&mut self, on: bool) {
+        self.keep_depth_order = on;
     }
 
     /// Switches the per-tile classes of cutoff pairs ([`crate::stages::cutoff_tiles`]) on (the
@@ -459,11 +471,13 @@ impl Renderer {
         let drawn = stats.visible as usize;
         let m = stats.intersections as usize;
         let (gx, gy) = tile_grid(f.width, f.height);
-        let depth_sorted = self.sort.passes_for(DEPTH_KEY_BITS) as usize % 2;
         Ok(Intermediates {
             splats: f.splats.download_as(n)?,
             tiles_touched: f.tiles_touched.download_as(n)?,
-            depth_order: f.depth_sort.values[depth_sorted].download_as(drawn)?,
+            depth_order: match &f.depth_order_copy {
+                Some(copy) => copy.download_as(drawn)?,
+                None => Vec::new(),
+            },
             offsets: f.slots.download_as(drawn)?,
             keys: f.sort.keys[f.sorted].download_as(m)?,
             values: f.sort.values[f.sorted].download_as(m)?,
@@ -592,13 +606,13 @@ impl Renderer {
         slot.resources.as_mut().unwrap().sorted = sorted_index;
         // The texel views that most kernels read through on CPU drivers (project, depth order,
         // emit, tile ranges, rasterize).
-        let depth_sorted_index = self.sort.passes_for(DEPTH_KEY_BITS) as usize % 2;
         let frame_texels = match self.rasterize.layout() {
-            RasterLayout::Strips => {
-                Some(slot.frame_texels_set(sorted_index, depth_sorted_index, scene)?)
-            }
+            RasterLayout::Strips => Some(slot.frame_texels_set(sorted_index, scene)?),
             RasterLayout::PixelPerInvocation => None,
         };
+        if self.keep_depth_order {
+            slot.keep_depth_order(scene.count)?;
+        }
         let f = slot.resources.as_ref().unwrap();
         let counters_readback = slot.counters_readback();
 
@@ -686,15 +700,17 @@ impl Renderer {
         let scan = (&self.prefix_sum, &f.slots_scan);
         self.project
             .record(&mut rec, scene, object_clips.map(|o| &o.project));
-        let depth_sorted =
-            self.depth_order
-                .record_sorted(&mut rec, scene.count, scan, &self.sort, &f.depth_sort);
-        debug_assert_eq!(depth_sorted, depth_sorted_index);
-        let depth_order = f.depth_sort.values[depth_sorted].address;
+        self.depth_order
+            .record_sorted(&mut rec, scene.count, scan, &self.sort, &f.sort);
+        let depth_order = f.sort.values[DEPTH_ORDER_BUFFER].address;
+        if let Some(copy) = &f.depth_order_copy {
+            rec.copy_aside(&f.sort.values[DEPTH_ORDER_BUFFER], copy);
+        }
         self.depth_order
             .record_first_pairs(&mut rec, scene.count, depth_order, scan);
-        // Emit's rounds keep their progress in the depth sort's other key buffer, free by now.
-        let progress = f.depth_sort.keys[1 - depth_sorted].address;
+        // Emit writes the pairs into sort buffer 0 and keeps its rounds' progress in the depth
+        // sort's keys, which nothing reads once the order is known.
+        let progress = f.sort.keys[DEPTH_ORDER_BUFFER].address;
         self.emit.record(
             &mut rec,
             scene.count,
@@ -705,10 +721,10 @@ impl Renderer {
         )?;
         if let Some(pairs) = cutoff_pairs {
             let flags = tile_lists.map_or(0, |(b, _)| b.address + TileListsLayout::FLAGS);
-            self.cutoff_tiles.record(&mut rec, pairs, &f.sort, flags);
+            self.cutoff_tiles.record(&mut rec, pairs, &f.sort, flags)?;
         }
         if let Some((buffer, layout)) = &tile_lists {
-            self.tile_lists.record(&mut rec, buffer, layout);
+            self.tile_lists.record(&mut rec, buffer, layout)?;
         }
         let sorted = self.sort.record(
             ctx,
@@ -729,7 +745,7 @@ impl Renderer {
         if let (Some(d), Some((_, limit))) = (&depth, depth_buffers) {
             if let (Some(test), Some(source)) = (&options.depth_test, d.source) {
                 self.depth
-                    .record_prepare(&mut rec, source, &test.projection, limit);
+                    .record_prepare(&mut rec, source, &test.projection, limit)?;
                 depth_limit = limit;
             }
         }
@@ -755,7 +771,7 @@ impl Renderer {
             (&depth, depth_buffers, &options.depth_output)
         {
             self.depth
-                .record_write(&mut rec, sums, output.mode, d.target.expect("an output"));
+                .record_write(&mut rec, sums, output.mode, d.target.expect("an output"))?;
         }
 
         // The counters, for FrameSlot::stats once the frame completed.
@@ -967,7 +983,7 @@ impl Renderer {
         let list: Vec<(&GpuScene, ObjectTransform)> =
             objects.iter().map(|o| (o.scene, o.transform)).collect();
         self.objects
-            .record(&self.ctx, cmd, &list, &buffers.merged, &buffers.params);
+            .record(&self.ctx, cmd, &list, &buffers.merged, &buffers.params)?;
         let frame_clips = match (&buffers.clips, own_clips) {
             (Some((regions, cutoff_regions)), true) => {
                 Some(self.record_object_regions(cmd, objects, options, regions, cutoff_regions))
@@ -1209,7 +1225,7 @@ impl Renderer {
                 grid: tile_grid(w, h),
             };
             self.depth
-                .record_prepare(&mut rec, *source, projection, *limit);
+                .record_prepare(&mut rec, *source, projection, *limit)?;
         }
         let trace_options = crate::reference::raytrace::RayTraceOptions::default();
         tracer.record(

@@ -665,10 +665,7 @@ fn cutoff_tiles_past_the_loop_budget_change_no_pixel() {
 fn gpu_classes(splats: &[GpuProjectedSplat]) -> Vec<Option<bool>> {
     splats
         .iter()
-        .map(|s| {
-            let drawn = s.rect[2] > s.rect[0] && s.rect[3] > s.rect[1];
-            drawn.then_some(s.cutoff != u32::MAX)
-        })
+        .map(|s| s.drawn().then_some(s.cutoff != u32::MAX))
         .collect()
 }
 

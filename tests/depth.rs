@@ -136,6 +136,7 @@ fn buffer_test(buffer: &Buffer, projection: DepthProjection) -> DepthTest {
 fn depth_test_hides_what_lies_behind_the_engine_surface() {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
+    renderer.set_keep_depth_order(true);
     let (scene, cam) = scene_and_camera();
     let gpu = renderer.upload(&scene).unwrap();
     let (w, h) = (cam.width as usize, cam.height as usize);

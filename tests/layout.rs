@@ -61,8 +61,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuProjectedSplat, conic),
         offset_of!(GpuProjectedSplat, cutoff),
         offset_of!(GpuProjectedSplat, color),
-        offset_of!(GpuProjectedSplat, pad),
-        offset_of!(GpuProjectedSplat, rect),
+        offset_of!(GpuProjectedSplat, radius),
     ];
     assert_layout(shaders::PROJECT_DEG3, "ProjectedSplat", &projected);
     let gaussian = [

@@ -103,10 +103,9 @@ fn six_million_sh3_gaussians_match_the_reference() {
     let written = t.elapsed();
     // `rara render` of the file at 320 px, as a user runs it: the PLY streams from the file to
     // the device, and no host copy of the scene exists while it renders (issue 36). Peak
-    // resident memory against the file's size: at most 1.5x with f32 SH; with f16 SH the goal
-    // was 1.0x, which needs a smaller per-Gaussian frame (docs/PERFORMANCE.md), so the bound is
-    // what is reached, 1.15x.
-    for (flags, bound) in [(&[][..], 1.5), (&["--sh-half"][..], 1.15)] {
+    // resident memory against the file's size: at most 1.5x with f32 SH and 1.0x with f16 SH
+    // (on lavapipe, device memory is host memory: the f16 scene is 0.58x of the file).
+    for (flags, bound) in [(&[][..], 1.5), (&["--sh-half"][..], 1.0)] {
         let out = dir.join("frame.png");
         let mut args = vec![
             "render".to_string(),

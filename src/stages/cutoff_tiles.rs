@@ -16,7 +16,7 @@ use super::sort::SortBuffers;
 use super::FrameRecording;
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, Context, LazyPipeline};
 
 /// Offset of the cutoff-tiles dispatch arguments in the frame's cutoff-pairs buffer (which emit
 /// fills under rara clipping by planes with the mass weight).
@@ -54,21 +54,20 @@ pub struct CutoffTilesPush {
 
 /// The cutoff-tiles kernel.
 pub struct CutoffTiles {
-    pipeline: ComputePipeline,
+    pipeline: LazyPipeline,
 }
 
 impl CutoffTiles {
-    /// Builds the kernel; with `texels`, the layout of the frame's texel views (CPU drivers),
-    /// the variant that reads through them.
+    /// The stage, whose kernel the first rara frame that classifies tiles builds; with
+    /// `texels`, the layout of the frame's texel views (CPU drivers), the variant that reads
+    /// through them.
     pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
         let (name, spirv) = match texels {
             Some(_) => (c"cutoff_tiles_texels", shaders::CUTOFF_TILES_TEXELS),
             None => (c"cutoff_tiles", shaders::CUTOFF_TILES),
         };
         Ok(CutoffTiles {
-            pipeline: ComputePipeline::with_set_layout::<CutoffTilesPush>(
-                ctx, name, spirv, texels,
-            )?,
+            pipeline: LazyPipeline::new::<CutoffTilesPush>(ctx, name, spirv, texels),
         })
     }
 
@@ -84,7 +83,8 @@ impl CutoffTiles {
         pairs: &Buffer,
         sort: &SortBuffers,
         tile_flags: u64,
-    ) {
+    ) -> Result<()> {
+        let kernel = self.pipeline.get()?;
         let push = CutoffTilesPush {
             frame: f.at.params,
             splats: f.at.splats,
@@ -98,14 +98,9 @@ impl CutoffTiles {
             tile_flags,
         };
         f.pass(c"cutoff tiles", |f| {
-            self.pipeline.dispatch_indirect_in(
-                f.cmd,
-                &push,
-                f.texels,
-                pairs.raw,
-                CUTOFF_ARGS_OFFSET,
-            );
+            kernel.dispatch_indirect_in(f.cmd, &push, f.texels, pairs.raw, CUTOFF_ARGS_OFFSET);
             f.barrier();
         });
+        Ok(())
     }
 }

@@ -12,7 +12,7 @@ use crate::constants::TILE_SIZE;
 use crate::depth::{DepthMode, DepthProjection};
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{ComputePipeline, Context};
+use crate::vk::{Context, LazyPipeline};
 
 /// Push constants of `depth_prepare_*`.
 #[repr(C)]
@@ -55,10 +55,10 @@ pub struct WriteDepthPush {
 /// The depth kernels and the layouts of their image descriptor sets (set 0: the engine's depth
 /// image, sampled; or the depth output's storage image).
 pub struct DepthStages {
-    prepare_buffer: ComputePipeline,
-    prepare_image: ComputePipeline,
-    write_buffer: ComputePipeline,
-    write_image: ComputePipeline,
+    prepare_buffer: LazyPipeline,
+    prepare_image: LazyPipeline,
+    write_buffer: LazyPipeline,
+    write_image: LazyPipeline,
     sampled_layout: vk::DescriptorSetLayout,
     storage_layout: vk::DescriptorSetLayout,
     ctx: Context,
@@ -78,52 +78,36 @@ impl DepthStages {
                 return Err(e);
             }
         };
-        let kernels = (|| {
-            Ok((
-                ComputePipeline::new::<DepthPreparePush>(
-                    ctx,
-                    c"depth_prepare_buffer",
-                    shaders::DEPTH_PREPARE_BUFFER,
-                )?,
-                ComputePipeline::with_set_layout::<DepthPreparePush>(
-                    ctx,
-                    c"depth_prepare_image",
-                    shaders::DEPTH_PREPARE_IMAGE,
-                    Some(sampled_layout),
-                )?,
-                ComputePipeline::new::<WriteDepthPush>(
-                    ctx,
-                    c"write_depth_buffer",
-                    shaders::WRITE_DEPTH_BUFFER,
-                )?,
-                ComputePipeline::with_set_layout::<WriteDepthPush>(
-                    ctx,
-                    c"write_depth_image",
-                    shaders::WRITE_DEPTH_IMAGE,
-                    Some(storage_layout),
-                )?,
-            ))
-        })();
-        match kernels {
-            Ok((prepare_buffer, prepare_image, write_buffer, write_image)) => Ok(DepthStages {
-                prepare_buffer,
-                prepare_image,
-                write_buffer,
-                write_image,
-                sampled_layout,
-                storage_layout,
-                ctx: ctx.clone(),
-            }),
-            Err(e) => {
-                unsafe {
-                    ctx.device()
-                        .destroy_descriptor_set_layout(sampled_layout, None);
-                    ctx.device()
-                        .destroy_descriptor_set_layout(storage_layout, None);
-                }
-                Err(e)
-            }
-        }
+        // Built when a frame first asks for a depth test or output.
+        Ok(DepthStages {
+            prepare_buffer: LazyPipeline::new::<DepthPreparePush>(
+                ctx,
+                c"depth_prepare_buffer",
+                shaders::DEPTH_PREPARE_BUFFER,
+                None,
+            ),
+            prepare_image: LazyPipeline::new::<DepthPreparePush>(
+                ctx,
+                c"depth_prepare_image",
+                shaders::DEPTH_PREPARE_IMAGE,
+                Some(sampled_layout),
+            ),
+            write_buffer: LazyPipeline::new::<WriteDepthPush>(
+                ctx,
+                c"write_depth_buffer",
+                shaders::WRITE_DEPTH_BUFFER,
+                None,
+            ),
+            write_image: LazyPipeline::new::<WriteDepthPush>(
+                ctx,
+                c"write_depth_image",
+                shaders::WRITE_DEPTH_IMAGE,
+                Some(storage_layout),
+            ),
+            sampled_layout,
+            storage_layout,
+            ctx: ctx.clone(),
+        })
     }
 
     fn groups((w, h): (u32, u32)) -> [u32; 3] {
@@ -132,14 +116,14 @@ impl DepthStages {
 
     /// Records the pass "depth prepare": the engine's depth (the buffer at `source`, or the
     /// sampled image of descriptor set `image`) into per-pixel view depth at `limit`, then a
-    /// barrier.
+    /// barrier. Builds the kernel on first use.
     pub fn record_prepare(
         &self,
         f: &mut FrameRecording,
         (source, image): (u64, Option<vk::DescriptorSet>),
         projection: &DepthProjection,
         limit: u64,
-    ) {
+    ) -> Result<()> {
         let push = DepthPreparePush {
             source,
             limit,
@@ -150,26 +134,30 @@ impl DepthStages {
             padding: 0,
         };
         let groups = Self::groups(f.size);
+        let kernel = match image {
+            Some(_) => self.prepare_image.get()?,
+            None => self.prepare_buffer.get()?,
+        };
         f.pass(c"depth prepare", |f| {
             match image {
-                Some(set) => self
-                    .prepare_image
-                    .dispatch_with_set(f.cmd, &push, set, groups),
-                None => self.prepare_buffer.dispatch(f.cmd, &push, groups),
+                Some(set) => kernel.dispatch_with_set(f.cmd, &push, set, groups),
+                None => kernel.dispatch(f.cmd, &push, groups),
             }
             f.barrier();
         });
+        Ok(())
     }
 
     /// Records the pass "write depth": the depth output of `mode` from the rasterizer's state
     /// into the buffer at `buffer_target` or the storage image of descriptor set `image`.
+    /// Builds the kernel on first use.
     pub fn record_write(
         &self,
         f: &mut FrameRecording,
         depth_state: u64,
         mode: DepthMode,
         (buffer_target, image): (u64, Option<vk::DescriptorSet>),
-    ) {
+    ) -> Result<()> {
         let push = WriteDepthPush {
             state: f.at.state,
             depth_state,
@@ -179,12 +167,15 @@ impl DepthStages {
             padding: 0,
         };
         let groups = Self::groups(f.size);
+        let kernel = match image {
+            Some(_) => self.write_image.get()?,
+            None => self.write_buffer.get()?,
+        };
         f.pass(c"write depth", |f| match image {
-            Some(set) => self
-                .write_image
-                .dispatch_with_set(f.cmd, &push, set, groups),
-            None => self.write_buffer.dispatch(f.cmd, &push, groups),
+            Some(set) => kernel.dispatch_with_set(f.cmd, &push, set, groups),
+            None => kernel.dispatch(f.cmd, &push, groups),
         });
+        Ok(())
     }
 }
 

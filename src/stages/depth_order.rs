@@ -23,6 +23,13 @@ use crate::vk::{ComputePipeline, Context};
 /// order as the depths do).
 pub const DEPTH_KEY_BITS: u32 = 32;
 
+/// The buffer of the frame's [`SortBuffers`] (shared with the tile pairs' sort) that holds the
+/// depth order: buffer 1, so that emit can write the tile pairs into buffer 0, where the pair
+/// sort starts, while it reads the order. The depth sort starts in whichever buffer makes its
+/// passes end there. Sharing the buffers saves the depth sort's own (16 B per Gaussian on GPUs,
+/// 24 B in the CPU drivers' layout): the pairs are not written until the order is read.
+pub const DEPTH_ORDER_BUFFER: usize = 1;
+
 /// Byte offset of `scene.x` (the Gaussian count) in `FrameParams`: the scan of the drawn flags
 /// reads its length there.
 const PARAMS_COUNT_OFFSET: u64 = 112;
@@ -90,8 +97,9 @@ impl DepthOrder {
 
     /// Records the pass "depth keys" (project's drawn flags scanned into packed sort slots,
     /// the count into `COUNTER_VISIBLE`, then one (depth bits, index) pair per drawn
-    /// Gaussian) and then the depth sort's passes over `depth_sort`; returns which of its
-    /// buffers holds the sorted pairs. The texel kernels read the frame's texel views.
+    /// Gaussian) and then the depth sort's passes over `depth_sort` (the frame's sort buffers,
+    /// which must hold a pair per Gaussian), whose result is in buffer
+    /// [`DEPTH_ORDER_BUFFER`]. The texel kernels read the frame's texel views.
     pub fn record_sorted(
         &self,
         f: &mut FrameRecording,
@@ -99,15 +107,20 @@ impl DepthOrder {
         scan: (&PrefixSum, &PrefixSumScratch),
         sort: &RadixSort,
         depth_sort: &SortBuffers,
-    ) -> usize {
+    ) {
+        assert!(
+            depth_sort.capacity() >= count as u64,
+            "a sort slot per Gaussian"
+        );
         let (prefix_sum, scratch) = scan;
+        let first = (DEPTH_ORDER_BUFFER + sort.passes_for(DEPTH_KEY_BITS) as usize) % 2;
         let push = DepthKeysPush {
             frame: f.at.params,
             splats: f.at.splats,
             tiles_touched: f.at.tiles_touched,
             slots: f.at.slots,
-            keys: depth_sort.keys[0].address,
-            values: depth_sort.values[0].address,
+            keys: depth_sort.keys[first].address,
+            values: depth_sort.values[first].address,
         };
         f.pass(c"depth keys", |f| {
             prefix_sum.record(
@@ -122,15 +135,17 @@ impl DepthOrder {
                 .dispatch_in(f.cmd, &push, f.texels, super::linear_grid(count));
             f.barrier();
         });
-        sort.record(
+        let sorted = sort.record_from(
             f.ctx,
             f.cmd,
             depth_sort,
+            first,
             f.at.counter(COUNTER_VISIBLE),
             DEPTH_KEY_BITS,
             &DEPTH_SORT_LABELS,
             Some(&mut *f.timer),
-        )
+        );
+        debug_assert_eq!(sorted, DEPTH_ORDER_BUFFER);
     }
 
     /// Records the pass "prefix sum": the tiles touched listed in depth `order` (the depth

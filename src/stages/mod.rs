@@ -78,6 +78,22 @@ impl FrameRecording<'_> {
     pub fn barrier(&self) {
         compute_barrier(self.ctx, self.cmd);
     }
+
+    /// Copies the start of `from` into `to` (as much as `to` holds), then a barrier: keeps
+    /// what a later pass of the frame overwrites, for debugging.
+    pub fn copy_aside(&self, from: &crate::vk::Buffer, to: &crate::vk::Buffer) {
+        let region = ash::vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: from.size.min(to.size),
+        };
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_copy_buffer(self.cmd, from.raw, to.raw, &[region]);
+        }
+        self.barrier();
+    }
 }
 
 pub mod bvh;

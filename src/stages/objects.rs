@@ -10,7 +10,7 @@ use crate::gpu_scene::GpuScene;
 use crate::objects::{ObjectTransform, SH_ROTATION_FLOATS};
 use crate::scene::sh_coeffs;
 use crate::shaders;
-use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context};
+use crate::vk::{compute_barrier, Buffer, Context, LazyPipeline};
 
 /// Push constants of `object_transform`.
 #[repr(C)]
@@ -69,18 +69,19 @@ impl GpuObjectParams {
 
 /// The object-transform kernel.
 pub struct ObjectTransformStage {
-    pipeline: ComputePipeline,
+    pipeline: LazyPipeline,
 }
 
 impl ObjectTransformStage {
-    /// Builds the kernel.
+    /// The stage; its kernel is built by the first frame of several objects.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(ObjectTransformStage {
-            pipeline: ComputePipeline::new::<ObjectTransformPush>(
+            pipeline: LazyPipeline::new::<ObjectTransformPush>(
                 ctx,
                 c"object_transform",
                 shaders::OBJECT_TRANSFORM,
-            )?,
+                None,
+            ),
         })
     }
 
@@ -93,7 +94,8 @@ impl ObjectTransformStage {
         objects: &[(&GpuScene, ObjectTransform)],
         merged: &GpuScene,
         params: &Buffer,
-    ) {
+    ) -> Result<()> {
+        let kernel = self.pipeline.get()?;
         let record = std::mem::size_of::<GpuObjectParams>() as u64;
         let all: Vec<GpuObjectParams> = objects
             .iter()
@@ -125,10 +127,10 @@ impl ObjectTransformStage {
                 src_coeffs: sh_coeffs(scene.sh_degree()) as u32,
                 dst_coeffs,
             };
-            self.pipeline
-                .dispatch(cmd, &push, [scene.len().div_ceil(256), 1, 1]);
+            kernel.dispatch(cmd, &push, [scene.len().div_ceil(256), 1, 1]);
             base += scene.len();
         }
         compute_barrier(ctx, cmd);
+        Ok(())
     }
 }

@@ -57,8 +57,8 @@ pub struct RasterizePush {
 const ROUND_FIRST: u32 = 1;
 const ROUND_TILE_LIST: u32 = 2;
 
-/// Texels of `R32G32B32A32_UINT` per projected splat (64 bytes) in the strips kernels' view.
-const SPLAT_TEXELS: u64 = 4;
+/// Texels of `R32G32B32A32_UINT` per projected splat (48 bytes) in the strips kernels' view.
+const SPLAT_TEXELS: u64 = 3;
 
 /// Whether the strips kernels' texel view of the projected splats holds a scene of
 /// `gaussians` on a device with `max_texels` texels per view (the cutoff records take 3 per
@@ -408,12 +408,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn strips_scene_limit_is_a_quarter_of_the_texels() {
+    fn strips_scene_limit_is_a_third_of_the_texels() {
         // lavapipe's maxTexelBufferElements, and the spec's minimum.
-        assert!(strips_scene_fits(33_554_432, 134_217_728).is_ok());
-        let err = strips_scene_fits(33_554_433, 134_217_728).unwrap_err();
+        assert!(strips_scene_fits(44_739_242, 134_217_728).is_ok());
+        let err = strips_scene_fits(44_739_243, 134_217_728).unwrap_err();
         assert!(err.to_string().contains("RARA_RASTER=pixels"), "{err}");
-        assert!(strips_scene_fits(16_384, 65_536).is_ok());
-        assert!(strips_scene_fits(16_385, 65_536).is_err());
+        assert!(strips_scene_fits(21_845, 65_536).is_ok());
+        assert!(strips_scene_fits(21_846, 65_536).is_err());
     }
 }

@@ -832,8 +832,46 @@ impl RadixSort {
         key_bits: u32,
         form: PairForm,
         labels: &SortLabels,
+        timer: Option<&mut PassTimer>,
+    ) -> usize {
+        self.record_passes(ctx, cmd, bufs, 0, count, key_bits, form, labels, timer)
+    }
+
+    /// As [`RadixSort::record`], for pairs in `bufs.keys[first]` / `bufs.values[first]`: the
+    /// result is in buffer `(first + passes) % 2`, which it returns. The frame's depth sort
+    /// starts in buffer 1 or 0 so that its result lands in buffer 1, which leaves buffer 0 to
+    /// the tile pairs emitted from it (the two sorts share their buffers).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_from(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        bufs: &SortBuffers,
+        first: usize,
+        count: u64,
+        key_bits: u32,
+        labels: &SortLabels,
+        timer: Option<&mut PassTimer>,
+    ) -> usize {
+        let form = PairForm::Split;
+        self.record_passes(ctx, cmd, bufs, first, count, key_bits, form, labels, timer)
+    }
+
+    /// The passes of a sort from buffer `first` (0 or 1); returns the buffer of the result.
+    #[allow(clippy::too_many_arguments)]
+    fn record_passes(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        bufs: &SortBuffers,
+        first: usize,
+        count: u64,
+        key_bits: u32,
+        form: PairForm,
+        labels: &SortLabels,
         mut timer: Option<&mut PassTimer>,
     ) -> usize {
+        assert!(first < 2, "sort buffer {first}");
         if let Some(t) = timer.as_deref_mut() {
             t.begin_pass(cmd, labels.setup);
         }
@@ -865,7 +903,7 @@ impl RadixSort {
         if let Some(t) = timer.as_deref_mut() {
             t.end_pass(cmd, labels.setup);
         }
-        let mut src = 0;
+        let mut src = first;
         let bits = self.layout.radix_bits();
         // (shift, mask) of digit k of the key.
         let digit = |k: u32| {
@@ -878,7 +916,7 @@ impl RadixSort {
                 t.begin_pass(cmd, label);
             }
             if let (Some((kernels, _)), 1) = (segments, pass) {
-                self.record_buckets(ctx, cmd, bufs, kernels, passes, form);
+                self.record_buckets(ctx, cmd, bufs, src, kernels, passes, form);
             }
             let (shift, digit_mask) = digit(pass);
             // A segmented sort takes the top digit first, then the others from the least
@@ -936,12 +974,15 @@ impl RadixSort {
     /// [`RadixSort::set_segment_min_keys`]): `sort_segments.comp` lists the buckets and
     /// chooses, and where every bucket is small the local kernel sorts each by the digits
     /// after the top one ([`local_passes`] of them; the passes it makes then dispatch no
-    /// workgroup). It leaves the pairs where those passes would have.
+    /// workgroup). It leaves the pairs where those passes would have. `src` is the buffer the
+    /// first pass left the pairs in.
+    #[allow(clippy::too_many_arguments)]
     fn record_buckets(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         bufs: &SortBuffers,
+        src: usize,
         kernels: &SegmentKernels,
         passes: u32,
         form: PairForm,
@@ -966,7 +1007,7 @@ impl RadixSort {
         kernels.local[local_passes as usize - 2].dispatch_indirect_with_sets(
             cmd,
             &LocalPush { table },
-            &[texels.sets[1], texels.sets[0]],
+            &[texels.sets[src], texels.sets[1 - src]],
             bufs.info.raw,
             LOCAL_ARGS_OFFSET,
         );

@@ -14,7 +14,7 @@ use bytemuck::{Pod, Zeroable};
 use super::{linear_grid, FrameRecording};
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, Context, LazyPipeline};
 
 /// Where the parts of a frame's tile-lists buffer lie, for a grid of `tile_count` tiles: the
 /// two indirect dispatches (weighted list, then plain list; 16 bytes each), the flags (one
@@ -73,18 +73,19 @@ pub struct TileListsPush {
 
 /// The tile-lists kernel.
 pub struct TileLists {
-    pipeline: ComputePipeline,
+    pipeline: LazyPipeline,
 }
 
 impl TileLists {
-    /// Builds the kernel.
+    /// The stage; its kernel is built by the first frame that records it.
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(TileLists {
-            pipeline: ComputePipeline::new::<TileListsPush>(
+            pipeline: LazyPipeline::new::<TileListsPush>(
                 ctx,
                 c"tile_lists",
                 shaders::TILE_LISTS,
-            )?,
+                None,
+            ),
         })
     }
 
@@ -120,7 +121,13 @@ impl TileLists {
 
     /// Records the pass "tile lists" over the grid's tiles into `buffer` (laid out as
     /// `layout`), then a barrier.
-    pub fn record(&self, f: &mut FrameRecording, buffer: &Buffer, layout: &TileListsLayout) {
+    pub fn record(
+        &self,
+        f: &mut FrameRecording,
+        buffer: &Buffer,
+        layout: &TileListsLayout,
+    ) -> Result<()> {
+        let kernel = self.pipeline.get()?;
         let push = TileListsPush {
             flags: buffer.address + TileListsLayout::FLAGS,
             weighted_args: buffer.address + TileListsLayout::WEIGHTED_ARGS,
@@ -132,10 +139,10 @@ impl TileLists {
             pad: 0,
         };
         f.pass(c"tile lists", |f| {
-            self.pipeline
-                .dispatch(f.cmd, &push, linear_grid(push.tile_count));
+            kernel.dispatch(f.cmd, &push, linear_grid(push.tile_count));
             f.barrier();
         });
+        Ok(())
     }
 }
 
