@@ -665,6 +665,19 @@ fn bench_writes_table_json_and_trace() {
     }
     assert_eq!(weighted_tiles("hard") + weighted_tiles("original"), 0);
     assert!(report["rara_over_hard_per_frame_median"].as_f64().unwrap() > 0.0);
+    let pairs = |mode: &str| -> f64 {
+        report["modes"][mode]["intersections_per_frame"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_f64().unwrap())
+            .sum()
+    };
+    let pair_ratio = report["rara_over_hard_pairs"].as_f64().unwrap();
+    assert!(
+        (pair_ratio - pairs("rara") / pairs("hard")).abs() < 1e-9,
+        "{pair_ratio}"
+    );
 
     // One event per pass per frame, each mode on its own track, frames in the order they were
     // rendered: frame k of every mode before frame k + 1 of any.
