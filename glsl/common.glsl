@@ -257,7 +257,7 @@ vec4 footprint_pixel_box_in_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint
 // far off screen too (int() of a float beyond the int range is undefined in GLSL). Project
 // computes it and every later reader derives it again from the stored uv and radius: the same
 // operations on the same floats (the division by the power-of-two tile size is exact), so the
-// same rectangle. Empty for SKIPPED_RADIUS.
+// same rectangle. Empty for SKIPPED_RADIUS. Host twin: reference::project::tile_rect.
 uvec4 splat_tile_rect(vec2 uv, float radius, uvec2 grid) {
     if (!(radius >= 0.0)) {
         return uvec4(0u);

@@ -47,22 +47,15 @@ impl GpuProjectedSplat {
     }
 
     /// The tiles (x0, y0, x1, y1), end exclusive, of its 3-sigma square in a grid of `grid`
-    /// tiles: `splat_tile_rect` in common.glsl, the same operations on the same floats (the
+    /// tiles: `splat_tile_rect` in common.glsl through its CPU twin
+    /// [`crate::reference::project::tile_rect`], the same operations on the same floats (the
     /// division by the tile size is exact). Empty for a skipped Gaussian.
     pub fn tile_rect(&self, grid: (u32, u32)) -> [u32; 4] {
         if !self.drawn() {
             return [0; 4];
         }
-        let tile = crate::constants::TILE_SIZE as f32;
-        let lo = |c: f32, g: u32| ((c - self.radius) / tile).clamp(0.0, g as f32) as u32;
-        let hi =
-            |c: f32, g: u32| ((c + self.radius + tile - 1.0) / tile).clamp(0.0, g as f32) as u32;
-        [
-            lo(self.uv[0], grid.0),
-            lo(self.uv[1], grid.1),
-            hi(self.uv[0], grid.0),
-            hi(self.uv[1], grid.1),
-        ]
+        let uv = glam::Vec2::from(self.uv);
+        crate::reference::project::tile_rect(uv, self.radius, grid)
     }
 }
 

@@ -190,14 +190,8 @@ pub fn project_or_skip(
     let radius = (3.0 * lambda.sqrt()).ceil();
     let (cx, cy) = camera.principal_point();
     let uv = Vec2::new(fx * t.x / t.z + cx, fy * t.y / t.z + cy);
-    let tile = TILE_SIZE as f32;
-    let (gx, gy) = tile_grid(camera);
-    // clamp(int(v), 0, g), clamped before the conversion as on the GPU (project_body.glsl).
-    let cell = |v: f32, g: u32| v.clamp(0.0, g as f32) as i32;
-    let x0 = cell((uv.x - radius) / tile, gx);
-    let x1 = cell((uv.x + radius + tile - 1.0) / tile, gx);
-    let y0 = cell((uv.y - radius) / tile, gy);
-    let y1 = cell((uv.y + radius + tile - 1.0) / tile, gy);
+    let rect = tile_rect(uv, radius, tile_grid(camera));
+    let [x0, y0, x1, y1] = rect;
     if x1 <= x0 || y1 <= y0 {
         return Err(Skipped::NoTile);
     }
@@ -205,9 +199,7 @@ pub fn project_or_skip(
     let opacity = scene.opacities[i];
     let q_max = footprint_q_max(opacity);
     let reaches_a_tile = opacity >= 1.0 / 255.0
-        && (y0..y1).any(|ty| {
-            (x0..x1).any(|tx| footprint_touches_tile(uv, conic, q_max, tx as u32, ty as u32))
-        });
+        && (y0..y1).any(|ty| (x0..x1).any(|tx| footprint_touches_tile(uv, conic, q_max, tx, ty)));
     if !reaches_a_tile {
         return Err(Skipped::NoTile);
     }
@@ -219,7 +211,7 @@ pub fn project_or_skip(
         opacity: scene.opacities[i],
         conic,
         color,
-        rect: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
+        rect,
         cutoff: (class == Classification::Cutoff)
             .then(|| CutoffRay::new(mu, scene.scales[i], scene.rotations[i], camera.position)),
     })
@@ -238,6 +230,20 @@ pub fn count_oversized(scene: &Scene, camera: &Camera, clip: &Clip) -> usize {
 /// `footprint_q_max` in `glsl/common.glsl`.
 pub fn footprint_q_max(opacity: f32) -> f32 {
     2.0 * (255.0 * opacity).ln() * 1.0001 + 1e-3
+}
+
+/// The tiles (x0, y0, x1, y1), end exclusive, of the square of half side `radius` pixels
+/// around `uv` in a grid of `grid` tiles: clamp(int(v), 0, g) of SPEC section 3, clamped before
+/// the conversion as on the GPU (`splat_tile_rect` in common.glsl, the same operations).
+pub fn tile_rect(uv: Vec2, radius: f32, (gx, gy): (u32, u32)) -> [u32; 4] {
+    let tile = TILE_SIZE as f32;
+    let cell = |v: f32, g: u32| v.clamp(0.0, g as f32) as u32;
+    [
+        cell((uv.x - radius) / tile, gx),
+        cell((uv.y - radius) / tile, gy),
+        cell((uv.x + radius + tile - 1.0) / tile, gx),
+        cell((uv.y + radius + tile - 1.0) / tile, gy),
+    ]
 }
 
 /// Whether the splat's visible footprint (`q <= q_max` around `uv`) reaches a pixel centre of
