@@ -206,11 +206,12 @@ float footprint_q_max(float opacity) {
     return 2.0 * log(255.0 * opacity) * 1.0001 + 1e-3;
 }
 
-// The minimum of q(p - uv) over the pixel centres of tile (tx, ty): 0 when uv lies in their
-// box, else found on the box's edges.
-float footprint_q_min_in_tile(vec2 uv, vec3 conic, uint tx, uint ty) {
-    vec2 lo = vec2(tx * TILE_SIZE, ty * TILE_SIZE) - uv;
-    vec2 hi = lo + float(TILE_SIZE - 1u);
+// The minimum of q(p - uv) over the pixel centres of the square box whose first centre is
+// `corner` and which spans `span` pixels more each way: 0 when uv lies in the box, else found
+// on the box's edges.
+float footprint_q_min_in_box(vec2 uv, vec3 conic, vec2 corner, float span) {
+    vec2 lo = corner - uv;
+    vec2 hi = lo + span;
     if (lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0) {
         return 0.0;
     }
@@ -227,9 +228,29 @@ float footprint_q_min_in_tile(vec2 uv, vec3 conic, uint tx, uint ty) {
     return q_min;
 }
 
+// The minimum of q(p - uv) over the pixel centres of tile (tx, ty).
+float footprint_q_min_in_tile(vec2 uv, vec3 conic, uint tx, uint ty) {
+    return footprint_q_min_in_box(uv, conic, vec2(tx * TILE_SIZE, ty * TILE_SIZE),
+                                  float(TILE_SIZE - 1u));
+}
+
 // Whether the ellipse q(p - uv) <= q_max reaches the pixel centres of tile (tx, ty).
 bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
     return footprint_q_min_in_tile(uv, conic, tx, ty) <= q_max;
+}
+
+// The block bits of a pair in tile (tx, ty) (PAIR_BLOCKS_SHIFT): which of the tile's four
+// BLOCK_SIZE x BLOCK_SIZE blocks of pixel centres the ellipse q(p - uv) <= q_max reaches.
+// Host twin: reference::project::footprint_blocks.
+uint footprint_blocks(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
+    uint bits = 0u;
+    for (uint b = 0u; b < 4u; ++b) {
+        vec2 corner = vec2(tx * TILE_SIZE + (b & 1u) * BLOCK_SIZE,
+                           ty * TILE_SIZE + (b >> 1u) * BLOCK_SIZE);
+        bool reached = footprint_q_min_in_box(uv, conic, corner, float(BLOCK_SIZE - 1u)) <= q_max;
+        bits |= reached ? 1u << (PAIR_BLOCKS_SHIFT + b) : 0u;
+    }
+    return bits;
 }
 
 // Half extents (x, y) of the ellipse q(p - uv) <= q_max's bounding box, sqrt(q_max C / det)

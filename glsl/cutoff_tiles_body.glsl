@@ -203,7 +203,7 @@ void main() {
                 pc.keys.v[slot] = tile_count;
                 ++empty;
             } else if (tile_class == TILE_CLASS_FULL) {
-                pc.values.v[slot] = i;
+                pc.values.v[slot] &= ~PAIR_WEIGHTED;   // keeps the block bits
                 ++weight_one;
             } else if (tile_lists) {
                 pc.tile_flags.v[tile] = 1u;

@@ -95,7 +95,8 @@ void main() {
                 && footprint_touches_tile(p.uv, p.conic, q_max, w.xy.x, w.xy.y)) {
             if (slot < capacity) {
                 pc.keys.v[slot] = w.xy.y * f.size.z + w.xy.x;
-                pc.values.v[slot] = value;
+                pc.values.v[slot] =
+                    value | footprint_blocks(p.uv, p.conic, q_max, w.xy.x, w.xy.y);
             }
             ++slot;
         }

@@ -294,27 +294,27 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT 0", "SPLAT_TEXELS"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT 0", "SPLAT_TEXELS"],
         about: &[
-            "Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows, splats fetched from",
+            "Stage 7, rasterize, CPU-driver layout (8-pixel columns, a SIMD vector per 8x8 block, splats from",
             "texel buffers), no rara clipping (see rasterize_body.glsl).",
         ],
     },
     Variant {
         name: "rasterize_strips_length",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS"],
         about: &[
-            "Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows, splats fetched from",
+            "Stage 7, rasterize, CPU-driver layout (8-pixel columns, a SIMD vector per 8x8 block, splats from",
             "texel buffers), rara clipping with the length weight (see rasterize_body.glsl).",
         ],
     },
     Variant {
         name: "rasterize_strips_mass",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS"],
         about: &[
-            "Stage 7, rasterize, CPU-driver layout (strips of 2 columns x 16 rows, splats fetched from",
+            "Stage 7, rasterize, CPU-driver layout (8-pixel columns, a SIMD vector per 8x8 block, splats from",
             "texel buffers), rara clipping with the mass weight (see rasterize_body.glsl).",
         ],
     },
@@ -348,7 +348,7 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips_depth",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT 0", "SPLAT_TEXELS", "DEPTH"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT 0", "SPLAT_TEXELS", "DEPTH"],
         about: &[
             "Stage 7, rasterize, CPU-driver layout, no rara clipping, with the depth test and the",
             "depth outputs (SPEC section 9; see rasterize_body.glsl).",
@@ -357,7 +357,7 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips_length_depth",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "DEPTH"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "DEPTH"],
         about: &[
             "Stage 7, rasterize, CPU-driver layout, rara clipping with the length weight, with the depth test and the",
             "depth outputs (SPEC section 9; see rasterize_body.glsl).",
@@ -366,7 +366,7 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips_mass_depth",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "DEPTH"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "DEPTH"],
         about: &[
             "Stage 7, rasterize, CPU-driver layout, rara clipping with the mass weight, with the depth test and the",
             "depth outputs (SPEC section 9; see rasterize_body.glsl).",
@@ -411,7 +411,7 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips_mass_objects",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "OBJECT_CLIPS"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "OBJECT_CLIPS"],
         about: &[
             "Stage 7, rasterize, CPU-driver layout, rara clipping with the mass weight by a clip region per object",
             "(SPEC section 9; see rasterize_body.glsl).",
@@ -420,7 +420,7 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips_mass_objects_depth",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "OBJECT_CLIPS", "DEPTH"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_MASS + 1", "SPLAT_TEXELS", "OBJECT_CLIPS", "DEPTH"],
         about: &[
             "Stage 7, rasterize, CPU-driver layout, rara clipping with the mass weight by a clip region per object",
             "(SPEC section 9), with the depth test and the depth outputs (see rasterize_body.glsl).",
@@ -429,7 +429,7 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips_length_objects",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "OBJECT_CLIPS"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "OBJECT_CLIPS"],
         about: &[
             "Stage 7, rasterize, CPU-driver layout, rara clipping with the length weight by a clip region per object",
             "(SPEC section 9; see rasterize_body.glsl).",
@@ -438,7 +438,7 @@ const VARIANTS: &[Variant] = &[
     Variant {
         name: "rasterize_strips_length_objects_depth",
         body: "rasterize_body.glsl",
-        defines: &["PIXELS_PER_INVOCATION 16", "COLUMNS_PER_INVOCATION 2", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "OBJECT_CLIPS", "DEPTH"],
+        defines: &["PIXELS_PER_INVOCATION 8", "COLUMNS_PER_INVOCATION 1", "TILE_BLOCKS", "CUTOFF_WEIGHT CLIP_WEIGHT_LENGTH + 1", "SPLAT_TEXELS", "OBJECT_CLIPS", "DEPTH"],
         about: &[
             "Stage 7, rasterize, CPU-driver layout, rara clipping with the length weight by a clip region per object",
             "(SPEC section 9), with the depth test and the depth outputs (see rasterize_body.glsl).",

@@ -9,13 +9,15 @@ pub const TILE_SIZE: u32 = 16;
 /// Threads per workgroup of the rasterizer: one per pixel of a tile.
 pub const RASTER_WORKGROUP: u32 = TILE_SIZE * TILE_SIZE;
 /// Most tile-list entries one rasterizer round walks per tile. lavapipe stops an invocation's
-/// loops after 65,535 iterations in total. The rara rasterizer's loops take up to 3 passes per
-/// entry: a cutoff splat takes its pass of the cutoff loop and up to two of the ends of its
-/// visible interval; a plain and a cutoff splat in turn take five between them (one each, two
-/// ends, one of the outer loop), and each loop at most one empty pass per batch walked; the
+/// loops after 65,535 iterations in total. The rara rasterizer's loops take up to 4 passes per
+/// entry: a cutoff splat takes its pass of the cutoff loop, up to two of the ends of its
+/// visible interval and, in the strips kernels, one of the loop that passes over the entries
+/// missing the invocation's block (one pass per entry it passes over); a plain and a cutoff
+/// splat in turn take seven between them (those, one of the plain loop and its block loop,
+/// one of the outer loop), and each loop at most one empty pass per batch walked; the
 /// pixel-per-invocation layout's staging adds one per batch of 256 entries. So longer lists are
 /// split over several rounds (dispatches) that carry the per-pixel state in a buffer;
-/// 12,288 x 3 = 36,864 keeps a margin under the cap.
+/// 12,288 x 4 = 49,152 keeps a margin under the cap.
 pub const RASTER_CHUNK: u32 = 12288;
 /// Most cells of a splat's tile rectangle one invocation walks per round, for the same cap:
 /// project counting the tiles a splat touches, emit writing its pairs. A splat that covers
@@ -170,6 +172,16 @@ pub const MAX_FOOTPRINT_SIGMA_PX: u32 = 65536;
 /// stage clears it where the weight is 1 at every pixel of the pair's tile. Splat indices stay
 /// below `MAX_GAUSSIANS` < 2^31.
 pub const PAIR_WEIGHTED: u32 = 1 << 31;
+/// Lowest of the four bits of a pair's value that say which 8x8 blocks of its tile the splat's
+/// footprint reaches (bit `PAIR_BLOCKS_SHIFT + 2 by + bx` for the block at pixel offset
+/// `(8 bx, 8 by)`): emit sets them, and the CPU-driver rasterizer, one SIMD vector per block,
+/// skips the pairs whose footprint misses its block.
+pub const PAIR_BLOCKS_SHIFT: u32 = 27;
+/// The splat index in a pair's value (below the block bits and `PAIR_WEIGHTED`).
+pub const PAIR_INDEX_MASK: u32 = (1 << PAIR_BLOCKS_SHIFT) - 1;
+/// Side in pixels of a tile's blocks (`PAIR_BLOCKS_SHIFT`).
+pub const BLOCK_SIZE: u32 = TILE_SIZE / 2;
+const _: () = assert!(MAX_GAUSSIANS <= PAIR_INDEX_MASK as u64 + 1);
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -281,6 +293,9 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("COUNTER_OVERSIZED", COUNTER_OVERSIZED),
     ("MAX_FOOTPRINT_SIGMA_PX", MAX_FOOTPRINT_SIGMA_PX),
     ("PAIR_WEIGHTED", PAIR_WEIGHTED),
+    ("PAIR_BLOCKS_SHIFT", PAIR_BLOCKS_SHIFT),
+    ("PAIR_INDEX_MASK", PAIR_INDEX_MASK),
+    ("BLOCK_SIZE", BLOCK_SIZE),
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),

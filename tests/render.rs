@@ -4,7 +4,9 @@ mod common;
 
 use glam::{Quat, Vec3};
 use rara::constants::RASTER_CHUNK;
-use rara::reference::project::{footprint_q_max, footprint_touches_tile, project_one};
+use rara::reference::project::{
+    footprint_blocks, footprint_q_max, footprint_touches_tile, project_one,
+};
 use rara::reference::{self, rasterize::tile_lists};
 use rara::{Camera, Clip, ClipRegion, GpuScene, RenderOptions, Renderer, Scene, ShPrecision};
 
@@ -240,12 +242,30 @@ fn stages_match_cpu_twins(scene: &Scene, cam: &Camera, raster: (f64, u8)) {
     }
     assert_eq!(acc, stats.intersections);
 
-    // emit + sort + tile ranges: every tile's list equals the CPU's (depth, index) order.
+    // emit + sort + tile ranges: every tile's list equals the CPU's (depth, index) order, each
+    // pair with the blocks of the tile that its splat's footprint reaches.
     let cpu_lists = tile_lists(&cpu_splats, cam);
+    let grid_x = reference::project::tile_grid(cam).0;
     for (tile, list) in cpu_lists.iter().enumerate() {
         let [start, end] = mid.ranges[tile];
         let gpu_list: Vec<u32> = mid.values[start as usize..end as usize].to_vec();
-        let cpu_list: Vec<u32> = list.iter().map(|&k| cpu_splats[k as usize].index).collect();
+        let (tx, ty) = (tile as u32 % grid_x, tile as u32 / grid_x);
+        let cpu_list: Vec<u32> = list
+            .iter()
+            .map(|&k| {
+                // From the GPU's own projection, as emit worked them out.
+                let i = cpu_splats[k as usize].index;
+                let g = &mid.splats[i as usize];
+                let blocks = footprint_blocks(
+                    g.uv.into(),
+                    g.conic.into(),
+                    footprint_q_max(g.opacity),
+                    tx,
+                    ty,
+                );
+                i | blocks
+            })
+            .collect();
         assert_eq!(gpu_list, cpu_list, "tile {tile}: sorted list differs");
         assert!(mid.keys[start as usize..end as usize]
             .iter()

@@ -4,7 +4,7 @@ use glam::{Quat, Vec2, Vec3};
 
 use crate::camera::Camera;
 use crate::clip::{Classification, Clip, CutoffRay};
-use crate::constants::TILE_SIZE;
+use crate::constants::{BLOCK_SIZE, PAIR_BLOCKS_SHIFT, TILE_SIZE};
 use crate::scene::Scene;
 
 /// SH constant of degree 0.
@@ -251,10 +251,18 @@ pub fn tile_rect(uv: Vec2, radius: f32, (gx, gy): (u32, u32)) -> [u32; 4] {
 /// the splat at every pixel (alpha < 1/255), so the tile lists leave it out: fewer pairs to
 /// sort and walk, the same image. Twin of `footprint_touches_tile` in `glsl/common.glsl`.
 pub fn footprint_touches_tile(uv: Vec2, conic: Vec3, q_max: f32, tx: u32, ty: u32) -> bool {
-    let lo = Vec2::new((tx * TILE_SIZE) as f32, (ty * TILE_SIZE) as f32) - uv;
-    let hi = lo + (TILE_SIZE - 1) as f32;
+    let corner = Vec2::new((tx * TILE_SIZE) as f32, (ty * TILE_SIZE) as f32);
+    footprint_q_min_in_box(uv, conic, corner, (TILE_SIZE - 1) as f32) <= q_max
+}
+
+/// The minimum of `q(p - uv)` over the pixel centres of the square box whose first centre is
+/// `corner` and that spans `span` pixels more each way. Twin of `footprint_q_min_in_box` in
+/// `glsl/common.glsl`.
+fn footprint_q_min_in_box(uv: Vec2, conic: Vec3, corner: Vec2, span: f32) -> f32 {
+    let lo = corner - uv;
+    let hi = lo + span;
     if lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 {
-        return true;
+        return 0.0;
     }
     let q = |dx: f32, dy: f32| conic.x * dx * dx + 2.0 * conic.y * dx * dy + conic.z * dy * dy;
     let mut q_min = f32::INFINITY;
@@ -263,7 +271,22 @@ pub fn footprint_touches_tile(uv: Vec2, conic: Vec3, q_max: f32, tx: u32, ty: u3
         q_min = q_min.min(q(dx, (-conic.y * dx / conic.z).clamp(lo.y, hi.y)));
         q_min = q_min.min(q((-conic.y * dy / conic.x).clamp(lo.x, hi.x), dy));
     }
-    q_min <= q_max
+    q_min
+}
+
+/// The block bits of the splat's pair in tile `(tx, ty)` ([`crate::constants::PAIR_BLOCKS_SHIFT`]):
+/// which of the tile's four `BLOCK_SIZE` x `BLOCK_SIZE` blocks of pixel centres the visible
+/// footprint reaches. Twin of `footprint_blocks` in `glsl/common.glsl`.
+pub fn footprint_blocks(uv: Vec2, conic: Vec3, q_max: f32, tx: u32, ty: u32) -> u32 {
+    (0..4u32)
+        .filter(|b| {
+            let corner = Vec2::new(
+                (tx * TILE_SIZE + (b & 1) * BLOCK_SIZE) as f32,
+                (ty * TILE_SIZE + (b >> 1) * BLOCK_SIZE) as f32,
+            );
+            footprint_q_min_in_box(uv, conic, corner, (BLOCK_SIZE - 1) as f32) <= q_max
+        })
+        .fold(0, |bits, b| bits | 1 << (PAIR_BLOCKS_SHIFT + b))
 }
 
 /// Projects every Gaussian; the result holds only those that draw something, in index order.

@@ -81,9 +81,10 @@ fn strips_scene_fits(gaussians: u32, max_texels: u32) -> Result<()> {
 pub enum RasterLayout {
     /// One invocation per pixel, 256 per tile (`rasterize`): the layout for GPUs.
     PixelPerInvocation,
-    /// One invocation per strip of 2 columns x 16 rows, 8 per tile (`rasterize_strips*`):
-    /// for CPU drivers such as lavapipe, where each splat is then loaded once for 32 pixels
-    /// and a tile is one 8-lane SIMD vector. The kernels fetch the splats from uniform texel
+    /// One invocation per column of 8 pixels, 32 per tile (`rasterize_strips*`): for CPU
+    /// drivers such as lavapipe, where each splat is then loaded once for 8 pixels, each 8x8
+    /// block of a tile is one 8-lane SIMD vector, and a vector passes over the pairs whose
+    /// footprint misses its block ([`crate::constants::PAIR_BLOCKS_SHIFT`]). The kernels fetch the splats from uniform texel
     /// buffers ([`super::frame_texels_set_layout`]), which caps a frame's pairs and a scene's
     /// Gaussians ([`Rasterize::pair_limit`], [`Rasterize::check_scene`]).
     Strips,
