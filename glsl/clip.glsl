@@ -65,6 +65,12 @@ CutoffRecord volume_cutoff_record(vec3 c0, vec3 c1, vec3 c2, vec3 s, vec3 rel) {
                         vec4(w2, -dot(w2, rel)));
 }
 
+// Whether a frame may hold flat Gaussians (SPEC section 6), whose cutoff records and weights
+// take branches of their own: a specialization constant, false in the rasterize kernels of
+// frames without any (FLAT_SPLATS_CONSTANT_ID; stages::rasterize), so that a CPU driver, which
+// runs both sides of every branch under a mask, does not run the flat side for volume splats.
+layout(constant_id = FLAT_SPLATS_CONSTANT_ID) const bool FLAT_SPLATS = true;
+
 // Below this |n.d| / |d| a ray counts as parallel to a flat Gaussian's plane (SPEC section 6;
 // FLAT_PARALLEL_EPSILON in src/clip.rs).
 #define FLAT_PARALLEL_EPSILON 1e-7
@@ -211,7 +217,7 @@ struct WhitenedStrip {
 };
 
 WhitenedStrip whitened_strip(CutoffRecord rec, vec3 dir0, vec3 step) {
-    if (cutoff_record_is_flat(rec)) {
+    if (FLAT_SPLATS && cutoff_record_is_flat(rec)) {
         vec3 n = rec.m0.xyz;
         vec3 eo = rec.m1.xyz;
         return WhitenedStrip(vec3(dot(n, dir0), dot(n, step), 0.0), vec2(rec.m0.w, 0.0),
@@ -303,7 +309,7 @@ MassEnds clip_mass_ends(vec4 spans) {
 // A flat Gaussian is a point mass at flat_hit_t: its Phi is a step, so the sum over the ends
 // is 1 where that point is visible and 0 elsewhere.
 float end_mass(WhitenedStrip s, float r, vec2 end) {
-    if (s.is_flat) {
+    if (FLAT_SPLATS && s.is_flat) {
         return end.y * (end.x - flat_hit_t(s, r)) >= 0.0 ? 1.0 : 0.0;
     }
     float a = strip_a(s, r);
@@ -319,7 +325,7 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
     bool on_chord = false;
     float a = strip_a(s, r);
     vec3 c = s.c0 + r * s.c1;
-    if (s.is_flat) {
+    if (FLAT_SPLATS && s.is_flat) {
         t_star = flat_hit_t(s, r);
     } else {
         t_star = -strip_od(s, r) / a;

@@ -182,7 +182,7 @@ void main() {
             // A flat splat's weight is a step along its plane (SPEC section 6): the mass
             // bounds, worked out in the whitened frame it does not have, give way to
             // flat_tile_class.
-            bool flat_splat = cutoff_record_is_flat(rec);
+            bool flat_splat = FLAT_SPLATS && cutoff_record_is_flat(rec);
             TileMassBounds bounds = tile_mass_bounds_none();
             uint bounded_planes = flat_splat ? 0u : config.w;
             for (uint plane = 0u; plane < bounded_planes; ++plane) {

@@ -183,6 +183,11 @@ pub const PAIR_INDEX_MASK: u32 = (1 << PAIR_BLOCKS_SHIFT) - 1;
 pub const BLOCK_SIZE: u32 = TILE_SIZE / 2;
 const _: () = assert!(MAX_GAUSSIANS <= PAIR_INDEX_MASK as u64 + 1);
 
+/// Specialization constant id of `FLAT_SPLATS` (`glsl/clip.glsl`): whether the frame may hold
+/// flat Gaussians (SPEC section 6); the rasterize kernels of frames without any are built with
+/// it false.
+pub const FLAT_SPLATS_CONSTANT_ID: u32 = 0;
+
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
 /// Clip mode `none` (SPEC section 5): nothing is clipped.
@@ -297,6 +302,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("PAIR_INDEX_MASK", PAIR_INDEX_MASK),
     ("BLOCK_SIZE", BLOCK_SIZE),
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
+    ("FLAT_SPLATS_CONSTANT_ID", FLAT_SPLATS_CONSTANT_ID),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),
     ("CLIP_MODE_RARA", CLIP_MODE_RARA),

@@ -45,6 +45,10 @@ pub struct GpuScene {
     pub(crate) count: u32,
     pub(crate) sh_degree: u32,
     pub(crate) sh_precision: ShPrecision,
+    /// Whether a Gaussian may be flat (SPEC section 6) on the device: a scale of 0, or one so
+    /// small that a driver flushing denormals to zero reads it as 0. False lets the rasterizer
+    /// run its kernels without the flat Gaussians' branches (`stages::rasterize`).
+    pub(crate) may_be_flat: bool,
     /// Unique per upload into new buffers: frame slots key their texel views of the scene by
     /// it (a freed buffer's handle may come back).
     pub(crate) id: u64,
@@ -82,6 +86,7 @@ impl GpuScene {
             count: 0,
             sh_degree: scene.sh_degree,
             sh_precision: precision,
+            may_be_flat: false,
             id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         gpu_scene.upload(scene)?;
@@ -144,6 +149,7 @@ impl GpuScene {
                         count: 0,
                         sh_degree: chunk.sh_degree,
                         sh_precision: precision,
+                        may_be_flat: false,
                         id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
                     })
                 }
@@ -161,6 +167,10 @@ impl GpuScene {
 
     /// Writes `chunk` as Gaussians `first..` (through `staging`), and counts them in.
     fn write_chunk(&mut self, staging: &mut Buffer, chunk: &Scene, first: usize) -> Result<()> {
+        self.may_be_flat |= chunk
+            .scales
+            .iter()
+            .any(|s| s.min_element().abs() < f32::MIN_POSITIVE);
         let record = std::mem::size_of::<GpuGaussian>();
         self.gaussians.upload_range_with(
             staging,
@@ -227,6 +237,8 @@ impl GpuScene {
             count,
             sh_degree,
             sh_precision: ShPrecision::F32,
+            // The objects' transforms scale the scales: a tiny one may come out as 0.
+            may_be_flat: true,
             id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         })
     }

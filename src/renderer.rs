@@ -652,6 +652,7 @@ impl Renderer {
                 rara.then_some(options.clip.weight),
                 depth.is_some(),
                 tile_lists.is_some(),
+                scene.may_be_flat,
             )?;
         }
         let ctx = &self.ctx;
@@ -721,7 +722,8 @@ impl Renderer {
         )?;
         if let Some(pairs) = cutoff_pairs {
             let flags = tile_lists.map_or(0, |(b, _)| b.address + TileListsLayout::FLAGS);
-            self.cutoff_tiles.record(&mut rec, pairs, &f.sort, flags)?;
+            self.cutoff_tiles
+                .record(&mut rec, pairs, &f.sort, flags, scene.may_be_flat)?;
         }
         if let Some((buffer, layout)) = &tile_lists {
             self.tile_lists.record(&mut rec, buffer, layout)?;
@@ -754,7 +756,7 @@ impl Renderer {
             &mut rec,
             (&f.sort, sorted),
             rounds,
-            cutoff_weight,
+            (cutoff_weight, scene.may_be_flat),
             tile_lists,
             depth_buffers.map(|(sums, _)| (sums, depth_limit)),
             object_clips

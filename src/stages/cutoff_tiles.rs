@@ -14,6 +14,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::sort::SortBuffers;
 use super::FrameRecording;
+use crate::constants::FLAT_SPLATS_CONSTANT_ID;
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{Buffer, Context, LazyPipeline};
@@ -55,6 +56,9 @@ pub struct CutoffTilesPush {
 /// The cutoff-tiles kernel.
 pub struct CutoffTiles {
     pipeline: LazyPipeline,
+    /// The same kernel for frames without flat Gaussians: their branch compiled out
+    /// (`FLAT_SPLATS` in `glsl/clip.glsl`).
+    volume: LazyPipeline,
 }
 
 impl CutoffTiles {
@@ -66,8 +70,10 @@ impl CutoffTiles {
             Some(_) => (c"cutoff_tiles_texels", shaders::CUTOFF_TILES_TEXELS),
             None => (c"cutoff_tiles", shaders::CUTOFF_TILES),
         };
+        let build = || LazyPipeline::new::<CutoffTilesPush>(ctx, name, spirv, texels);
         Ok(CutoffTiles {
-            pipeline: LazyPipeline::new::<CutoffTilesPush>(ctx, name, spirv, texels),
+            pipeline: build(),
+            volume: build().specialized(&[(FLAT_SPLATS_CONSTANT_ID, 0)]),
         })
     }
 
@@ -76,15 +82,16 @@ impl CutoffTiles {
     /// (`glsl/cutoff_tiles_body.glsl`), dispatched indirectly from the arguments emit wrote in
     /// `pairs` (the frame's cutoff-pairs buffer), over the pairs emit wrote into the first
     /// buffers of `sort`; flags the tiles that keep a weighted pair at `tile_flags` (0: none),
-    /// then a barrier.
+    /// then a barrier. `flat`: whether the frame may hold flat Gaussians.
     pub fn record(
         &self,
         f: &mut FrameRecording,
         pairs: &Buffer,
         sort: &SortBuffers,
         tile_flags: u64,
+        flat: bool,
     ) -> Result<()> {
-        let kernel = self.pipeline.get()?;
+        let kernel = if flat { &self.pipeline } else { &self.volume }.get()?;
         let push = CutoffTilesPush {
             frame: f.at.params,
             splats: f.at.splats,

@@ -12,7 +12,7 @@ use super::sort::SortBuffers;
 use super::tile_lists::TileListsLayout;
 use super::FrameRecording;
 use crate::clip::ClipWeight;
-use crate::constants::MAX_INTERSECTIONS;
+use crate::constants::{FLAT_SPLATS_CONSTANT_ID, MAX_INTERSECTIONS};
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::shaders;
@@ -112,12 +112,15 @@ impl RasterLayout {
 /// CPU drivers execute both sides of every branch, so each frame runs the kernel that holds
 /// only the code it needs.
 pub struct Rasterize {
-    plain: LazyPipeline,
-    mass: LazyPipeline,
-    length: LazyPipeline,
-    /// The same three with the depth test and the depth outputs (SPEC section 9). All six are
-    /// built when a frame first needs them ([`Rasterize::prepare`]).
-    depth: [LazyPipeline; 3],
+    /// Without and with the depth test and the depth outputs (SPEC section 9): the kernels
+    /// without rara clipping, with the mass weight and with the length weight. Each is built
+    /// when a frame first needs it ([`Rasterize::prepare`]).
+    kernels: [[LazyPipeline; 3]; 2],
+    /// The weighted ones (mass, length) built for frames without flat Gaussians (SPEC section
+    /// 6): the flat Gaussians' branches of the weight code compiled out (`FLAT_SPLATS` in
+    /// `glsl/clip.glsl`), which a CPU driver would otherwise run, masked, for every cutoff
+    /// splat.
+    volume: [[LazyPipeline; 2]; 2],
     /// The kernels for several objects each clipped by a region of its own (`OBJECT_CLIPS`):
     /// mass, length, and the two with the depth test. Built on first use
     /// ([`Rasterize::prepare_object_clips`]), as few frames need them.
@@ -125,6 +128,42 @@ pub struct Rasterize {
     texels: Option<vk::DescriptorSetLayout>,
     layout: RasterLayout,
 }
+
+/// The kernels of each layout, (name, SPIR-V) without and with the depth test: without rara
+/// clipping, with the mass weight, with the length weight.
+type KernelTable = [[(&'static CStr, &'static [u32]); 3]; 2];
+const KERNELS: [KernelTable; 2] = [
+    [
+        [
+            (c"rasterize", shaders::RASTERIZE),
+            (c"rasterize_mass", shaders::RASTERIZE_MASS),
+            (c"rasterize_length", shaders::RASTERIZE_LENGTH),
+        ],
+        [
+            (c"rasterize_depth", shaders::RASTERIZE_DEPTH),
+            (c"rasterize_mass_depth", shaders::RASTERIZE_MASS_DEPTH),
+            (c"rasterize_length_depth", shaders::RASTERIZE_LENGTH_DEPTH),
+        ],
+    ],
+    [
+        [
+            (c"rasterize_strips", shaders::RASTERIZE_STRIPS),
+            (c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS),
+            (c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH),
+        ],
+        [
+            (c"rasterize_strips_depth", shaders::RASTERIZE_STRIPS_DEPTH),
+            (
+                c"rasterize_strips_mass_depth",
+                shaders::RASTERIZE_STRIPS_MASS_DEPTH,
+            ),
+            (
+                c"rasterize_strips_length_depth",
+                shaders::RASTERIZE_STRIPS_LENGTH_DEPTH,
+            ),
+        ],
+    ],
+];
 
 /// The object-clip kernels of each layout: (name, SPIR-V) of mass, length, mass with depth,
 /// length with depth.
@@ -175,46 +214,22 @@ impl Rasterize {
         let build = |name: &'static CStr, spirv: &'static [u32]| {
             LazyPipeline::new::<RasterizePush>(ctx, name, spirv, texels)
         };
-        let (plain, mass, length, depth) = match layout {
-            RasterLayout::PixelPerInvocation => (
-                build(c"rasterize", shaders::RASTERIZE),
-                build(c"rasterize_mass", shaders::RASTERIZE_MASS),
-                build(c"rasterize_length", shaders::RASTERIZE_LENGTH),
-                [
-                    build(c"rasterize_depth", shaders::RASTERIZE_DEPTH),
-                    build(c"rasterize_mass_depth", shaders::RASTERIZE_MASS_DEPTH),
-                    build(c"rasterize_length_depth", shaders::RASTERIZE_LENGTH_DEPTH),
-                ],
-            ),
-            RasterLayout::Strips => {
-                if texels.is_none() {
-                    return Err(Error::InvalidInput(
-                        "the strips rasterizer needs the frame's texel views".into(),
-                    ));
-                }
-                (
-                    build(c"rasterize_strips", shaders::RASTERIZE_STRIPS),
-                    build(c"rasterize_strips_mass", shaders::RASTERIZE_STRIPS_MASS),
-                    build(c"rasterize_strips_length", shaders::RASTERIZE_STRIPS_LENGTH),
-                    [
-                        build(c"rasterize_strips_depth", shaders::RASTERIZE_STRIPS_DEPTH),
-                        build(
-                            c"rasterize_strips_mass_depth",
-                            shaders::RASTERIZE_STRIPS_MASS_DEPTH,
-                        ),
-                        build(
-                            c"rasterize_strips_length_depth",
-                            shaders::RASTERIZE_STRIPS_LENGTH_DEPTH,
-                        ),
-                    ],
-                )
-            }
-        };
+        if layout == RasterLayout::Strips && texels.is_none() {
+            return Err(Error::InvalidInput(
+                "the strips rasterizer needs the frame's texel views".into(),
+            ));
+        }
+        let table = &KERNELS[(layout == RasterLayout::Strips) as usize];
+        let kernels = table.map(|row| row.map(|(name, spirv)| build(name, spirv)));
+        // The weighted kernels again with FLAT_SPLATS false, for frames without flat Gaussians.
+        let volume = table.map(|row| {
+            [row[1], row[2]].map(|(name, spirv)| {
+                build(name, spirv).specialized(&[(FLAT_SPLATS_CONSTANT_ID, 0)])
+            })
+        });
         Ok(Rasterize {
-            plain,
-            mass,
-            length,
-            depth,
+            kernels,
+            volume,
             object_clips: OnceLock::new(),
             texels,
             layout,
@@ -222,28 +237,35 @@ impl Rasterize {
     }
 
     /// The kernel without object clips for `weight` (`None`: no rara clipping), with or without
-    /// the depth test.
-    fn lazy_kernel(&self, weight: Option<ClipWeight>, depth: bool) -> &LazyPipeline {
-        let k = match weight {
-            None => 0,
-            Some(ClipWeight::Mass) => 1,
-            Some(ClipWeight::Length) => 2,
-        };
-        match (depth, k) {
-            (true, k) => &self.depth[k],
-            (false, 0) => &self.plain,
-            (false, 1) => &self.mass,
-            (false, _) => &self.length,
+    /// the depth test; `flat`: for a frame that may hold flat Gaussians.
+    fn lazy_kernel(&self, weight: Option<ClipWeight>, depth: bool, flat: bool) -> &LazyPipeline {
+        let depth = depth as usize;
+        match weight {
+            None => &self.kernels[depth][0],
+            Some(w) => {
+                let k = (w == ClipWeight::Length) as usize;
+                if flat {
+                    &self.kernels[depth][1 + k]
+                } else {
+                    &self.volume[depth][k]
+                }
+            }
         }
     }
 
-    /// Builds what a frame of `weight` (with or without `depth`) records, if it was not built
-    /// yet: its kernel, and with `plain_too` (tile lists) the plain one beside it. Call it
-    /// before [`Rasterize::record`].
-    pub fn prepare(&self, weight: Option<ClipWeight>, depth: bool, plain_too: bool) -> Result<()> {
-        self.lazy_kernel(weight, depth).get()?;
+    /// Builds what a frame of `weight` (with or without `depth`; `flat`: with flat Gaussians
+    /// in the frame) records, if it was not built yet: its kernel, and with `plain_too` (tile
+    /// lists) the plain one beside it. Call it before [`Rasterize::record`].
+    pub fn prepare(
+        &self,
+        weight: Option<ClipWeight>,
+        depth: bool,
+        plain_too: bool,
+        flat: bool,
+    ) -> Result<()> {
+        self.lazy_kernel(weight, depth, flat).get()?;
         if plain_too {
-            self.lazy_kernel(None, depth).get()?;
+            self.lazy_kernel(None, depth, flat).get()?;
         }
         Ok(())
     }
@@ -318,7 +340,8 @@ impl Rasterize {
     /// Records the pass "rasterize": `rounds` rounds over the grid, each walking the next
     /// RASTER_CHUNK entries of every tile list (the pairs sorted into buffer `sorted` of
     /// `sort`), then a barrier. `cutoff_weight` is the weight of the frame's rara clipping,
-    /// `None` when no splat is cutoff. With `lists` (the frame's tile-lists buffer and its
+    /// `None` when no splat is cutoff; `flat`, whether the frame may hold flat Gaussians (the
+    /// kernels [`Rasterize::prepare`] built for the same pair). With `lists` (the frame's tile-lists buffer and its
     /// layout, [`super::tile_lists`]; mass weight only) each round runs the plain kernel over
     /// the plain list and the weighted kernel over the weighted list, as indirect dispatches;
     /// else one kernel over the whole grid. The strips kernels read the frame's texel views.
@@ -333,7 +356,7 @@ impl Rasterize {
         f: &mut FrameRecording,
         (sort, sorted): (&SortBuffers, usize),
         rounds: u32,
-        cutoff_weight: Option<ClipWeight>,
+        (cutoff_weight, flat): (Option<ClipWeight>, bool),
         lists: Option<(&Buffer, TileListsLayout)>,
         depth: Option<(u64, u64)>,
         object_clips: Option<u64>,
@@ -363,12 +386,12 @@ impl Rasterize {
         let kernel = |weight: Option<ClipWeight>| -> &ComputePipeline {
             let with_depth = depth.is_some() as usize;
             match (weight, object_clips) {
-                (None, _) => self.lazy_kernel(None, depth.is_some()).built(),
+                (None, _) => self.lazy_kernel(None, depth.is_some(), flat).built(),
                 (Some(w), Some(_)) => {
                     let k = (w == ClipWeight::Length) as usize;
                     &object_kernels()[2 * with_depth + k]
                 }
-                (Some(w), None) => self.lazy_kernel(Some(w), depth.is_some()).built(),
+                (Some(w), None) => self.lazy_kernel(Some(w), depth.is_some(), flat).built(),
             }
         };
         let pipeline = kernel(cutoff_weight);

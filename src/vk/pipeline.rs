@@ -53,16 +53,19 @@ impl ComputePipeline {
             spirv,
             set_layouts,
             std::mem::size_of::<P>() as u32,
+            &[],
         )
     }
 
-    /// Like [`ComputePipeline::with_set_layouts`], with a push-constant block of `push_bytes`.
+    /// Like [`ComputePipeline::with_set_layouts`], with a push-constant block of `push_bytes`
+    /// and the 32-bit specialization constants `constants` (constant id, value).
     fn with_push_bytes(
         ctx: &Context,
         name: &'static CStr,
         spirv: &[u32],
         set_layouts: &[vk::DescriptorSetLayout],
         push_bytes: u32,
+        constants: &[(u32, u32)],
     ) -> Result<Self> {
         let device = ctx.device();
         let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
@@ -82,10 +85,27 @@ impl ComputePipeline {
                 return Err(e).vk("vkCreatePipelineLayout");
             }
         };
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let entries: Vec<vk::SpecializationMapEntry> = constants
+            .iter()
+            .enumerate()
+            .map(|(k, &(id, _))| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(id)
+                    .offset(4 * k as u32)
+                    .size(4)
+            })
+            .collect();
+        let data: Vec<u32> = constants.iter().map(|&(_, value)| value).collect();
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(&data));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&specialization);
+        }
         let info = [vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(layout)];
@@ -243,6 +263,7 @@ pub struct LazyPipeline {
     spirv: &'static [u32],
     set_layouts: Vec<vk::DescriptorSetLayout>,
     push_bytes: u32,
+    constants: Vec<(u32, u32)>,
     built: std::sync::OnceLock<ComputePipeline>,
 }
 
@@ -271,8 +292,16 @@ impl LazyPipeline {
             spirv,
             set_layouts: set_layouts.to_vec(),
             push_bytes: std::mem::size_of::<P>() as u32,
+            constants: Vec::new(),
             built: std::sync::OnceLock::new(),
         }
+    }
+
+    /// This pipeline with the 32-bit specialization constants `constants` (constant id,
+    /// value).
+    pub fn specialized(mut self, constants: &[(u32, u32)]) -> Self {
+        self.constants = constants.to_vec();
+        self
     }
 
     /// The pipeline, built now if it was not.
@@ -286,6 +315,7 @@ impl LazyPipeline {
             self.spirv,
             &self.set_layouts,
             self.push_bytes,
+            &self.constants,
         )?;
         // Another thread may have built it meanwhile: either is the same pipeline.
         let _ = self.built.set(p);
