@@ -372,6 +372,12 @@ bool composite(Staged s, bool cutoff) {
             // rasterize 0.86-0.91x unclipped, the same image).
             bool open_px = !px_done[i];
             any_open = any_open || open_px;
+            // power <= 0 everywhere for the positive definite conic (SPEC section 3), so
+            // SPEC section 4's "skip when power > 0" only ever catches rounding: the form
+            // below, evaluated from the strip's first pixel, can come out a hair over 0 next to
+            // the centre, where the reference's direct formula gives a hair under. The min
+            // keeps alpha <= o there instead of skipping the splat (two operations fewer per
+            // pixel).
             float power2 = q.x + float(r) * (q.y + float(r) * q.z);
             float alpha = co.w * exp2(min(power2, 0.0));
 #ifdef DEPTH
@@ -380,7 +386,7 @@ bool composite(Staged s, bool cutoff) {
             px_done[i] = px_done[i] || behind;
             open_px = open_px && !behind;
 #endif
-            bool use = open_px && power2 <= 0.0 && alpha >= 1.0 / 255.0;
+            bool use = open_px && alpha >= 1.0 / 255.0;
 #if CUTOFF_WEIGHT != 0
             // Only the weight can take alpha back under the threshold (min(0.99, .) cannot);
             // a GPU skips the weight where w <= 1 cannot lift alpha over it.
@@ -393,17 +399,20 @@ bool composite(Staged s, bool cutoff) {
                 use = alpha >= 1.0 / 255.0;
             }
 #endif
-            alpha = min(0.99, alpha);
-            float next_T = px_T[i] * (1.0 - alpha);
-            bool finish = use && next_T < 1e-4;
+            // a = 0 for a splat the pixel skips: then next_T = T, which is >= 1e-4 (T only
+            // ever takes a next_T that is), so `finish` holds only for a used splat.
+            float a = use ? min(0.99, alpha) : 0.0;
+            float next_T = px_T[i] * (1.0 - a);
+            bool finish = next_T < 1e-4;
             px_done[i] = px_done[i] || finish;
-            bool add = use && !finish;
-            px_color[i] += (add ? alpha * px_T[i] : 0.0) * rgb;
+            float w = finish ? 0.0 : a * px_T[i];   // alpha T of an added splat, else 0
+            px_color[i] += w * rgb;
 #ifdef DEPTH
-            px_zsum[i] += add ? alpha * px_T[i] * s.depth : 0.0;
-            px_median[i] = add && next_T <= 0.5 && isinf(px_median[i]) ? s.depth : px_median[i];
+            px_zsum[i] += w * s.depth;
+            px_median[i] = w > 0.0 && next_T <= 0.5 && isinf(px_median[i]) ? s.depth
+                                                                           : px_median[i];
 #endif
-            px_T[i] = add ? next_T : px_T[i];
+            px_T[i] = finish ? px_T[i] : next_T;
         }
     }
     return any_open;
