@@ -378,7 +378,7 @@ bool composite(Staged s, bool cutoff) {
             // the centre, where the reference's direct formula gives a hair under. The min
             // keeps alpha <= o there instead of skipping the splat (two operations fewer per
             // pixel).
-            float power2 = q.x + float(r) * (q.y + float(r) * q.z);
+            float power2 = fma(float(r), fma(float(r), q.z, q.y), q.x);
             float alpha = co.w * exp2(min(power2, 0.0));
 #ifdef DEPTH
             // Behind the engine's surface: this splat and every later one are hidden.
@@ -402,11 +402,11 @@ bool composite(Staged s, bool cutoff) {
             // a = 0 for a splat the pixel skips: then next_T = T, which is >= 1e-4 (T only
             // ever takes a next_T that is), so `finish` holds only for a used splat.
             float a = use ? min(0.99, alpha) : 0.0;
-            float next_T = px_T[i] * (1.0 - a);
+            float next_T = fma(-a, px_T[i], px_T[i]);
             bool finish = next_T < 1e-4;
             px_done[i] = px_done[i] || finish;
             float w = finish ? 0.0 : a * px_T[i];   // alpha T of an added splat, else 0
-            px_color[i] += w * rgb;
+            px_color[i] = fma(vec3(w), rgb, px_color[i]);
 #ifdef DEPTH
             px_zsum[i] += w * s.depth;
             px_median[i] = w > 0.0 && next_T <= 0.5 && isinf(px_median[i]) ? s.depth

@@ -524,7 +524,7 @@ fn intersection_overflow_grows_and_rerenders() {
 }
 
 /// The two rasterizer layouts (a pixel per invocation for GPUs, column strips for CPU drivers)
-/// give the same image, clipped or not, on an image whose size is not a multiple of the tile.
+/// give the same image to rounding, clipped or not, on an image whose size is not a multiple of the tile.
 #[test]
 fn raster_layouts_agree() {
     use rara::stages::rasterize::RasterLayout;
@@ -543,11 +543,16 @@ fn raster_layouts_agree() {
             let gpu_scene = renderer.upload(&scene).unwrap();
             images.push(renderer.render(&gpu_scene, cam, &options).unwrap().0);
         }
+        // The same to float rounding: the strips evaluate a splat's exponent down a column
+        // from the strip's first pixel (a quadratic in the row), the pixel layout at each
+        // pixel, so the two alphas can differ in the last bits and put a pixel on the other
+        // side of a rounding to 8 bits.
         let d = rara::metrics::compare(&images[0], &images[1]);
-        assert_eq!(
-            d.max_diff, 0,
-            "layouts differ in {} pixels",
-            d.differing_pixels
+        assert!(
+            d.max_diff <= 1 && d.differing_pixels <= 3,
+            "layouts differ in {} pixels, by up to {}",
+            d.differing_pixels,
+            d.max_diff
         );
         let cpu = reference::render(&scene, cam, &options);
         common::check_images("raster_layouts", &images[1], &cpu, 50.0, 4);

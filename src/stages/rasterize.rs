@@ -76,7 +76,8 @@ fn strips_scene_fits(gaussians: u32, max_texels: u32) -> Result<()> {
     Ok(())
 }
 
-/// How the rasterizer maps pixels to invocations. Both give the same image.
+/// How the rasterizer maps pixels to invocations. Both give the same image, to float rounding
+/// (a pixel here and there off by one in 8 bits).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RasterLayout {
     /// One invocation per pixel, 256 per tile (`rasterize`): the layout for GPUs.
