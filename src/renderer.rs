@@ -92,7 +92,9 @@ pub struct Intermediates {
     pub offsets: Vec<u32>,
     /// Sorted keys (tile ids).
     pub keys: Vec<u32>,
-    /// Splat index of each sorted key.
+    /// Each sorted key's pair value: the splat index (bits of
+    /// [`crate::constants::PAIR_INDEX_MASK`]), the blocks of the tile its footprint reaches
+    /// ([`crate::constants::PAIR_BLOCKS_SHIFT`]) and [`crate::constants::PAIR_WEIGHTED`].
     pub values: Vec<u32>,
     /// `[start, end)` per tile.
     pub ranges: Vec<[u32; 2]>,
