@@ -469,6 +469,33 @@ void strip_spans(vec3 eye, ClipParamsRef clip) {
 }
 #endif
 
+// The first entry of [0, count) to composite, in k with its handle in h (with TILE_BLOCKS, the
+// first whose footprint reaches this invocation's block); false when there is none.
+bool first_entry(uint base, uint count, out uint k, out uint h) {
+    k = 0u;
+    if (count == 0u) {
+        return false;
+    }
+    h = entry_handle(base, 0u);
+#ifdef TILE_BLOCKS
+    skip_to_block(base, count, k, h);
+#endif
+    return k < count;
+}
+
+// Moves k and h on to the next entry to composite after k (as first_entry); false, with
+// k = count, when the list ran out.
+bool next_entry(uint base, uint count, inout uint k, inout uint h) {
+    if (++k == count) {
+        return false;
+    }
+    h = entry_handle(base, k);
+#ifdef TILE_BLOCKS
+    skip_to_block(base, count, k, h);
+#endif
+    return k < count;
+}
+
 #if CUTOFF_WEIGHT != 0
 // Composites the run of plain (weighted false) or weighted entries that starts with entry k,
 // whose handle is h, over the strip, and leaves in k and h the entry after the run. Returns
@@ -477,17 +504,9 @@ bool composite_run(uint base, uint count, bool weighted, inout uint k, inout uin
     bool open;
     do {
         open = composite(handle_splat(h), weighted);
-        ++k;
-        if (!open || k == count) {
+        if (!open || !next_entry(base, count, k, h)) {
             break;
         }
-        h = entry_handle(base, k);
-#ifdef TILE_BLOCKS
-        skip_to_block(base, count, k, h);
-        if (k == count) {
-            break;
-        }
-#endif
     } while (handle_weighted(h) == weighted);
     return open;
 }
@@ -497,20 +516,12 @@ bool composite_run(uint base, uint count, bool weighted, inout uint k, inout uin
 // pixel of the strip is done.
 void composite_entries(uint base, uint count) {
 #if CUTOFF_WEIGHT == 0 && defined(TILE_BLOCKS)
-    if (count == 0u) {
+    uint k, h;
+    if (!first_entry(base, count, k, h)) {
         return;
     }
-    uint k = 0u;
-    uint h = entry_handle(base, 0u);
-    do {
-        skip_to_block(base, count, k, h);
-        if (k == count || !composite(handle_splat(h), false)) {
-            break;
-        }
-        if (++k < count) {
-            h = entry_handle(base, k);
-        }
-    } while (k < count);
+    while (composite(handle_splat(h), false) && next_entry(base, count, k, h)) {
+    }
 #elif CUTOFF_WEIGHT == 0
     for (uint k = 0u; k < count; ++k) {
         if (!composite(splat_at(base, k), false)) {
@@ -532,18 +543,11 @@ void composite_entries(uint base, uint count) {
     // body. Carrying the fetched splat instead (ten words, every one a masked move on a CPU
     // driver) cost 1-2 % more (lavapipe, one thread, biker at 1280x960 under a plane:
     // rasterize 96.5-97.9 against 98.4-101.4 ms).
-    if (count == 0u) {
+    uint k, h;
+    if (!first_entry(base, count, k, h)) {
         return;
     }
-    uint k = 0u;
     bool open = true;
-    uint h = entry_handle(base, 0u);
-#ifdef TILE_BLOCKS
-    skip_to_block(base, count, k, h);
-    if (k == count) {
-        return;
-    }
-#endif
     do {
         if (!handle_weighted(h)) {
             open = composite_run(base, count, false, k, h);
