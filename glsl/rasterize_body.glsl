@@ -14,8 +14,8 @@
 // of the tile, four per tile, each walking the tile's list on its own. A CPU driver composites
 // every entry of a list for every pixel of its vector, under a mask where the splat misses
 // them; a vector here passes over the entries whose footprint misses its block (emit marks the
-// blocks each pair reaches, PAIR_BLOCKS_SHIFT) in a loop of one texel fetch per entry, and
-// stops when its own 64 pixels are done. lavapipe, render --repeat 3 at 640x480, unclipped:
+// blocks each pair reaches, PAIR_BLOCKS_SHIFT) in a loop that fetches two entries' handles a
+// pass (advance_to_block), and stops when its own 64 pixels are done. lavapipe, render --repeat 3 at 640x480, unclipped:
 // rasterize playbot 0.61x, plant 0.79x of the whole tile in one vector (2 columns x 16 rows);
 // images the same but for a few pixels off by 1.
 //
@@ -162,17 +162,41 @@ Staged splat_at(uint base, uint k) {
 // This invocation's block's bit in a pair's value.
 uint block_bit;
 
-// Moves k (and its handle h) on to the first entry from k, of [0, count), whose footprint
-// reaches this invocation's block; k = count when none does. Every lane of a SIMD vector
-// takes the same block, so the loop is uniform: a CPU driver runs one cheap body per entry
-// passed over instead of compositing it under an empty mask.
-void skip_to_block(uint base, uint count, inout uint k, inout uint h) {
-    while ((h & block_bit) == 0u) {
-        if (++k == count) {
-            break;
-        }
-        h = entry_handle(base, k);
+// How many entries one pass of advance_to_block looks at.
+#ifndef BLOCK_LOOKAHEAD
+#define BLOCK_LOOKAHEAD 2u
+#endif
+
+// Moves k (and its handle h) on to the first entry after k, of [0, count), whose footprint
+// reaches this invocation's block; false, with k = count, when none does. Every lane of a
+// SIMD vector takes the same block, so the loop is uniform: a CPU driver runs one cheap pass
+// per BLOCK_LOOKAHEAD entries passed over instead of compositing them under an empty mask.
+// A pass fetches BLOCK_LOOKAHEAD handles at once (independent loads) and takes the first
+// that reaches the block, so the common case, the next entry reaches it, takes one pass of
+// a do-while; a CPU driver runs a loop's body at least once even when no lane enters it, so
+// a test before the loop would cost a whole pass too.
+bool advance_to_block(uint base, uint count, inout uint k, inout uint h) {
+    if (k + 1u >= count) {  // k = ~0u before the first entry
+        k = count;
+        return false;
     }
+    uint last = count - 1u;
+    bool found;
+    do {
+        // Entries past the last read the last one again: never a new find.
+        found = false;
+        uint step = BLOCK_LOOKAHEAD;
+        [[unroll]] for (uint j = BLOCK_LOOKAHEAD; j >= 1u; --j) {
+            uint hj = entry_handle(base, min(k + j, last));
+            bool reaches = (hj & block_bit) != 0u;
+            h = reaches ? hj : h;
+            step = reaches ? j : step;
+            found = found || reaches;
+        }
+        k += step;
+    } while (!found && k < last);
+    k = found ? k : count;
+    return found;
 }
 #endif
 #else
@@ -247,8 +271,11 @@ shared uint pixels_done;
 // (lo0, hi0, lo1, hi1) for the length weight.
 uvec2 first_pixel;
 vec3 px_color[NPX];
+// The transmittance, negated once the pixel is done (as in `state`). An open pixel's T is
+// >= 1e-4, so compositing a splat over a done one (T < 0) always "finishes" it again, adds
+// nothing and keeps T: the sign is the done flag at no cost per pixel and splat. A separate
+// flag took three operations more per pixel and splat and eight more vectors of live state.
 float px_T[NPX];
-bool px_done[NPX];
 #ifdef DEPTH
 float px_limit[NPX];    // the engine's view depth (+inf without a depth test)
 float px_median[NPX];   // the median depth so far (+inf until 1 - T reaches 0.5)
@@ -297,19 +324,19 @@ uint strip_done;
 uint done_count() {
     uint n = 0u;
     [[unroll]] for (uint i = 0u; i < NPX; ++i) {
-        n += px_done[i] ? 1u : 0u;
+        n += px_T[i] < 0.0 ? 1u : 0u;
     }
     return n;
 }
 #endif
 
 // Composites splat s over the strip (SPEC section 4); `cutoff` applies its clip weight.
-// Returns whether any pixel of the strip was still open.
+// Returns whether any pixel of the strip is still open after it.
 bool composite(Staged s, bool cutoff) {
     vec4 co = s.co;
     vec2 uv = s.uv;
     vec3 rgb = s.rgb;
-    bool any_open = false;
+    float T_max = -1.0;
 #if CUTOFF_WEIGHT != 0
     CutoffRecord rec;
     if (cutoff) {
@@ -370,8 +397,7 @@ bool composite(Staged s, bool cutoff) {
             // Branch-free: a CPU driver runs every branch under a mask anyway, and the masks
             // of `continue`s cost more than the selects (lavapipe, plant at 640x480:
             // rasterize 0.86-0.91x unclipped, the same image).
-            bool open_px = !px_done[i];
-            any_open = any_open || open_px;
+            float T = px_T[i];
             // power <= 0 everywhere for the positive definite conic (SPEC section 3), so
             // SPEC section 4's "skip when power > 0" only ever catches rounding: the form
             // below, evaluated from the strip's first pixel, can come out a hair over 0 next to
@@ -382,11 +408,9 @@ bool composite(Staged s, bool cutoff) {
             float alpha = co.w * exp2(min(power2, 0.0));
 #ifdef DEPTH
             // Behind the engine's surface: this splat and every later one are hidden.
-            bool behind = s.depth >= px_limit[i];
-            px_done[i] = px_done[i] || behind;
-            open_px = open_px && !behind;
+            T = s.depth >= px_limit[i] ? -abs(T) : T;
 #endif
-            bool use = open_px && alpha >= 1.0 / 255.0;
+            bool use = alpha >= 1.0 / 255.0;
 #if CUTOFF_WEIGHT != 0
             // Only the weight can take alpha back under the threshold (min(0.99, .) cannot);
             // a GPU skips the weight where w <= 1 cannot lift alpha over it.
@@ -399,23 +423,24 @@ bool composite(Staged s, bool cutoff) {
                 use = alpha >= 1.0 / 255.0;
             }
 #endif
-            // a = 0 for a splat the pixel skips: then next_T = T, which is >= 1e-4 (T only
-            // ever takes a next_T that is), so `finish` holds only for a used splat.
+            // a = 0 for a splat the pixel skips: then next_T = T, which is >= 1e-4 for an
+            // open pixel (T only ever takes a next_T that is), so `finish` holds only for a
+            // used splat or a done pixel (T < 0).
             float a = use ? min(0.99, alpha) : 0.0;
-            float next_T = fma(-a, px_T[i], px_T[i]);
+            float next_T = fma(-a, T, T);
             bool finish = next_T < 1e-4;
-            px_done[i] = px_done[i] || finish;
-            float w = finish ? 0.0 : a * px_T[i];   // alpha T of an added splat, else 0
+            float w = finish ? 0.0 : a * T;   // alpha T of an added splat, else 0
             px_color[i] = fma(vec3(w), rgb, px_color[i]);
 #ifdef DEPTH
             px_zsum[i] += w * s.depth;
             px_median[i] = w > 0.0 && next_T <= 0.5 && isinf(px_median[i]) ? s.depth
                                                                            : px_median[i];
 #endif
-            px_T[i] = finish ? px_T[i] : next_T;
+            px_T[i] = finish ? -abs(T) : next_T;
+            T_max = max(T_max, px_T[i]);
         }
     }
-    return any_open;
+    return T_max > 0.0;
 }
 
 #if CUTOFF_WEIGHT != 0
@@ -472,28 +497,32 @@ void strip_spans(vec3 eye, ClipParamsRef clip) {
 // The first entry of [0, count) to composite, in k with its handle in h (with TILE_BLOCKS, the
 // first whose footprint reaches this invocation's block); false when there is none.
 bool first_entry(uint base, uint count, out uint k, out uint h) {
+#ifdef TILE_BLOCKS
+    k = ~0u;
+    h = 0u;
+    return advance_to_block(base, count, k, h);
+#else
     k = 0u;
     if (count == 0u) {
         return false;
     }
     h = entry_handle(base, 0u);
-#ifdef TILE_BLOCKS
-    skip_to_block(base, count, k, h);
+    return true;
 #endif
-    return k < count;
 }
 
 // Moves k and h on to the next entry to composite after k (as first_entry); false, with
 // k = count, when the list ran out.
 bool next_entry(uint base, uint count, inout uint k, inout uint h) {
+#ifdef TILE_BLOCKS
+    return advance_to_block(base, count, k, h);
+#else
     if (++k == count) {
         return false;
     }
     h = entry_handle(base, k);
-#ifdef TILE_BLOCKS
-    skip_to_block(base, count, k, h);
+    return true;
 #endif
-    return k < count;
 }
 
 #if CUTOFF_WEIGHT != 0
@@ -589,13 +618,11 @@ void main() {
         uvec2 pixel = first_pixel + uvec2(i / P, i % P);
         bool inside = pixel.x < f.size.x && pixel.y < f.size.y;
         px_color[i] = vec3(0.0);
-        px_T[i] = 1.0;
-        px_done[i] = !inside;
+        px_T[i] = inside ? 1.0 : -1.0;
         if ((pc.flags & ROUND_FIRST) == 0u && inside) {
             vec4 s = load_vec4_item(pc.state, pixel.y * f.size.x + pixel.x);
             px_color[i] = s.rgb;
-            px_T[i] = abs(s.a);
-            px_done[i] = s.a < 0.0;
+            px_T[i] = s.a;
         }
 #ifdef DEPTH
         uint at = inside ? pixel.y * f.size.x + pixel.x : 0u;
@@ -681,7 +708,7 @@ void main() {
             continue;
         }
         store_vec4_item(pc.state, pixel.y * f.size.x + pixel.x,
-                        vec4(px_color[i], px_done[i] ? -px_T[i] : px_T[i]));
+                        vec4(px_color[i], px_T[i]));
 #ifdef DEPTH
         store_vec4_item(pc.depth_state, pixel.y * f.size.x + pixel.x,
                         vec4(px_median[i], px_zsum[i], 0.0, 0.0));

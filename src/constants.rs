@@ -12,7 +12,7 @@ pub const RASTER_WORKGROUP: u32 = TILE_SIZE * TILE_SIZE;
 /// loops after 65,535 iterations in total. The rara rasterizer's loops take up to 4 passes per
 /// entry: a cutoff splat takes its pass of the cutoff loop, up to two of the ends of its
 /// visible interval and, in the strips kernels, one of the loop that passes over the entries
-/// missing the invocation's block (one pass per entry it passes over); a plain and a cutoff
+/// missing the invocation's block (at most one pass per entry it passes over); a plain and a cutoff
 /// splat in turn take seven between them (those, one of the plain loop and its block loop,
 /// one of the outer loop), and each loop at most one empty pass per batch walked; the
 /// pixel-per-invocation layout's staging adds one per batch of 256 entries. So longer lists are
