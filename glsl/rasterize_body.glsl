@@ -531,6 +531,25 @@ bool next_entry(uint base, uint count, inout uint k, inout uint h) {
 // whether any pixel of the strip is still open.
 bool composite_run(uint base, uint count, bool weighted, inout uint k, inout uint h) {
     bool open;
+#ifdef SPLAT_TEXELS
+    if (!weighted) {
+        // Two plain entries a pass on CPU drivers, as composite_entries' plain loop; the
+        // second only where it belongs to the run, else it waits in h for the weighted run.
+        do {
+            Staged first = handle_splat(h);
+            bool found = next_entry(base, count, k, h);
+            bool have_second = found && !handle_weighted(h);
+            Staged second = handle_splat(h);
+            second.co.w = have_second ? second.co.w : 0.0;
+            composite(first, false);
+            open = composite(second, false);
+            if (!open || !have_second || !next_entry(base, count, k, h)) {
+                break;
+            }
+        } while (!handle_weighted(h));
+        return open;
+    }
+#endif
     do {
         open = composite(handle_splat(h), weighted);
         if (!open || !next_entry(base, count, k, h)) {
@@ -549,8 +568,23 @@ void composite_entries(uint base, uint count) {
     if (!first_entry(base, count, k, h)) {
         return;
     }
-    while (composite(handle_splat(h), false) && next_entry(base, count, k, h)) {
-    }
+    // Two entries a pass: both found and fetched first, then composited one after the other.
+    // A CPU driver keeps the strip's state (colour and T of NPX pixels) in variables that every
+    // pass of a loop writes back under the loop's mask; two entries a pass halve that traffic.
+    // A list that runs out after the first composites the second at opacity 0, which changes
+    // no pixel. lavapipe, playbot at 640x480, bench, three rounds in turn, the same image:
+    // rasterize 141.4/145.0/154.1 -> 120.2/126.2/123.1 ms. Finding the second entry after the
+    // first was composited (state live across the walk's loop) made it 1.5x slower than one a
+    // pass, and four entries or the handles alone fetched first were slower than two.
+    bool more;
+    do {
+        Staged first = handle_splat(h);
+        bool have_second = next_entry(base, count, k, h);
+        Staged second = handle_splat(h);
+        second.co.w = have_second ? second.co.w : 0.0;
+        composite(first, false);
+        more = composite(second, false) && have_second && next_entry(base, count, k, h);
+    } while (more);
 #elif CUTOFF_WEIGHT == 0
     for (uint k = 0u; k < count; ++k) {
         if (!composite(splat_at(base, k), false)) {
