@@ -187,6 +187,9 @@ const _: () = assert!(MAX_GAUSSIANS <= PAIR_INDEX_MASK as u64 + 1);
 /// flat Gaussians (SPEC section 6); the rasterize kernels of frames without any are built with
 /// it false.
 pub const FLAT_SPLATS_CONSTANT_ID: u32 = 0;
+/// Specialization constant id of `MAY_COMPOSITE_OVER` (`glsl/write_target_body.glsl`): the
+/// write-target kernels for [`crate::target::Composite::Background`] are built with it false.
+pub const TARGET_OVER_CONSTANT_ID: u32 = 1;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -303,6 +306,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BLOCK_SIZE", BLOCK_SIZE),
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
     ("FLAT_SPLATS_CONSTANT_ID", FLAT_SPLATS_CONSTANT_ID),
+    ("TARGET_OVER_CONSTANT_ID", TARGET_OVER_CONSTANT_ID),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),
     ("CLIP_MODE_RARA", CLIP_MODE_RARA),

@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
 use super::FrameRecording;
-use crate::constants::TILE_SIZE;
+use crate::constants::{TARGET_OVER_CONSTANT_ID, TILE_SIZE};
 use crate::error::{Result, VkContext};
 use crate::shaders;
 use crate::target::{Composite, TargetFormat};
@@ -63,12 +63,38 @@ pub fn single_image_set_layout(
         .vk("vkCreateDescriptorSetLayout")
 }
 
-/// One write-target kernel per [`TargetFormat`], for one kind of target, each built when a
-/// frame first needs it.
+/// The write-target kernel of one format for each [`Composite`]: the background one built
+/// without the target's load (`MAY_COMPOSITE_OVER` false), which a CPU driver would run under
+/// a mask in every frame.
+struct CompositeKernels {
+    background: LazyPipeline,
+    over: LazyPipeline,
+}
+
+impl CompositeKernels {
+    /// Both kernels from `build`, which makes the unbuilt pipeline.
+    fn new(build: impl Fn() -> LazyPipeline) -> Self {
+        CompositeKernels {
+            background: build().specialized(&[(TARGET_OVER_CONSTANT_ID, 0)]),
+            over: build(),
+        }
+    }
+
+    /// The kernel for `composite`.
+    fn get(&self, composite: Composite) -> &LazyPipeline {
+        match composite {
+            Composite::Background => &self.background,
+            Composite::Over => &self.over,
+        }
+    }
+}
+
+/// One write-target kernel per [`TargetFormat`] and [`Composite`], for one kind of target,
+/// each built when a frame first needs it.
 struct FormatKernels {
-    rgba8: LazyPipeline,
-    rgba16f: LazyPipeline,
-    rgba32f: LazyPipeline,
+    rgba8: CompositeKernels,
+    rgba16f: CompositeKernels,
+    rgba32f: CompositeKernels,
 }
 
 impl FormatKernels {
@@ -80,7 +106,9 @@ impl FormatKernels {
         set_layouts: &[vk::DescriptorSetLayout],
     ) -> Result<Self> {
         let build = |(name, spirv): (&'static CStr, &'static [u32])| {
-            LazyPipeline::with_set_layouts::<WriteTargetPush>(ctx, name, spirv, set_layouts)
+            CompositeKernels::new(|| {
+                LazyPipeline::with_set_layouts::<WriteTargetPush>(ctx, name, spirv, set_layouts)
+            })
         };
         let [rgba8, rgba16f, rgba32f] = kernels;
         Ok(FormatKernels {
@@ -90,13 +118,14 @@ impl FormatKernels {
         })
     }
 
-    /// The kernel for `format`.
-    fn get(&self, format: TargetFormat) -> &LazyPipeline {
+    /// The kernel for `format` and `composite`.
+    fn get(&self, format: TargetFormat, composite: Composite) -> &LazyPipeline {
         match format {
             TargetFormat::Rgba8Unorm => &self.rgba8,
             TargetFormat::Rgba16Float => &self.rgba16f,
             TargetFormat::Rgba32Float => &self.rgba32f,
         }
+        .get(composite)
     }
 }
 
@@ -246,7 +275,7 @@ impl WriteTarget {
                 (None, Some(((_, buffer), texels))) => (buffer, vec![texels]),
                 (Some(image), Some(((images, _), texels))) => (images, vec![image, texels]),
             };
-        let kernel = kernels.get(format).get()?;
+        let kernel = kernels.get(format, composite).get()?;
         let groups = [w.div_ceil(TILE_SIZE), h.div_ceil(TILE_SIZE), 1];
         f.pass(c"write target", |f| {
             kernel.dispatch_with_sets(f.cmd, &push, &sets, groups)
