@@ -525,6 +525,27 @@ bool next_entry(uint base, uint count, inout uint k, inout uint h) {
 #endif
 }
 
+#ifdef SPLAT_TEXELS
+// For the loops that composite two entries a pass (CPU drivers; see composite_entries): the
+// splat of entry k (handle h) as `first`, then k and h moved on to the next entry, whose splat
+// is `second`. Returns whether the second is to be composited: it exists and, unless
+// `any_kind`, it is of the run's kind (weighted or not, handle_weighted). Otherwise it stays in
+// h for the caller and `second` is idle: opacity 0, so compositing it changes no pixel, and
+// the first's cutoff record index, since a plain entry's NO_CUTOFF indexes no record. When
+// the list ran out, h stays, so `second` is the first splat again (a depth test then marks
+// nothing new).
+bool fetch_two(uint base, uint count, bool any_kind, bool weighted, inout uint k, inout uint h,
+               out Staged first, out Staged second) {
+    first = handle_splat(h);
+    bool found = next_entry(base, count, k, h);
+    bool have_second = found && (any_kind || handle_weighted(h) == weighted);
+    second = handle_splat(h);
+    second.co.w = have_second ? second.co.w : 0.0;
+    second.cutoff = have_second ? second.cutoff : first.cutoff;
+    return have_second;
+}
+#endif
+
 #if CUTOFF_WEIGHT != 0
 // Composites the run of plain (weighted false) or weighted entries that starts with entry k,
 // whose handle is h, over the strip, and leaves in k and h the entry after the run. Returns
@@ -532,22 +553,14 @@ bool next_entry(uint base, uint count, inout uint k, inout uint h) {
 bool composite_run(uint base, uint count, bool weighted, inout uint k, inout uint h) {
     bool open;
 #ifdef SPLAT_TEXELS
-    // Two entries a pass on CPU drivers, as composite_entries' plain loop; the second only
-    // where it belongs to the run, else it waits in h for the next run and is composited here
-    // at opacity 0. A weighted run's idle second still pays the weight, yet the weighted runs
-    // gained too (lavapipe, bench --modes hard,rara at 640x480, five rounds on plant and two
-    // on biker in turn, the plain runs two a pass in both builds: rara / hard per pair 1.117 -
-    // 1.188 -> 1.108 - 1.131 on plant, 1.090 / 1.119 -> 1.062 / 1.068 on biker; the same
-    // images).
+    // Two entries a pass on CPU drivers, as composite_entries' plain loop (fetch_two). A
+    // weighted run's idle second still pays the weight, yet the weighted runs gained too
+    // (lavapipe, bench --modes hard,rara at 640x480, five rounds on plant and two on biker in
+    // turn, the plain runs two a pass in both builds: rara / hard per pair 1.117 - 1.188 ->
+    // 1.108 - 1.131 on plant, 1.090 / 1.119 -> 1.062 / 1.068 on biker; the same images).
     do {
-        Staged first = handle_splat(h);
-        bool found = next_entry(base, count, k, h);
-        bool have_second = found && handle_weighted(h) == weighted;
-        Staged second = handle_splat(h);
-        second.co.w = have_second ? second.co.w : 0.0;
-        // An idle second of a weighted run may be a plain entry, whose cutoff is NO_CUTOFF:
-        // it takes the first's record, a valid index, instead.
-        second.cutoff = have_second ? second.cutoff : first.cutoff;
+        Staged first, second;
+        bool have_second = fetch_two(base, count, false, weighted, k, h, first, second);
         composite(first, weighted);
         open = composite(second, weighted);
         if (!open || !have_second || !next_entry(base, count, k, h)) {
@@ -574,20 +587,18 @@ void composite_entries(uint base, uint count) {
     if (!first_entry(base, count, k, h)) {
         return;
     }
-    // Two entries a pass: both found and fetched first, then composited one after the other.
-    // A CPU driver keeps the strip's state (colour and T of NPX pixels) in variables that every
-    // pass of a loop writes back under the loop's mask; two entries a pass halve that traffic.
-    // A list that runs out after the first composites the second at opacity 0, which changes
-    // no pixel (it is the first splat again: h stays, so a depth test marks nothing new). lavapipe, playbot at 640x480, bench, three rounds in turn, the same image:
-    // rasterize 141.4/145.0/154.1 -> 120.2/126.2/123.1 ms. Finding the second entry after the
-    // first was composited (state live across the walk's loop) made it 1.5x slower than one a
-    // pass, and four entries or the handles alone fetched first were slower than two.
+    // Two entries a pass: both found and fetched first (fetch_two), then composited one after
+    // the other. A CPU driver keeps the strip's state (colour and T of NPX pixels) in
+    // variables that every pass of a loop writes back under the loop's mask; two entries a
+    // pass halve that traffic. lavapipe, playbot at 640x480, bench, three rounds in turn, the
+    // same image: rasterize 141.4/145.0/154.1 -> 120.2/126.2/123.1 ms. Finding the second
+    // entry after the first was composited (state live across the walk's loop) made it 1.5x
+    // slower than one a pass, and four entries or the handles alone fetched first were slower
+    // than two.
     bool more;
     do {
-        Staged first = handle_splat(h);
-        bool have_second = next_entry(base, count, k, h);
-        Staged second = handle_splat(h);
-        second.co.w = have_second ? second.co.w : 0.0;
+        Staged first, second;
+        bool have_second = fetch_two(base, count, true, false, k, h, first, second);
         composite(first, false);
         more = composite(second, false) && have_second && next_entry(base, count, k, h);
     } while (more);
