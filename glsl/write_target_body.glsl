@@ -24,13 +24,12 @@
 
 layout(local_size_x = TILE_SIZE, local_size_y = TILE_SIZE) in;
 
-#define TARGET_OVER 1u
-// Whether the kernel may composite over the target (TARGET_OVER). The kernels for a
-// background are built with it false, which takes the target's load out of them: a CPU driver
-// runs that load, a scalar loop over the lanes, under a mask whatever the flag says (lavapipe,
-// plant at 1280x960, bench, three rounds in turn: write target 12.8 / 13.3 / 12.0 -> 11.5 /
-// 12.0 / 11.2 ms, the same image).
-layout(constant_id = TARGET_OVER_CONSTANT_ID) const bool MAY_COMPOSITE_OVER = true;
+// Whether the kernel composites over what the target holds (true) or over the background: a
+// specialization constant rather than a flag in the push constants, so that the background
+// kernels hold no load of the target, which a CPU driver would run under a mask, a scalar
+// loop over the lanes, whatever a flag said (lavapipe, plant at 1280x960, bench, three rounds
+// in turn: write target 12.8 / 13.3 / 12.0 -> 11.5 / 12.0 / 11.2 ms, the same image).
+layout(constant_id = TARGET_OVER_CONSTANT_ID) const bool COMPOSITE_OVER = true;
 
 // Buffer formats (TARGET_BUFFER_FORMAT of the buffer kernels), as TargetFormat on the host.
 #define BUFFER_RGBA8 0
@@ -41,10 +40,8 @@ layout(push_constant) uniform Push {
     Vec4s state;        // per pixel (C, T), T negated once the pixel was done; unused with
                         // STATE_TEXELS
     U32s buffer_target; // the buffer target (0 for an image)
-    vec4 background;    // rgba, with mode background
+    vec4 background;    // rgba, unless COMPOSITE_OVER
     uvec2 size;         // W, H
-    uint flags;         // TARGET_OVER
-    uint padding;
 } pc;
 
 #ifdef TARGET_IMAGE_FORMAT
@@ -104,7 +101,6 @@ void main() {
     vec4 s = load_vec4_item(pc.state, index);
 #endif
     float T = abs(s.a);
-    vec4 under = MAY_COMPOSITE_OVER && (pc.flags & TARGET_OVER) != 0u ? load_target(p, index)
-                                                                       : pc.background;
+    vec4 under = COMPOSITE_OVER ? load_target(p, index) : pc.background;
     store_target(p, index, vec4(s.rgb + T * under.rgb, (1.0 - T) + T * under.a));
 }

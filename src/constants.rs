@@ -187,7 +187,7 @@ const _: () = assert!(MAX_GAUSSIANS <= PAIR_INDEX_MASK as u64 + 1);
 /// flat Gaussians (SPEC section 6); the rasterize kernels of frames without any are built with
 /// it false.
 pub const FLAT_SPLATS_CONSTANT_ID: u32 = 0;
-/// Specialization constant id of `MAY_COMPOSITE_OVER` (`glsl/write_target_body.glsl`): the
+/// Specialization constant id of `COMPOSITE_OVER` (`glsl/write_target_body.glsl`): the
 /// write-target kernels for [`crate::target::Composite::Background`] are built with it false.
 pub const TARGET_OVER_CONSTANT_ID: u32 = 1;
 

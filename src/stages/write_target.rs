@@ -20,24 +20,10 @@ pub struct WriteTargetPush {
     pub state: u64,
     /// Device address of a buffer target's first pixel (0 for an image target).
     pub buffer_target: u64,
-    /// Background rgba with [`Composite::Background`].
+    /// Background rgba with [`Composite::Background`] (the kernel, not a flag, says which).
     pub background: [f32; 4],
     /// Width, height.
     pub size: [u32; 2],
-    /// 1 for [`Composite::Over`].
-    pub flags: u32,
-    /// Padding to the struct's 8-byte alignment (always 0).
-    pub padding: u32,
-}
-
-impl WriteTargetPush {
-    /// The flags word for `composite`.
-    pub fn flags_for(composite: Composite) -> u32 {
-        match composite {
-            Composite::Background => 0,
-            Composite::Over => 1,
-        }
-    }
 }
 
 /// Creates the layout of the descriptor set that holds an image target: one storage image at
@@ -63,9 +49,9 @@ pub fn single_image_set_layout(
         .vk("vkCreateDescriptorSetLayout")
 }
 
-/// The write-target kernel of one format for each [`Composite`]: the background one built
-/// without the target's load (`MAY_COMPOSITE_OVER` false), which a CPU driver would run under
-/// a mask in every frame.
+/// The write-target kernel of one format for each [`Composite`]: the specialization constant
+/// `COMPOSITE_OVER` (`glsl/write_target_body.glsl`) false for the background, true over the
+/// target.
 struct CompositeKernels {
     background: LazyPipeline,
     over: LazyPipeline,
@@ -263,8 +249,6 @@ impl WriteTarget {
             buffer_target,
             background: [background.x, background.y, background.z, 1.0],
             size: [w, h],
-            flags: WriteTargetPush::flags_for(composite),
-            padding: 0,
         };
         let max_texels = f.ctx.info().max_texel_buffer_elements as u64;
         let frame_texels = f.texels.filter(|_| w as u64 * h as u64 <= max_texels);
