@@ -14,7 +14,7 @@
 // of the tile, four per tile, each walking the tile's list on its own. A CPU driver composites
 // every entry of a list for every pixel of its vector, under a mask where the splat misses
 // them; a vector here passes over the entries whose footprint misses its block (emit marks the
-// blocks each pair reaches, PAIR_BLOCKS_SHIFT) in a loop that fetches two entries' handles a
+// blocks each pair reaches, PAIR_BLOCKS_SHIFT) in a loop that fetches four entries' handles a
 // pass (advance_to_block), and stops when its own 64 pixels are done. lavapipe, render --repeat 3 at 640x480, unclipped:
 // rasterize playbot 0.61x, plant 0.79x of the whole tile in one vector (2 columns x 16 rows);
 // images the same but for a few pixels off by 1.
@@ -162,40 +162,41 @@ Staged splat_at(uint base, uint k) {
 // This invocation's block's bit in a pair's value.
 uint block_bit;
 
-// How many entries one pass of advance_to_block looks at.
-#ifndef BLOCK_LOOKAHEAD
-#define BLOCK_LOOKAHEAD 2u
-#endif
-
 // Moves k (and its handle h) on to the first entry after k, of [0, count), whose footprint
 // reaches this invocation's block; false, with k = count, when none does. Every lane of a
 // SIMD vector takes the same block, so the loop is uniform: a CPU driver runs one cheap pass
-// per BLOCK_LOOKAHEAD entries passed over instead of compositing them under an empty mask.
-// A pass fetches BLOCK_LOOKAHEAD handles at once (independent loads) and takes the first
-// that reaches the block, so the common case, the next entry reaches it, takes one pass of
-// a do-while; a CPU driver runs a loop's body at least once even when no lane enters it, so
-// a test before the loop would cost a whole pass too.
+// per texel of four entries passed over instead of compositing them under an empty mask.
+// A pass fetches the handles four at a time, the texel of sorted_value_quads that holds the
+// next entry, and takes the first of its entries from there on that reaches the block, so
+// the common case, the next entry reaches it, takes one pass of a do-while and one fetch; a
+// CPU driver runs a loop's body at least once even when no lane enters it, so a test before
+// the loop would cost a whole pass too. Each texel fetch is a gather on such a driver, as
+// costly for four handles as for one: the form before, two handles a pass from the R32 view,
+// paid two fetches for the common case and a pass per two entries passed over.
 bool advance_to_block(uint base, uint count, inout uint k, inout uint h) {
     if (k + 1u >= count) {  // k = ~0u before the first entry
         k = count;
         return false;
     }
-    uint last = count - 1u;
+    // Absolute indices into the sorted pairs: the pass looks at [at, end) within its texel.
+    uint at = base + k + 1u;
+    uint end = base + count;
     bool found;
     do {
-        // Entries past the last read the last one again: never a new find.
+        uint quad = at >> 2u;
+        uvec4 handles = texelFetch(sorted_value_quads, int(quad));
+        uint next = (quad + 1u) << 2u;
         found = false;
-        uint step = BLOCK_LOOKAHEAD;
-        [[unroll]] for (uint j = BLOCK_LOOKAHEAD; j >= 1u; --j) {
-            uint hj = entry_handle(base, min(k + j, last));
-            bool reaches = (hj & block_bit) != 0u;
-            h = reaches ? hj : h;
-            step = reaches ? j : step;
+        [[unroll]] for (int j = 3; j >= 0; --j) {
+            uint entry = (quad << 2u) + uint(j);
+            bool reaches = (handles[j] & block_bit) != 0u && entry >= at && entry < end;
+            h = reaches ? handles[j] : h;
+            next = reaches ? entry : next;
             found = found || reaches;
         }
-        k += step;
-    } while (!found && k < last);
-    k = found ? k : count;
+        at = next;
+    } while (!found && at < end);
+    k = found ? at - base : count;
     return found;
 }
 #endif

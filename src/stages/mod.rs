@@ -135,10 +135,11 @@ pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
 /// (`R32G32B32A32_UINT`, 3 texels each), 3 the drawn Gaussians in depth order and 4 their first
 /// pairs, 5 the tiles touched per Gaussian, 6 the sorted tile keys, 7 the tile keys as emitted
 /// (all five `R32_UINT`), 8 the rasterizer's per-pixel state (`R32G32B32A32_UINT`, one texel
-/// per pixel), 9 the clip parameters (`R32G32B32A32_UINT`, planes from texel 3), 10 the scene's
-/// Gaussians (`R32G32B32A32_UINT`, 3 texels each) and 11 its SH coefficients (4 to a texel:
+/// per pixel), 9 the clip parameters (`R32G32B32A32_UINT`, planes from texel 3), 10 the sorted
+/// pair values again, four to a texel (`R32G32B32A32_UINT`), 11 the scene's Gaussians
+/// (`R32G32B32A32_UINT`, 3 texels each) and 12 its SH coefficients (4 to a texel:
 /// `R32G32B32A32_UINT` for floats, `R32G32_UINT` for half floats). The kernels declare all
-/// twelve, with these numbers, in `glsl/frame_texels.glsl`.
+/// thirteen, with these numbers, in `glsl/frame_texels.glsl`.
 pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
     let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..FRAME_TEXEL_BINDINGS)
         .map(|b| {
@@ -154,7 +155,7 @@ pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout>
         .vk("vkCreateDescriptorSetLayout")
 }
 
-/// Format and bytes of a texel of the SH view (binding 11 of [`frame_texels_set_layout`]): four
+/// Format and bytes of a texel of the SH view (binding 12 of [`frame_texels_set_layout`]): four
 /// coefficients at either precision.
 pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
     match precision {
@@ -164,7 +165,7 @@ pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
 }
 
 /// Bindings of [`frame_texels_set_layout`].
-pub const FRAME_TEXEL_BINDINGS: u32 = 12;
+pub const FRAME_TEXEL_BINDINGS: u32 = 13;
 
 /// [`frame_texels_set_layout`] made once for the kernels of a renderer (the frame slots make
 /// their own, compatible one for their sets); destroyed on drop.
