@@ -678,6 +678,40 @@ fn bench_writes_table_json_and_trace() {
         (pair_ratio - pairs("rara") / pairs("hard")).abs() < 1e-9,
         "{pair_ratio}"
     );
+    // The time per pair frame by frame: the median of each frame's time ratio over its pair
+    // ratio, worked out again from the per-frame arrays.
+    let per_frame = |mode: &str, key: &str| -> Vec<f64> {
+        report["modes"][mode][key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_f64().unwrap())
+            .collect()
+    };
+    let (rara_ms, hard_ms) = (per_frame("rara", "frame_ms"), per_frame("hard", "frame_ms"));
+    let (rara_pairs, hard_pairs) = (
+        per_frame("rara", "intersections_per_frame"),
+        per_frame("hard", "intersections_per_frame"),
+    );
+    let mut per_pair: Vec<f64> = (0..rara_ms.len())
+        .filter(|&k| rara_pairs[k] > 0.0 && hard_pairs[k] > 0.0)
+        .map(|k| (rara_ms[k] / hard_ms[k]) / (rara_pairs[k] / hard_pairs[k]))
+        .collect();
+    per_pair.sort_by(f64::total_cmp);
+    let n = per_pair.len();
+    assert!(n > 0);
+    let median = if n % 2 == 1 {
+        per_pair[n / 2]
+    } else {
+        0.5 * (per_pair[n / 2 - 1] + per_pair[n / 2])
+    };
+    let reported = report["rara_over_hard_per_pair_frame_median"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (reported - median).abs() < 1e-9,
+        "{reported} against {median}"
+    );
 
     // One event per pass per frame, each mode on its own track, frames in the order they were
     // rendered: frame k of every mode before frame k + 1 of any.

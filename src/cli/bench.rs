@@ -464,6 +464,15 @@ fn print_table(
                 paired / pairs
             );
         }
+        // The line above divides a median over the frames by a ratio of sums, which the
+        // frames with the most pairs dominate; this one takes each frame's time ratio over
+        // its own pair ratio.
+        if let Some(per_pair) = paired_per_pair_ratio(results, BenchMode::Rara, BenchMode::Hard) {
+            println!(
+                "rara / hard per pair, frame by frame (the median of each frame's time ratio \
+                 over its pair ratio): {per_pair:.3}"
+            );
+        }
     }
     for (mode, what) in [
         (BenchMode::Depth, "depth-tested / original"),
@@ -645,6 +654,25 @@ fn paired_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Optio
     (!ratios.is_empty()).then(|| median(&mut ratios))
 }
 
+/// Median over the frames of `num`'s GPU time per tile pair over `den`'s at the same plane
+/// position (frames where either mode drew no pair left out).
+fn paired_per_pair_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Option<f64> {
+    let find = |mode| {
+        results
+            .iter()
+            .find(|r| r.mode == mode && r.tracer == rara::Tracer::Raster)
+    };
+    let (n, d) = (find(num)?, find(den)?);
+    let mut ratios: Vec<f64> = n
+        .frames
+        .iter()
+        .zip(&d.frames)
+        .filter(|(a, b)| a.intersections > 0 && b.intersections > 0)
+        .map(|(a, b)| (a.gpu_ms / b.gpu_ms) / (a.intersections as f64 / b.intersections as f64))
+        .collect();
+    (!ratios.is_empty()).then(|| median(&mut ratios))
+}
+
 fn json_report(
     ctx: &Context,
     path: &Path,
@@ -702,6 +730,8 @@ fn json_report(
         "modes": modes,
         "rara_over_hard_per_frame_median": paired_ratio(results, BenchMode::Rara, BenchMode::Hard),
         "rara_over_hard_pairs": pair_ratio(results, BenchMode::Rara, BenchMode::Hard),
+        "rara_over_hard_per_pair_frame_median":
+            paired_per_pair_ratio(results, BenchMode::Rara, BenchMode::Hard),
     })
 }
 
