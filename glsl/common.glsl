@@ -409,4 +409,19 @@ uint count_touched_cells(vec2 uv, vec3 conic, float q_max, uvec4 rect, uint firs
     return touched;
 }
 
+// The rasterizer's per-pixel state s = (C, T), T negated once the pixel was done, composited
+// over `under` (premultiplied alpha): (C + T under.rgb, (1 - T) + T under.a). write_target and
+// the rasterizer kernels that write the target themselves (WRITES_TARGET) share it.
+vec4 state_over(vec4 s, vec4 under) {
+    float T = abs(s.a);
+    return vec4(s.rgb + T * under.rgb, (1.0 - T) + T * under.a);
+}
+
+// c as an RGBA8 texel, each channel clamped to [0, 1] and rounded to nearest, as the CPU
+// reference does (SPEC section 4).
+uint pack_rgba8_nearest(vec4 c) {
+    uvec4 b = uvec4(floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5));
+    return b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
+}
+
 #endif

@@ -86,6 +86,13 @@ layout(local_size_x = BLOCK_SIZE / C, local_size_y = 4) in;
 layout(local_size_x = TILE_SIZE / C, local_size_y = STRIPS) in;
 #endif
 
+// Whether this dispatch writes the caller's RGBA8 buffer target (its address in pc.state), over
+// the frame's background, in place of the per-pixel state: the host builds the strips kernels
+// with it true for frames of one round without depth (Renderer::record), which then have no
+// write-target pass. On a CPU driver every store to a buffer is a scalar loop over the lanes:
+// the state took four words per pixel, read back by write target, which stored one more.
+layout(constant_id = RASTER_WRITES_TARGET_CONSTANT_ID) const bool WRITES_TARGET = false;
+
 #define ROUND_FIRST 1u
 // The dispatch walks a list of tiles (tile_lists.comp), workgroup x taking tiles.v[x], rather
 // than the grid of tiles.
@@ -754,6 +761,18 @@ void main() {
     }
 #endif
 
+    if (WRITES_TARGET) {
+        U32s target = U32s(uint64_t(pc.state));
+        vec4 background = vec4(f.background.rgb, 1.0);   // as write target's
+        [[unroll]] for (uint i = 0u; i < NPX; ++i) {
+            uvec2 pixel = first_pixel + uvec2(i / P, i % P);
+            if (pixel.x < f.size.x && pixel.y < f.size.y) {
+                target.v[pixel.y * f.size.x + pixel.x] =
+                    pack_rgba8_nearest(state_over(vec4(px_color[i], px_T[i]), background));
+            }
+        }
+        return;
+    }
     [[unroll]] for (uint i = 0u; i < NPX; ++i) {
         uvec2 pixel = first_pixel + uvec2(i / P, i % P);
         if (pixel.x >= f.size.x || pixel.y >= f.size.y) {

@@ -60,9 +60,7 @@ vec4 load_target(uvec2 p, uint index) {
 }
 
 void store_target(uvec2 p, uint index, vec4 c) {
-    // Round to nearest, as the CPU reference does (SPEC section 4).
-    uvec4 b = uvec4(floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5));
-    pc.buffer_target.v[index] = b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
+    pc.buffer_target.v[index] = pack_rgba8_nearest(c);
 }
 #elif TARGET_BUFFER_FORMAT == BUFFER_RGBA16F
 vec4 load_target(uvec2 p, uint index) {
@@ -100,7 +98,6 @@ void main() {
 #else
     vec4 s = load_vec4_item(pc.state, index);
 #endif
-    float T = abs(s.a);
     vec4 under = COMPOSITE_OVER ? load_target(p, index) : pc.background;
-    store_target(p, index, vec4(s.rgb + T * under.rgb, (1.0 - T) + T * under.a));
+    store_target(p, index, state_over(s, under));
 }

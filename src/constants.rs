@@ -190,6 +190,11 @@ pub const FLAT_SPLATS_CONSTANT_ID: u32 = 0;
 /// Specialization constant id of `COMPOSITE_OVER` (`glsl/write_target_body.glsl`): the
 /// write-target kernels for [`crate::target::Composite::Background`] are built with it false.
 pub const TARGET_OVER_CONSTANT_ID: u32 = 1;
+/// Specialization constant id of `WRITES_TARGET` (`glsl/rasterize_body.glsl`): the strips
+/// kernels built with it true write the caller's RGBA8 buffer target themselves, over the
+/// background, in place of the per-pixel state (frames of one round, no depth; see
+/// `Renderer::record`).
+pub const RASTER_WRITES_TARGET_CONSTANT_ID: u32 = 2;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -307,6 +312,10 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("MAX_CLIP_PLANES", MAX_CLIP_PLANES),
     ("FLAT_SPLATS_CONSTANT_ID", FLAT_SPLATS_CONSTANT_ID),
     ("TARGET_OVER_CONSTANT_ID", TARGET_OVER_CONSTANT_ID),
+    (
+        "RASTER_WRITES_TARGET_CONSTANT_ID",
+        RASTER_WRITES_TARGET_CONSTANT_ID,
+    ),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),
     ("CLIP_MODE_RARA", CLIP_MODE_RARA),

@@ -500,7 +500,10 @@ impl Renderer {
     /// - **First access to the target**: the write-target pass, stage
     ///   `VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT`, access `VK_ACCESS_SHADER_WRITE_BIT`, plus
     ///   `VK_ACCESS_SHADER_READ_BIT` with [`Composite::Over`]. **Last access**: the same pass
-    ///   and accesses. The target is not touched before that pass.
+    ///   and accesses. The target is not touched before that pass. (On CPU drivers, a frame
+    ///   drawn over the background into a [`TargetFormat::Rgba8Unorm`] buffer, without depth,
+    ///   in one rasterizer round, has no write-target pass: the rasterize pass writes the
+    ///   target, with the same stage and access.)
     /// - **Image layout**: an image target must be in `VK_IMAGE_LAYOUT_GENERAL` when the
     ///   commands execute, and is left in it.
     /// - **Depth test** ([`RenderOptions::depth_test`]): the engine's depth image or buffer is
@@ -647,6 +650,24 @@ impl Renderer {
                     tile_count: gx * gy,
                 },
             ));
+        // A frame of one round without depth drawn over the background into an RGBA8 buffer:
+        // the strips rasterizer (CPU drivers) writes the target itself, and the frame has no
+        // write-target pass (stages::rasterize, `WRITES_TARGET`). A CPU driver stores to a
+        // buffer one lane at a time: the per-pixel state was four words a pixel, which write
+        // target read back to store the fifth.
+        let rasterizer_writes_target = (self.rasterize.writes_targets()
+            && rounds == 1
+            && depth.is_none()
+            && !(rara && object_clips.is_some())
+            && matches!(options.composite, Composite::Background)
+            && matches!(
+                target,
+                Target::Buffer {
+                    format: TargetFormat::Rgba8Unorm,
+                    ..
+                }
+            ))
+        .then_some(buffer_target);
         // The kernels this frame runs, each built when a frame first needs it.
         self.project.prepare(scene)?;
         if !(rara && object_clips.is_some()) {
@@ -655,6 +676,7 @@ impl Renderer {
                 depth.is_some(),
                 tile_lists.is_some(),
                 scene.may_be_flat,
+                rasterizer_writes_target.is_some(),
             )?;
         }
         let ctx = &self.ctx;
@@ -764,13 +786,16 @@ impl Renderer {
             object_clips
                 .filter(|_| rara)
                 .map(|o| o.project.cutoff_regions),
+            rasterizer_writes_target,
         );
-        self.write_target.record(
-            &mut rec,
-            (target.format(), image_set, buffer_target),
-            options.background,
-            options.composite,
-        )?;
+        if rasterizer_writes_target.is_none() {
+            self.write_target.record(
+                &mut rec,
+                (target.format(), image_set, buffer_target),
+                options.background,
+                options.composite,
+            )?;
+        }
         if let (Some(d), Some((sums, _)), Some(output)) =
             (&depth, depth_buffers, &options.depth_output)
         {

@@ -622,12 +622,20 @@ fn bench_writes_table_json_and_trace() {
         let m = &report["modes"][mode];
         assert!(m["median_ms"].as_f64().unwrap() > 0.0, "{mode}: {m}");
         assert!(m["wall_median_ms"].as_f64().unwrap() >= m["median_ms"].as_f64().unwrap() * 0.5);
-        for pass in ["project", "emit", "rasterize", "write target"] {
+        for pass in ["project", "emit", "rasterize"] {
             assert!(
                 m["passes"][pass].as_f64().unwrap() >= 0.0,
                 "{mode} lacks {pass}: {m}"
             );
         }
+        // bench draws into an RGBA8 buffer over the background: on a CPU driver the strips
+        // rasterizer writes it itself, and the frames have no write-target pass.
+        let cpu_driver = report["device"].as_str().unwrap().contains("llvmpipe");
+        assert_eq!(
+            m["passes"].get("write target").is_some(),
+            !cpu_driver,
+            "{mode}: {m}"
+        );
         assert_eq!(m["cutoff_per_frame"].as_array().unwrap().len(), frames);
         let frame_ms = m["frame_ms"].as_array().unwrap();
         assert_eq!(frame_ms.len(), frames);

@@ -12,7 +12,9 @@ use super::sort::SortBuffers;
 use super::tile_lists::TileListsLayout;
 use super::FrameRecording;
 use crate::clip::ClipWeight;
-use crate::constants::{FLAT_SPLATS_CONSTANT_ID, MAX_INTERSECTIONS};
+use crate::constants::{
+    FLAT_SPLATS_CONSTANT_ID, MAX_INTERSECTIONS, RASTER_WRITES_TARGET_CONSTANT_ID,
+};
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::shaders;
@@ -31,7 +33,8 @@ pub struct RasterizePush {
     /// Tile ranges.
     pub ranges: u64,
     /// Per-pixel state (premultiplied colour, transmittance): carried between rounds and
-    /// left for the write-target stage.
+    /// left for the write-target stage. The kernels that write the target themselves
+    /// (`WRITES_TARGET`) take the RGBA8 buffer target's address here instead.
     pub state: u64,
     /// Frame counters (longest tile list).
     pub counters: u64,
@@ -122,6 +125,10 @@ pub struct Rasterize {
     /// `glsl/clip.glsl`), which a CPU driver would otherwise run, masked, for every cutoff
     /// splat.
     volume: [[LazyPipeline; 2]; 2],
+    /// The strips layout's kernels without the depth test again, built with `WRITES_TARGET`
+    /// (`glsl/rasterize_body.glsl`) true, for frames that [`Rasterize::record`] with a target:
+    /// without rara clipping; mass and length; mass and length without flat Gaussians.
+    to_target: Option<[LazyPipeline; 5]>,
     /// The kernels for several objects each clipped by a region of its own (`OBJECT_CLIPS`):
     /// mass, length, and the two with the depth test. Built on first use
     /// ([`Rasterize::prepare_object_clips`]), as few frames need them.
@@ -228,18 +235,55 @@ impl Rasterize {
                 build(name, spirv).specialized(&[(FLAT_SPLATS_CONSTANT_ID, 0)])
             })
         });
+        let to_target = (layout == RasterLayout::Strips).then(|| {
+            let row = &table[0];
+            let writes = (RASTER_WRITES_TARGET_CONSTANT_ID, 1);
+            let volume = (FLAT_SPLATS_CONSTANT_ID, 0);
+            [
+                build(row[0].0, row[0].1).specialized(&[writes]),
+                build(row[1].0, row[1].1).specialized(&[writes]),
+                build(row[2].0, row[2].1).specialized(&[writes]),
+                build(row[1].0, row[1].1).specialized(&[volume, writes]),
+                build(row[2].0, row[2].1).specialized(&[volume, writes]),
+            ]
+        });
         Ok(Rasterize {
             kernels,
             volume,
+            to_target,
             object_clips: OnceLock::new(),
             texels,
             layout,
         })
     }
 
+    /// Whether the kernels can write an RGBA8 buffer target themselves ([`Rasterize::record`]
+    /// with a target): the strips layout's.
+    pub fn writes_targets(&self) -> bool {
+        self.to_target.is_some()
+    }
+
     /// The kernel without object clips for `weight` (`None`: no rara clipping), with or without
-    /// the depth test; `flat`: for a frame that may hold flat Gaussians.
-    fn lazy_kernel(&self, weight: Option<ClipWeight>, depth: bool, flat: bool) -> &LazyPipeline {
+    /// the depth test; `flat`: for a frame that may hold flat Gaussians; `to_target`: one that
+    /// writes the target itself (no depth test; [`Rasterize::writes_targets`]).
+    fn lazy_kernel(
+        &self,
+        weight: Option<ClipWeight>,
+        depth: bool,
+        flat: bool,
+        to_target: bool,
+    ) -> &LazyPipeline {
+        if to_target {
+            let kernels = self
+                .to_target
+                .as_ref()
+                .expect("a layout whose kernels write targets");
+            debug_assert!(!depth);
+            return match weight {
+                None => &kernels[0],
+                Some(w) => &kernels[(w == ClipWeight::Length) as usize + if flat { 1 } else { 3 }],
+            };
+        }
         let depth = depth as usize;
         match weight {
             None => &self.kernels[depth][0],
@@ -255,18 +299,20 @@ impl Rasterize {
     }
 
     /// Builds what a frame of `weight` (with or without `depth`; `flat`: with flat Gaussians
-    /// in the frame) records, if it was not built yet: its kernel, and with `plain_too` (tile
-    /// lists) the plain one beside it. Call it before [`Rasterize::record`].
+    /// in the frame; `to_target`: the kernels that write the target) records, if it was not
+    /// built yet: its kernel, and with `plain_too` (tile lists) the plain one beside it. Call it
+    /// before [`Rasterize::record`].
     pub fn prepare(
         &self,
         weight: Option<ClipWeight>,
         depth: bool,
         plain_too: bool,
         flat: bool,
+        to_target: bool,
     ) -> Result<()> {
-        self.lazy_kernel(weight, depth, flat).get()?;
+        self.lazy_kernel(weight, depth, flat, to_target).get()?;
         if plain_too {
-            self.lazy_kernel(None, depth, flat).get()?;
+            self.lazy_kernel(None, depth, flat, to_target).get()?;
         }
         Ok(())
     }
@@ -350,7 +396,10 @@ impl Rasterize {
     /// 0 without a depth test) the depth kernels run (SPEC section 9). With `object_clips` (the
     /// address of each cutoff record's region; the frame's clip address is then the array of
     /// the objects' regions; no `lists`) the object-clip kernels run, which
-    /// [`Rasterize::prepare_object_clips`] must have built.
+    /// [`Rasterize::prepare_object_clips`] must have built. With `target` (the address of an
+    /// RGBA8 buffer target; one round, no `depth`, no `object_clips`, the strips layout) the
+    /// kernels write the frame over the background into it instead of the per-pixel state,
+    /// and the frame needs no write-target pass.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -361,13 +410,18 @@ impl Rasterize {
         lists: Option<(&Buffer, TileListsLayout)>,
         depth: Option<(u64, u64)>,
         object_clips: Option<u64>,
+        target: Option<u64>,
     ) {
+        debug_assert!(
+            target.is_none() || (rounds == 1 && depth.is_none() && object_clips.is_none())
+        );
+        let to_target = target.is_some();
         let push = RasterizePush {
             frame: f.at.params,
             splats: f.at.splats,
             values: sort.values[sorted].address,
             ranges: f.at.ranges,
-            state: f.at.state,
+            state: target.unwrap_or(f.at.state),
             counters: f.at.counters,
             clip: f.at.clip,
             cutoffs: f.at.cutoffs,
@@ -387,12 +441,16 @@ impl Rasterize {
         let kernel = |weight: Option<ClipWeight>| -> &ComputePipeline {
             let with_depth = depth.is_some() as usize;
             match (weight, object_clips) {
-                (None, _) => self.lazy_kernel(None, depth.is_some(), flat).built(),
+                (None, _) => self
+                    .lazy_kernel(None, depth.is_some(), flat, to_target)
+                    .built(),
                 (Some(w), Some(_)) => {
                     let k = (w == ClipWeight::Length) as usize;
                     &object_kernels()[2 * with_depth + k]
                 }
-                (Some(w), None) => self.lazy_kernel(Some(w), depth.is_some(), flat).built(),
+                (Some(w), None) => self
+                    .lazy_kernel(Some(w), depth.is_some(), flat, to_target)
+                    .built(),
             }
         };
         let pipeline = kernel(cutoff_weight);
