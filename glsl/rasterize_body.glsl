@@ -678,7 +678,10 @@ void main() {
         bool inside = pixel.x < f.size.x && pixel.y < f.size.y;
         px_color[i] = vec3(0.0);
         px_T[i] = inside ? 1.0 : -1.0;
-        if ((pc.flags & ROUND_FIRST) == 0u && inside) {
+        // A kernel that writes the target runs in frames of one round: never a state to load.
+        // (A CPU driver runs this load, two scalar loops over the lanes, under a mask even in a
+        // first round: the specialization constant takes it out of those kernels.)
+        if (!WRITES_TARGET && (pc.flags & ROUND_FIRST) == 0u && inside) {
             vec4 s = load_vec4_item(pc.state, pixel.y * f.size.x + pixel.x);
             px_color[i] = s.rgb;
             px_T[i] = s.a;
