@@ -424,4 +424,15 @@ uint pack_rgba8_nearest(vec4 c) {
     return b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
 }
 
+// Item `i` of [0, n) in the order that spreads consecutive items over the whole range:
+// i * stride mod n, a permutation when stride and n are coprime (the host's
+// `stages::spread_stride`). llvmpipe hands each of its threads one contiguous share of a
+// dispatch's workgroups (lp_cs_tpool: num_iters / num_threads each, no stealing), so a
+// dispatch whose costly items gather in one part of the range (the tiles of an object in the
+// lower half of the image) keeps one thread busy while the others wait. stride 1: the items in
+// order (GPUs, which schedule workgroups as they free up).
+uint spread_item(uint i, uint n, uint stride) {
+    return uint((uint64_t(i) * uint64_t(stride)) % uint64_t(max(n, 1u)));
+}
+
 #endif

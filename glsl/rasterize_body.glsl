@@ -113,6 +113,8 @@ layout(push_constant) uniform Push {
     U32s cutoff_regions;  // with OBJECT_CLIPS: per cutoff record, its region in `clip`
     uint round_index;
     uint flags;
+    uint row_stride;    // without ROUND_TILE_LIST: the grid's rows of tiles in spread_item order
+    uint pad;
 } pc;
 
 // A splat as the compositing loop takes it: conic and opacity, centre, colour and, with rara
@@ -651,11 +653,15 @@ void composite_entries(uint base, uint count) {
 void main() {
     FrameParams f = load_frame_params(pc.frame);
     uint lid = gl_LocalInvocationIndex;
-    uvec2 tile = gl_WorkGroupID.xy;
+    // Rows of tiles in spread order keep each CPU-driver thread's share of the grid spread
+    // over the image (a whole row at a time, for the splats that neighbouring tiles share in
+    // the cache; single tiles spread made playbot's rasterize slower than rows).
+    uint id = spread_item(gl_WorkGroupID.y, f.size.w, pc.row_stride) * f.size.z
+            + gl_WorkGroupID.x;
     if ((pc.flags & ROUND_TILE_LIST) != 0u) {
-        uint id = pc.tiles.v[gl_WorkGroupID.x];
-        tile = uvec2(id % f.size.z, id / f.size.z);
+        id = pc.tiles.v[gl_WorkGroupID.x];  // tile_lists.comp wrote them in a spread order
     }
+    uvec2 tile = uvec2(id % f.size.z, id / f.size.z);
 #ifdef TILE_BLOCKS
     uint block = gl_LocalInvocationID.y;
     block_bit = 1u << (PAIR_BLOCKS_SHIFT + block);

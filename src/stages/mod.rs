@@ -122,6 +122,28 @@ pub fn tile_rect_rounds(tiles: u32) -> u32 {
 
 /// Workgroup counts of a linear kernel over `items` (GLSL `linear_grid` in `common.glsl`): rows
 /// of at most [`LINEAR_GRID_X`] workgroups, as only 65,535 per dimension are guaranteed.
+/// The stride of `spread_item` (`glsl/common.glsl`) for `n` items: the integer nearest
+/// `n (sqrt(5) - 1) / 2` that is coprime with `n` (so that `i stride mod n` visits every item
+/// once), which spreads any run of consecutive items over the whole range. CPU drivers hand
+/// each thread a contiguous share of a dispatch (llvmpipe's `lp_cs_tpool`); kernels that take
+/// their items in this order keep the threads evenly loaded when the costly items cluster.
+pub fn spread_stride(n: u32) -> u32 {
+    if n <= 2 {
+        return 1;
+    }
+    fn gcd(mut a: u32, mut b: u32) -> u32 {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    }
+    let mut s = ((n as f64 * 0.618_033_988_749_895).round() as u32).max(1);
+    while gcd(s, n) != 1 {
+        s += 1;
+    }
+    s
+}
+
 pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
     let groups = items.div_ceil(LINEAR_WORKGROUP);
     [groups.min(LINEAR_GRID_X), groups.div_ceil(LINEAR_GRID_X), 1]
@@ -192,5 +214,31 @@ impl Drop for FrameTexelsLayout {
                 .device()
                 .destroy_descriptor_set_layout(self.raw, None)
         };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spread_stride;
+
+    #[test]
+    fn spread_stride_permutes_and_spreads() {
+        for n in [1u32, 2, 3, 4, 5, 12, 300, 1200, 4800, 8160, 65536] {
+            let s = spread_stride(n) as u64;
+            let order: Vec<u64> = (0..n as u64).map(|i| i * s % n as u64).collect();
+            let mut seen = vec![false; n as usize];
+            for &t in &order {
+                assert!(!seen[t as usize], "n = {n}: {t} twice");
+                seen[t as usize] = true;
+            }
+            // Either half of the order (each of two threads' share) takes close to half of
+            // the items from each half of the range.
+            if n >= 300 {
+                let first = &order[..n as usize / 2];
+                let low = first.iter().filter(|&&t| t < n as u64 / 2).count() as f64;
+                let share = low / first.len() as f64;
+                assert!((share - 0.5).abs() < 0.05, "n = {n}: {share}");
+            }
+        }
     }
 }

@@ -55,6 +55,23 @@ pub struct RasterizePush {
     pub round_index: u32,
     /// ROUND_FIRST on the first round.
     pub flags: u32,
+    /// Over the grid (no tile list): the rows of tiles in `spread_item` order with this stride
+    /// ([`super::spread_stride`] on CPU drivers, 1 on GPUs).
+    pub row_stride: u32,
+    /// Padding to 8 bytes.
+    pub pad: u32,
+}
+
+/// Device addresses of the kernel that fills the tiles without pairs (`glsl/fill_tiles.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FillTilesPush {
+    /// `FrameParams`.
+    frame: u64,
+    /// The RGBA8 buffer target.
+    target: u64,
+    /// The ids of the tiles to fill.
+    tiles: u64,
 }
 
 const ROUND_FIRST: u32 = 1;
@@ -129,6 +146,9 @@ pub struct Rasterize {
     /// (`glsl/rasterize_body.glsl`) true, for frames that [`Rasterize::record`] with a target:
     /// without rara clipping; mass and length; mass and length without flat Gaussians.
     to_target: Option<[LazyPipeline; 5]>,
+    /// The kernel that writes the background into the tiles without pairs of such frames
+    /// (`glsl/fill_tiles.comp`; [`super::tile_lists`] lists them).
+    fill_tiles: LazyPipeline,
     /// The kernels for several objects each clipped by a region of its own (`OBJECT_CLIPS`):
     /// mass, length, and the two with the depth test. Built on first use
     /// ([`Rasterize::prepare_object_clips`]), as few frames need them.
@@ -251,6 +271,12 @@ impl Rasterize {
             kernels,
             volume,
             to_target,
+            fill_tiles: LazyPipeline::new::<FillTilesPush>(
+                ctx,
+                c"fill_tiles",
+                shaders::FILL_TILES,
+                None,
+            ),
             object_clips: OnceLock::new(),
             texels,
             layout,
@@ -313,6 +339,9 @@ impl Rasterize {
         self.lazy_kernel(weight, depth, flat, to_target).get()?;
         if plain_too {
             self.lazy_kernel(None, depth, flat, to_target).get()?;
+        }
+        if plain_too && to_target {
+            self.fill_tiles.get()?;
         }
         Ok(())
     }
@@ -431,6 +460,11 @@ impl Rasterize {
             cutoff_regions: object_clips.unwrap_or(0),
             round_index: 0,
             flags: 0,
+            row_stride: match self.layout {
+                RasterLayout::Strips => super::spread_stride(f.grid.1),
+                RasterLayout::PixelPerInvocation => 1,
+            },
+            pad: 0,
         };
         let object_kernels = || {
             self.object_clips
@@ -454,8 +488,14 @@ impl Rasterize {
             }
         };
         let pipeline = kernel(cutoff_weight);
-        debug_assert!(lists.is_none() || cutoff_weight == Some(ClipWeight::Mass));
+        // Tile lists come with the mass weight's classes, or with a target: then every tile
+        // with pairs is in the list of the frame's kernel (the weighted one for a rara frame
+        // without classes, as TileLists::record_reset was told).
+        debug_assert!(
+            lists.is_none() || target.is_some() || cutoff_weight == Some(ClipWeight::Mass)
+        );
         debug_assert!(lists.is_none() || object_clips.is_none());
+        let fill_tiles = (lists.is_some() && target.is_some()).then(|| self.fill_tiles.built());
         let (gx, gy) = f.grid;
         f.pass(c"rasterize", |f| {
             for round in 0..rounds {
@@ -465,14 +505,27 @@ impl Rasterize {
                 match lists {
                     Some((buffer, layout)) => {
                         p.flags |= ROUND_TILE_LIST;
-                        // The two lists hold disjoint tiles: no barrier between them. (Tile lists
-                        // come with the mass weight: `pipeline` is its kernel.)
+                        // The lists hold disjoint tiles: no barrier between them. (`pipeline` is
+                        // the frame's kernel, weighted for a rara frame.)
                         for (kernel, list, args) in [
                             (kernel(None), layout.plain(), TileListsLayout::PLAIN_ARGS),
                             (pipeline, layout.weighted(), TileListsLayout::WEIGHTED_ARGS),
                         ] {
                             p.tiles = buffer.address + list;
                             kernel.dispatch_indirect_in(f.cmd, &p, f.texels, buffer.raw, args);
+                        }
+                        if let Some(fill) = fill_tiles {
+                            let fp = FillTilesPush {
+                                frame: p.frame,
+                                target: p.state,
+                                tiles: buffer.address + layout.empty(),
+                            };
+                            fill.dispatch_indirect(
+                                f.cmd,
+                                &fp,
+                                buffer.raw,
+                                TileListsLayout::EMPTY_ARGS,
+                            );
                         }
                     }
                     None => pipeline.dispatch_in(f.cmd, &p, f.texels, [gx, gy, 1]),
