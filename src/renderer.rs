@@ -796,12 +796,7 @@ impl Renderer {
             rasterizer_writes_target,
         );
         if rasterizer_writes_target.is_none() {
-            self.write_target.record(
-                &mut rec,
-                (target.format(), image_set, buffer_target),
-                options.background,
-                options.composite,
-            )?;
+            self.record_write_target(&mut rec, options, (target, image_set, buffer_target))?;
         }
         if let (Some(d), Some((sums, _)), Some(output)) =
             (&depth, depth_buffers, &options.depth_output)
@@ -1287,13 +1282,24 @@ impl Renderer {
             size: (w, h),
             grid: tile_grid(w, h),
         };
+        self.record_write_target(&mut rec, options, (target, image_set, buffer_target))
+    }
+
+    /// Records the pass that writes the frame's per-pixel state into `target` (its image
+    /// target's descriptor set, or its buffer target's address) over the background or the
+    /// target, as `options` says.
+    fn record_write_target(
+        &self,
+        rec: &mut FrameRecording,
+        options: &RenderOptions,
+        (target, image_set, buffer_target): (&Target, Option<vk::DescriptorSet>, u64),
+    ) -> Result<()> {
         self.write_target.record(
-            &mut rec,
+            rec,
             (target.format(), image_set, buffer_target),
             options.background,
             options.composite,
-        )?;
-        Ok(())
+        )
     }
 }
 

@@ -673,21 +673,7 @@ fn bench_writes_table_json_and_trace() {
     }
     assert_eq!(weighted_tiles("hard") + weighted_tiles("original"), 0);
     assert!(report["rara_over_hard_per_frame_median"].as_f64().unwrap() > 0.0);
-    let pairs = |mode: &str| -> f64 {
-        report["modes"][mode]["intersections_per_frame"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|n| n.as_f64().unwrap())
-            .sum()
-    };
-    let pair_ratio = report["rara_over_hard_pairs"].as_f64().unwrap();
-    assert!(
-        (pair_ratio - pairs("rara") / pairs("hard")).abs() < 1e-9,
-        "{pair_ratio}"
-    );
-    // The time per pair frame by frame: the median of each frame's time ratio over its pair
-    // ratio, worked out again from the per-frame arrays.
+    // A per-frame array of the report, as floats.
     let per_frame = |mode: &str, key: &str| -> Vec<f64> {
         report["modes"][mode][key]
             .as_array()
@@ -696,6 +682,14 @@ fn bench_writes_table_json_and_trace() {
             .map(|n| n.as_f64().unwrap())
             .collect()
     };
+    let pairs = |mode: &str| -> f64 { per_frame(mode, "intersections_per_frame").iter().sum() };
+    let pair_ratio = report["rara_over_hard_pairs"].as_f64().unwrap();
+    assert!(
+        (pair_ratio - pairs("rara") / pairs("hard")).abs() < 1e-9,
+        "{pair_ratio}"
+    );
+    // The time per pair frame by frame: the median of each frame's time ratio over its pair
+    // ratio, worked out again from the per-frame arrays.
     let (rara_ms, hard_ms) = (per_frame("rara", "frame_ms"), per_frame("hard", "frame_ms"));
     let (rara_pairs, hard_pairs) = (
         per_frame("rara", "intersections_per_frame"),

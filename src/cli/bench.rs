@@ -636,9 +636,13 @@ fn pair_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Option<
     (d > 0.0).then(|| n / d)
 }
 
-/// Median over the frames of `num`'s GPU time over `den`'s at the same plane position: less
-/// sensitive than a ratio of medians to noise that comes and goes during a run.
-fn paired_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Option<f64> {
+/// Median over the frames of `ratio` of `num`'s frame and `den`'s at the same plane position
+/// (frames where it is `None` left out).
+fn paired_median(
+    results: &[ModeResult],
+    (num, den): (BenchMode, BenchMode),
+    ratio: impl Fn(&FrameStats, &FrameStats) -> Option<f64>,
+) -> Option<f64> {
     let find = |mode| {
         results
             .iter()
@@ -649,28 +653,24 @@ fn paired_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Optio
         .frames
         .iter()
         .zip(&d.frames)
-        .map(|(a, b)| a.gpu_ms / b.gpu_ms)
+        .filter_map(|(a, b)| ratio(a, b))
         .collect();
     (!ratios.is_empty()).then(|| median(&mut ratios))
+}
+
+/// Median over the frames of `num`'s GPU time over `den`'s at the same plane position: less
+/// sensitive than a ratio of medians to noise that comes and goes during a run.
+fn paired_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Option<f64> {
+    paired_median(results, (num, den), |a, b| Some(a.gpu_ms / b.gpu_ms))
 }
 
 /// Median over the frames of `num`'s GPU time per tile pair over `den`'s at the same plane
 /// position (frames where either mode drew no pair left out).
 fn paired_per_pair_ratio(results: &[ModeResult], num: BenchMode, den: BenchMode) -> Option<f64> {
-    let find = |mode| {
-        results
-            .iter()
-            .find(|r| r.mode == mode && r.tracer == rara::Tracer::Raster)
-    };
-    let (n, d) = (find(num)?, find(den)?);
-    let mut ratios: Vec<f64> = n
-        .frames
-        .iter()
-        .zip(&d.frames)
-        .filter(|(a, b)| a.intersections > 0 && b.intersections > 0)
-        .map(|(a, b)| (a.gpu_ms / b.gpu_ms) / (a.intersections as f64 / b.intersections as f64))
-        .collect();
-    (!ratios.is_empty()).then(|| median(&mut ratios))
+    paired_median(results, (num, den), |a, b| {
+        (a.intersections > 0 && b.intersections > 0)
+            .then(|| (a.gpu_ms / b.gpu_ms) / (a.intersections as f64 / b.intersections as f64))
+    })
 }
 
 fn json_report(
