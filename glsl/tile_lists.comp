@@ -1,46 +1,36 @@
-// Stage 6b, tile lists (CPU drivers): one invocation per tile puts the tile's id in one of
-// three lists, the tiles that hold a weighted pair (cutoff_tiles flagged them), the tiles whose
-// list is empty (with EMPTY_SPLIT in flags) and the rest, and counts it into that list's
-// indirect dispatch. The rasterizer then runs its weighted kernel over the first list, its
-// plain kernel over the third, and writes the background into the empty tiles (fill_tiles).
+// Stage 4c, tile lists (CPU drivers, rara clipping by planes with the mass weight): one
+// invocation per tile puts the tile's id in one of two lists, the tiles that hold a weighted
+// pair (cutoff_tiles flagged them) and the rest, and counts it into that list's indirect
+// dispatch. The rasterizer then runs its weighted kernel over the first list and its plain
+// kernel over the second.
 //
-// Why: a CPU driver runs every branch under a mask, and a loop's body at least once. So the
+// Why: a CPU driver runs every branch under a mask, and a loop's body at least once, so the
 // weighted kernel pays one weighted compositing body per tile list whether or not the tile has
 // a weighted pair (its loop over a run of weighted entries is entered once, under an empty
 // mask, after the last plain run). lavapipe, one thread, biker at 1280x960 with nothing cutoff
 // (a plane far away): rasterize 159-164 ms for the weighted kernel against 146-153 ms for the
-// plain one, the same image. And any rasterizer kernel pays a whole pass of its compositing
-// loop, two splats, on a tile with nothing to composite: most tiles of the real scenes at
-// 1280x960 (65-83 % of them show only the background).
+// plain one, the same image.
 //
 // cutoff_tiles sets flags[tile] for every tile where it leaves a pair weighted, and
-// flags[tile_count] when it left pairs unclassified (its loop budget ran out), or the host
-// sets it for a frame whose kernel weighs every tile: every non-empty tile then goes in the
-// weighted list. Runs after tile ranges, which says which tiles are empty. The lists come out in
-// an order spread over the image (spread_item), which balances the rasterizer's threads.
+// flags[tile_count] when it left pairs unclassified (its loop budget ran out): every tile then
+// goes in the weighted list. The lists come out in an order spread over the image
+// (spread_item), which balances the rasterizer's threads on a CPU driver.
 #version 460
 #include "common.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
 
-// With it in pc.mode, tiles without pairs go in the empty list, not the plain one.
-#define EMPTY_SPLIT 1u
-
 layout(push_constant) uniform Push {
     U32s flags;         // per tile, then one for the whole grid
     U32s weighted_args; // out: the weighted list's dispatch (x, y, z), x counted here
     U32s plain_args;    // out: the plain list's dispatch
-    U32s empty_args;    // out: the empty list's dispatch
     U32s weighted;      // out: ids of the tiles with a weighted pair, in no particular order
-    U32s plain;         // out: ids of the other tiles with pairs (and, without EMPTY_SPLIT,
-                        // of the tiles without)
-    U32s empty;         // out: ids of the tiles without pairs (with EMPTY_SPLIT)
+    U32s plain;         // out: ids of the other tiles
     U32s counters;      // out: COUNTER_WEIGHTED_TILES
-    UVec2s ranges;      // per tile, [start, end) of its pairs
     uint tile_count;
-    uint mode;
     uint row_stride;    // the rows of tiles taken in spread_item order
     uint columns;       // tiles per row
+    uint pad;
 } pc;
 
 void main() {
@@ -53,12 +43,8 @@ void main() {
     }
     uint rows = pc.tile_count / pc.columns;
     uint tile = spread_item(i / pc.columns, rows, pc.row_stride) * pc.columns + i % pc.columns;
-    uvec2 range = pc.ranges.v[tile];
-    bool empty = (pc.mode & EMPTY_SPLIT) != 0u && range.x == range.y;
     bool weighted = pc.flags.v[tile] != 0u || pc.flags.v[pc.tile_count] != 0u;
-    if (empty) {
-        pc.empty.v[atomicAdd(pc.empty_args.v[0], 1u)] = tile;
-    } else if (weighted) {
+    if (weighted) {
         pc.weighted.v[atomicAdd(pc.weighted_args.v[0], 1u)] = tile;
         atomicAdd(pc.counters.v[COUNTER_WEIGHTED_TILES], 1u);
     } else {

@@ -639,6 +639,17 @@ impl Renderer {
         } else {
             None
         };
+        // With the strips rasterizer, such frames run the weighted kernel only over the tiles
+        // that hold a weighted pair (stages::tile_lists).
+        let tile_lists = (cutoff_pairs.is_some()
+            && self.tile_lists_on
+            && self.rasterize.layout() == RasterLayout::Strips)
+            .then_some((
+                &f.tile_lists,
+                TileListsLayout {
+                    tile_count: gx * gy,
+                },
+            ));
         // A frame of one round without depth drawn over the background into an RGBA8 buffer:
         // the strips rasterizer (CPU drivers) writes the target itself, and the frame has no
         // write-target pass (stages::rasterize, `WRITES_TARGET`). A CPU driver stores to a
@@ -657,22 +668,6 @@ impl Renderer {
                 }
             ))
         .then_some(buffer_target);
-        // With the strips rasterizer, classified frames run the weighted kernel only over the
-        // tiles that hold a weighted pair, and frames whose rasterizer writes the target skip
-        // the tiles without pairs, whose pixels only get the background (stages::tile_lists).
-        let classified = cutoff_pairs.is_some();
-        let tile_lists = (self.tile_lists_on
-            && self.rasterize.layout() == RasterLayout::Strips
-            && (classified || rasterizer_writes_target.is_some()))
-        .then_some((
-            &f.tile_lists,
-            TileListsLayout {
-                tile_count: gx * gy,
-            },
-        ));
-        // A rara frame listed without the classes: every tile with pairs takes the weighted
-        // kernel.
-        let all_weighted = rara && !classified;
         // The kernels this frame runs, each built when a frame first needs it.
         self.project.prepare(scene)?;
         if !(rara && object_clips.is_some()) {
@@ -702,8 +697,7 @@ impl Renderer {
             device.cmd_fill_buffer(cmd, f.ranges.raw, 0, vk::WHOLE_SIZE, 0);
         }
         if let Some((buffer, layout)) = &tile_lists {
-            self.tile_lists
-                .record_reset(ctx, cmd, buffer, layout, all_weighted);
+            self.tile_lists.record_reset(ctx, cmd, buffer, layout);
         }
         compute_barrier(ctx, cmd);
 
@@ -755,6 +749,9 @@ impl Renderer {
             self.cutoff_tiles
                 .record(&mut rec, pairs, &f.sort, flags, scene.may_be_flat)?;
         }
+        if let Some((buffer, layout)) = &tile_lists {
+            self.tile_lists.record(&mut rec, buffer, layout)?;
+        }
         let sorted = self.sort.record(
             ctx,
             cmd,
@@ -766,10 +763,6 @@ impl Renderer {
         );
         debug_assert_eq!(sorted, sorted_index);
         self.tile_ranges.record(&mut rec, &f.sort, sorted);
-        if let Some((buffer, layout)) = &tile_lists {
-            self.tile_lists
-                .record(&mut rec, buffer, layout, rasterizer_writes_target.is_some())?;
-        }
         let depth_buffers = depth.as_ref().map(|_| {
             let (sums, limit) = f.depth.as_ref().expect("prepare_depth");
             (sums.address, limit.address)

@@ -62,18 +62,6 @@ pub struct RasterizePush {
     pub pad: u32,
 }
 
-/// Device addresses of the kernel that fills the tiles without pairs (`glsl/fill_tiles.comp`).
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct FillTilesPush {
-    /// `FrameParams`.
-    frame: u64,
-    /// The RGBA8 buffer target.
-    target: u64,
-    /// The ids of the tiles to fill.
-    tiles: u64,
-}
-
 const ROUND_FIRST: u32 = 1;
 const ROUND_TILE_LIST: u32 = 2;
 
@@ -146,9 +134,6 @@ pub struct Rasterize {
     /// (`glsl/rasterize_body.glsl`) true, for frames that [`Rasterize::record`] with a target:
     /// without rara clipping; mass and length; mass and length without flat Gaussians.
     to_target: Option<[LazyPipeline; 5]>,
-    /// The kernel that writes the background into the tiles without pairs of such frames
-    /// (`glsl/fill_tiles.comp`; [`super::tile_lists`] lists them).
-    fill_tiles: LazyPipeline,
     /// The kernels for several objects each clipped by a region of its own (`OBJECT_CLIPS`):
     /// mass, length, and the two with the depth test. Built on first use
     /// ([`Rasterize::prepare_object_clips`]), as few frames need them.
@@ -271,12 +256,7 @@ impl Rasterize {
             kernels,
             volume,
             to_target,
-            fill_tiles: LazyPipeline::new::<FillTilesPush>(
-                ctx,
-                c"fill_tiles",
-                shaders::FILL_TILES,
-                None,
-            ),
+
             object_clips: OnceLock::new(),
             texels,
             layout,
@@ -339,9 +319,6 @@ impl Rasterize {
         self.lazy_kernel(weight, depth, flat, to_target).get()?;
         if plain_too {
             self.lazy_kernel(None, depth, flat, to_target).get()?;
-        }
-        if plain_too && to_target {
-            self.fill_tiles.get()?;
         }
         Ok(())
     }
@@ -488,14 +465,8 @@ impl Rasterize {
             }
         };
         let pipeline = kernel(cutoff_weight);
-        // Tile lists come with the mass weight's classes, or with a target: then every tile
-        // with pairs is in the list of the frame's kernel (the weighted one for a rara frame
-        // without classes, as TileLists::record_reset was told).
-        debug_assert!(
-            lists.is_none() || target.is_some() || cutoff_weight == Some(ClipWeight::Mass)
-        );
+        debug_assert!(lists.is_none() || cutoff_weight == Some(ClipWeight::Mass));
         debug_assert!(lists.is_none() || object_clips.is_none());
-        let fill_tiles = (lists.is_some() && target.is_some()).then(|| self.fill_tiles.built());
         let (gx, gy) = f.grid;
         f.pass(c"rasterize", |f| {
             for round in 0..rounds {
@@ -505,27 +476,14 @@ impl Rasterize {
                 match lists {
                     Some((buffer, layout)) => {
                         p.flags |= ROUND_TILE_LIST;
-                        // The lists hold disjoint tiles: no barrier between them. (`pipeline` is
-                        // the frame's kernel, weighted for a rara frame.)
+                        // The two lists hold disjoint tiles: no barrier between them. (Tile lists
+                        // come with the mass weight: `pipeline` is its kernel.)
                         for (kernel, list, args) in [
                             (kernel(None), layout.plain(), TileListsLayout::PLAIN_ARGS),
                             (pipeline, layout.weighted(), TileListsLayout::WEIGHTED_ARGS),
                         ] {
                             p.tiles = buffer.address + list;
                             kernel.dispatch_indirect_in(f.cmd, &p, f.texels, buffer.raw, args);
-                        }
-                        if let Some(fill) = fill_tiles {
-                            let fp = FillTilesPush {
-                                frame: p.frame,
-                                target: p.state,
-                                tiles: buffer.address + layout.empty(),
-                            };
-                            fill.dispatch_indirect(
-                                f.cmd,
-                                &fp,
-                                buffer.raw,
-                                TileListsLayout::EMPTY_ARGS,
-                            );
                         }
                     }
                     None => pipeline.dispatch_in(f.cmd, &p, f.texels, [gx, gy, 1]),

@@ -1,15 +1,12 @@
-//! Stage 6b, CPU drivers, under rara clipping by planes with the mass weight and in frames whose
-//! rasterizer writes the target itself: splits the tiles into those whose list holds a
-//! weighted pair, those without any pair (when asked) and the rest (`glsl/tile_lists.comp`),
-//! so that the rasterizer runs its weighted kernel only over the first, its plain kernel over
-//! the last, and only writes the background into the empty ones. A CPU driver runs every
-//! branch, and every loop's body at least once, so the weighted kernel costs a weighted
-//! compositing body on every tile it walks, weighted pair or not, and any kernel a whole
-//! compositing pass on a tile with nothing to composite.
+//! Stage 4c, CPU drivers under rara clipping by planes with the mass weight: splits the tiles
+//! into those whose list holds a weighted pair and the rest (`glsl/tile_lists.comp`), so that
+//! the rasterizer runs its weighted kernel only over the first and its plain kernel over the
+//! second. A CPU driver runs every branch, and every loop's body at least once, so the weighted
+//! kernel costs a weighted compositing body on every tile it walks, weighted pair or not.
 //!
 //! The cutoff-tiles stage flags the tiles where it leaves a pair weighted (and every tile when
-//! its loop budget left pairs unclassified); this stage lists them, after tile ranges. GPUs
-//! branch for real and keep one dispatch over the grid.
+//! its loop budget left pairs unclassified); this stage lists them. GPUs branch for real and
+//! keep one dispatch over the grid.
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -20,8 +17,8 @@ use crate::shaders;
 use crate::vk::{Buffer, Context, LazyPipeline};
 
 /// Where the parts of a frame's tile-lists buffer lie, for a grid of `tile_count` tiles: the
-/// three indirect dispatches (weighted list, plain list, empty list; 16 bytes each), the flags
-/// (one word per tile and one for the whole grid), and the three lists of tile ids.
+/// two indirect dispatches (weighted list, then plain list; 16 bytes each), the flags (one
+/// word per tile and one for the whole grid), and the two lists of tile ids.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TileListsLayout {
     /// Tiles in the grid.
@@ -33,10 +30,8 @@ impl TileListsLayout {
     pub const WEIGHTED_ARGS: u64 = 0;
     /// Offset of the plain list's dispatch arguments.
     pub const PLAIN_ARGS: u64 = 16;
-    /// Offset of the empty list's dispatch arguments.
-    pub const EMPTY_ARGS: u64 = 32;
     /// Offset of the per-tile flags.
-    pub const FLAGS: u64 = 48;
+    pub const FLAGS: u64 = 32;
 
     /// Offset of the weighted list.
     pub fn weighted(&self) -> u64 {
@@ -48,14 +43,9 @@ impl TileListsLayout {
         self.weighted() + 4 * self.tile_count as u64
     }
 
-    /// Offset of the empty list.
-    pub fn empty(&self) -> u64 {
-        self.plain() + 4 * self.tile_count as u64
-    }
-
     /// Bytes of the whole buffer.
     pub fn size(&self) -> u64 {
-        self.empty() + 4 * self.tile_count as u64
+        self.plain() + 4 * self.tile_count as u64
     }
 }
 
@@ -69,31 +59,22 @@ pub struct TileListsPush {
     pub weighted_args: u64,
     /// Out: the plain list's dispatch arguments.
     pub plain_args: u64,
-    /// Out: the empty list's dispatch arguments.
-    pub empty_args: u64,
     /// Out: ids of the tiles with a weighted pair.
     pub weighted: u64,
-    /// Out: ids of the other tiles with pairs (and, without `EMPTY_SPLIT`, of those without).
+    /// Out: ids of the other tiles.
     pub plain: u64,
-    /// Out: ids of the tiles without pairs (with `EMPTY_SPLIT`).
-    pub empty: u64,
     /// Out: the frame's counters (`COUNTER_WEIGHTED_TILES`).
     pub counters: u64,
-    /// Per tile, the range of its pairs.
-    pub ranges: u64,
     /// Tiles in the grid.
     pub tile_count: u32,
-    /// `EMPTY_SPLIT` (1): tiles without pairs go in the empty list.
-    pub mode: u32,
     /// The rows of tiles are taken in `spread_item` order with this stride
     /// ([`super::spread_stride`]), so the lists come out spread over the image.
     pub row_stride: u32,
     /// Tiles per row.
     pub columns: u32,
+    /// Padding to 8 bytes.
+    pub pad: u32,
 }
-
-/// [`TileListsPush::mode`]: tiles without pairs go in the empty list.
-const EMPTY_SPLIT: u32 = 1;
 
 /// The tile-lists kernel.
 pub struct TileLists {
@@ -113,26 +94,19 @@ impl TileLists {
         })
     }
 
-    /// Records the reset of `buffer` (laid out as `layout`) for a new frame: the three
-    /// dispatches to (0, 1, 1), every tile's flag to 0 and the whole grid's to `all_weighted`
-    /// (for a rara frame whose tiles are not classified: its kernel weighs every tile). A
-    /// compute barrier must follow before the cutoff-tiles stage writes the flags.
+    /// Records the reset of `buffer` (laid out as `layout`) for a new frame: both dispatches
+    /// to (0, 1, 1) and every flag to 0. A compute barrier must follow before the cutoff-tiles
+    /// stage writes the flags.
     pub fn record_reset(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         buffer: &Buffer,
         layout: &TileListsLayout,
-        all_weighted: bool,
     ) {
         let empty_dispatch: [u32; 4] = [0, 1, 1, 0];
-        let grid_flag = all_weighted as u32;
         unsafe {
-            for offset in [
-                TileListsLayout::WEIGHTED_ARGS,
-                TileListsLayout::PLAIN_ARGS,
-                TileListsLayout::EMPTY_ARGS,
-            ] {
+            for offset in [TileListsLayout::WEIGHTED_ARGS, TileListsLayout::PLAIN_ARGS] {
                 ctx.device().cmd_update_buffer(
                     cmd,
                     buffer.raw,
@@ -144,43 +118,32 @@ impl TileLists {
                 cmd,
                 buffer.raw,
                 TileListsLayout::FLAGS,
-                4 * layout.tile_count as u64,
+                layout.weighted() - TileListsLayout::FLAGS,
                 0,
-            );
-            ctx.device().cmd_update_buffer(
-                cmd,
-                buffer.raw,
-                layout.weighted() - 4,
-                bytemuck::bytes_of(&grid_flag),
             );
         }
     }
 
     /// Records the pass "tile lists" over the grid's tiles into `buffer` (laid out as
-    /// `layout`), then a barrier; with `split_empty`, the tiles without pairs (the tile ranges
-    /// say) go in the empty list.
+    /// `layout`), then a barrier.
     pub fn record(
         &self,
         f: &mut FrameRecording,
         buffer: &Buffer,
         layout: &TileListsLayout,
-        split_empty: bool,
     ) -> Result<()> {
         let kernel = self.pipeline.get()?;
         let push = TileListsPush {
             flags: buffer.address + TileListsLayout::FLAGS,
             weighted_args: buffer.address + TileListsLayout::WEIGHTED_ARGS,
             plain_args: buffer.address + TileListsLayout::PLAIN_ARGS,
-            empty_args: buffer.address + TileListsLayout::EMPTY_ARGS,
             weighted: buffer.address + layout.weighted(),
             plain: buffer.address + layout.plain(),
-            empty: buffer.address + layout.empty(),
             counters: f.at.counters,
-            ranges: f.at.ranges,
             tile_count: layout.tile_count,
-            mode: if split_empty { EMPTY_SPLIT } else { 0 },
             row_stride: super::spread_stride(f.grid.1),
             columns: f.grid.0,
+            pad: 0,
         };
         f.pass(c"tile lists", |f| {
             kernel.dispatch(f.cmd, &push, linear_grid(push.tile_count));
@@ -197,9 +160,8 @@ mod tests {
     #[test]
     fn layout_parts_follow_each_other() {
         let l = TileListsLayout { tile_count: 4800 };
-        assert_eq!(l.weighted(), 48 + 4 * 4801);
+        assert_eq!(l.weighted(), 32 + 4 * 4801);
         assert_eq!(l.plain(), l.weighted() + 4 * 4800);
-        assert_eq!(l.empty(), l.plain() + 4 * 4800);
-        assert_eq!(l.size(), 48 + 4 * (4 * 4800 + 1));
+        assert_eq!(l.size(), 32 + 4 * (3 * 4800 + 1));
     }
 }
