@@ -256,7 +256,6 @@ impl Rasterize {
             kernels,
             volume,
             to_target,
-
             object_clips: OnceLock::new(),
             texels,
             layout,
