@@ -17,8 +17,9 @@
 #define FRAME_TEXELS_SET 0
 #endif
 
-// R32_UINT, per pair.
-layout(set = FRAME_TEXELS_SET, binding = 0) uniform utextureBuffer sorted_values;
+// RGBA32_UINT: the sorted pair values, four to a texel (entries 4 g to 4 g + 3 in texel g), so
+// that the strips rasterizer's walk over the entries that miss its block gets four in a fetch.
+layout(set = FRAME_TEXELS_SET, binding = 0) uniform utextureBuffer sorted_value_quads;
 // RGBA32_UINT, 3 per splat.
 layout(set = FRAME_TEXELS_SET, binding = 1) uniform utextureBuffer splat_texels;
 // RGBA32_UINT, 3 per record.
@@ -38,14 +39,11 @@ layout(set = FRAME_TEXELS_SET, binding = 7) uniform utextureBuffer emitted_keys;
 layout(set = FRAME_TEXELS_SET, binding = 8) uniform utextureBuffer state_texels;
 // RGBA32_UINT: the frame's ClipParams (clip.glsl), texel 3 + k holding plane k.
 layout(set = FRAME_TEXELS_SET, binding = 9) uniform utextureBuffer clip_texels;
-// RGBA32_UINT: the sorted pair values of binding 0, four to a texel (entries 4 g to 4 g + 3
-// in texel g), for the strips rasterizer's walk over the entries that miss its block.
-layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer sorted_value_quads;
 // RGBA32_UINT, 3 per Gaussian.
-layout(set = FRAME_TEXELS_SET, binding = 11) uniform utextureBuffer gaussian_texels;
+layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer gaussian_texels;
 // The scene's SH coefficients, four to a texel: RGBA32_UINT for floats, RG32_UINT for half
 // floats (sh.glsl).
-layout(set = FRAME_TEXELS_SET, binding = 12) uniform utextureBuffer sh_texels;
+layout(set = FRAME_TEXELS_SET, binding = 11) uniform utextureBuffer sh_texels;
 
 // Projected splat i (load_splat in common.glsl, from its three texels; a kernel that does not
 // use a texel's fields does not fetch it).

@@ -140,7 +140,7 @@ CutoffRecord fetch_cutoff_record(uint i) {
 // Entry k of the pairs from `base`, as a handle for the loops below: the pair's value (the
 // splat index, with PAIR_WEIGHTED when the pair takes the clip weight).
 uint entry_handle(uint base, uint k) {
-    return texelFetch(sorted_values, int(base + k)).x;
+    return texelFetch(sorted_value_quads, int((base + k) >> 2u))[(base + k) & 3u];
 }
 
 // Whether the entry takes the clip weight.

@@ -20,14 +20,14 @@
 // Included by trace_deg<D> (SH of degree D in 32-bit floats) and trace_deg<D>_sh16.
 // With SCENE_TEXELS (CPU drivers) the BVH, the Gaussians and their coefficients are read
 // through texel views (a gather, where a buffer load is a scalar loop over the SIMD lanes per
-// 64-bit word): the Gaussians and coefficients at bindings 11 and 12 of frame_texels.glsl, the
-// nodes at binding 13, two RGBA32_UINT texels each (RayTracer's set layout).
+// 64-bit word): the Gaussians and coefficients at bindings 10 and 11 of frame_texels.glsl, the
+// nodes at binding 12, two RGBA32_UINT texels each (RayTracer's set layout).
 #extension GL_KHR_shader_subgroup_vote : require
 #include "bvh_common.glsl"
 #include "sh.glsl"
 #include "clip.glsl"
 #ifdef SCENE_TEXELS
-layout(set = 0, binding = 13) uniform utextureBuffer bvh_texels;
+layout(set = 0, binding = 12) uniform utextureBuffer bvh_texels;
 #endif
 // With MIXED (mixed scenes, SPEC section 8): each pixel's ray of this generation comes from
 // the ray tree (mixed_spawn.comp) with its origin, direction, the t range of its Gaussians and

@@ -25,7 +25,7 @@ use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{Buffer, Context, MemoryLocation};
 
 /// The first binding of [`frame_texels_set_layout`] that views the scene's buffers.
-const FIRST_SCENE_BINDING: usize = 11;
+const FIRST_SCENE_BINDING: usize = 10;
 
 /// Smallest intersection capacity a slot starts with.
 const MIN_CAPACITY: u64 = 1 << 16;
@@ -183,7 +183,7 @@ struct FrameTexelsSet {
     set: vk::DescriptorSet,
     views: [vk::BufferView; FRAME_TEXEL_BINDINGS as usize],
     viewed: [vk::Buffer; FRAME_TEXEL_BINDINGS as usize],
-    /// The [`GpuScene`] the scene views (bindings 11 and 12) are of.
+    /// The [`GpuScene`] the scene views (bindings 10 and 11) are of.
     scene_id: u64,
 }
 
@@ -570,16 +570,15 @@ impl FrameSlot {
             Some(&f.sort.keys[0]),
             Some(&f.state),
             Some(&f.clip_params),
-            Some(&f.sort.values[sorted]),
             Some(gaussians),
             Some(sh),
         ];
         let (r32, rgba32) = (vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT);
         let (sh_format, sh_texel_bytes) = sh_texel(scene.sh_precision());
         let formats = [
-            r32, rgba32, rgba32, r32, r32, r32, r32, r32, rgba32, rgba32, rgba32, rgba32, sh_format,
+            rgba32, rgba32, rgba32, r32, r32, r32, r32, r32, rgba32, rgba32, rgba32, sh_format,
         ];
-        let texel_bytes = [4u64, 16, 16, 4, 4, 4, 4, 4, 16, 16, 16, 16, sh_texel_bytes];
+        let texel_bytes = [16u64, 16, 16, 4, 4, 4, 4, 4, 16, 16, 16, sh_texel_bytes];
         let max_texels = self.ctx.info().max_texel_buffer_elements as u64;
         let texels = self.frame_texels.as_mut().unwrap();
         if texels.scene_id != scene_id {

@@ -122,6 +122,11 @@ pub fn tile_rect_rounds(tiles: u32) -> u32 {
 
 /// Workgroup counts of a linear kernel over `items` (GLSL `linear_grid` in `common.glsl`): rows
 /// of at most [`LINEAR_GRID_X`] workgroups, as only 65,535 per dimension are guaranteed.
+pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
+    let groups = items.div_ceil(LINEAR_WORKGROUP);
+    [groups.min(LINEAR_GRID_X), groups.div_ceil(LINEAR_GRID_X), 1]
+}
+
 /// The stride of `spread_item` (`glsl/common.glsl`) for `n` items: the integer nearest
 /// `n (sqrt(5) - 1) / 2` that is coprime with `n` (so that `i stride mod n` visits every item
 /// once), which spreads any run of consecutive items over the whole range. CPU drivers hand
@@ -144,24 +149,18 @@ pub fn spread_stride(n: u32) -> u32 {
     s
 }
 
-pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
-    let groups = items.div_ceil(LINEAR_WORKGROUP);
-    [groups.min(LINEAR_GRID_X), groups.div_ceil(LINEAR_GRID_X), 1]
-}
-
 /// Creates the layout of the frame's texel views, descriptor set 0 of the kernels that read
 /// through texel buffers on CPU drivers (project, depth order, emit, cutoff tiles, tile ranges,
 /// the strips rasterizer, see `glsl/rasterize_body.glsl`, and write target, whose image kernels
-/// take it as set 1), all uniform texel buffers: 0 the sorted pair values (`R32_UINT`), 1 the
-/// projected splats (`R32G32B32A32_UINT`, 4 texels each), 2 the cutoff records
-/// (`R32G32B32A32_UINT`, 3 texels each), 3 the drawn Gaussians in depth order and 4 their first
+/// take it as set 1), all uniform texel buffers: 0 the sorted pair values (`R32G32B32A32_UINT`,
+/// four to a texel), 1 the projected splats (`R32G32B32A32_UINT`, 3 texels each), 2 the cutoff
+/// records (`R32G32B32A32_UINT`, 3 texels each), 3 the drawn Gaussians in depth order and 4 their first
 /// pairs, 5 the tiles touched per Gaussian, 6 the sorted tile keys, 7 the tile keys as emitted
 /// (all five `R32_UINT`), 8 the rasterizer's per-pixel state (`R32G32B32A32_UINT`, one texel
-/// per pixel), 9 the clip parameters (`R32G32B32A32_UINT`, planes from texel 3), 10 the sorted
-/// pair values again, four to a texel (`R32G32B32A32_UINT`), 11 the scene's Gaussians
-/// (`R32G32B32A32_UINT`, 3 texels each) and 12 its SH coefficients (4 to a texel:
+/// per pixel), 9 the clip parameters (`R32G32B32A32_UINT`, planes from texel 3), 10 the scene's
+/// Gaussians (`R32G32B32A32_UINT`, 3 texels each) and 11 its SH coefficients (4 to a texel:
 /// `R32G32B32A32_UINT` for floats, `R32G32_UINT` for half floats). The kernels declare all
-/// thirteen, with these numbers, in `glsl/frame_texels.glsl`.
+/// twelve, with these numbers, in `glsl/frame_texels.glsl`.
 pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
     let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..FRAME_TEXEL_BINDINGS)
         .map(|b| {
@@ -177,7 +176,7 @@ pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout>
         .vk("vkCreateDescriptorSetLayout")
 }
 
-/// Format and bytes of a texel of the SH view (binding 12 of [`frame_texels_set_layout`]): four
+/// Format and bytes of a texel of the SH view (binding 11 of [`frame_texels_set_layout`]): four
 /// coefficients at either precision.
 pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
     match precision {
@@ -187,7 +186,7 @@ pub(crate) fn sh_texel(precision: ShPrecision) -> (vk::Format, u64) {
 }
 
 /// Bindings of [`frame_texels_set_layout`].
-pub const FRAME_TEXEL_BINDINGS: u32 = 13;
+pub const FRAME_TEXEL_BINDINGS: u32 = 12;
 
 /// [`frame_texels_set_layout`] made once for the kernels of a renderer (the frame slots make
 /// their own, compatible one for their sets); destroyed on drop.

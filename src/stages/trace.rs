@@ -255,8 +255,8 @@ pub struct TraceBuffers {
     ctx: Context,
 }
 
-/// The descriptor set of the texel-view kernels (CPU drivers): binding 11 the Gaussians and
-/// 12 their SH coefficients (as `glsl/frame_texels.glsl` numbers them), 13 the BVH nodes.
+/// The descriptor set of the texel-view kernels (CPU drivers): binding 10 the Gaussians and
+/// 11 their SH coefficients (as `glsl/frame_texels.glsl` numbers them), 12 the BVH nodes.
 struct TraceTexels {
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
@@ -267,7 +267,7 @@ struct TraceTexels {
 }
 
 /// Bindings of the texel set ([`TraceTexels`]).
-const TEXEL_BINDINGS: [u32; 3] = [13, 11, 12];
+const TEXEL_BINDINGS: [u32; 3] = [12, 10, 11];
 
 impl Drop for TraceBuffers {
     fn drop(&mut self) {
