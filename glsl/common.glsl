@@ -234,21 +234,53 @@ float footprint_q_min_in_tile(vec2 uv, vec3 conic, uint tx, uint ty) {
                                   float(TILE_SIZE - 1u));
 }
 
-// Whether the ellipse q(p - uv) <= q_max reaches the pixel centres of tile (tx, ty).
+// The ellipse q(d) <= q_max (d = p - uv) within a band of pixel-centre rows, d.y in [lo_y, hi_y]:
+// (x_lo, x_hi) of the d.x its part in the band spans, widened against rounding; empty
+// (x_lo > x_hi) where the band misses the ellipse; unbounded (+-1e30) for a conic with
+// det < 1e-2 AC, whose det has lost its digits. A box of pixel centres that spans the band's
+// whole height meets the ellipse iff its x-range meets this one (both convex). With
+// Q = q_max and det = AC - B^2 the ellipse's edges are x(dy) = (-B dy +- sqrt(A Q - det dy^2))
+// / A, concave and convex in dy, so their extremes over the band lie at
+// dy = -+B sqrt(Q / (det C)) (where the whole ellipse has its rightmost and leftmost points)
+// clamped into it: two square roots per band, where the minimum of q over a box's edges
+// (footprint_q_min_in_box) takes four divisions per box. A block reached by mistake costs a
+// masked pass, not a pixel. Host twin: reference::project::footprint_x_range_in_band.
+vec2 footprint_x_range_in_band(vec3 conic, float q_max, float lo_y, float hi_y) {
+    float a = conic.x, b = conic.y, c = conic.z;
+    float det = a * c - b * b;
+    float q = max(q_max, 0.0);
+    float b_s = b * sqrt(q / (det * c));
+    float dy_extent = sqrt(q * a / det) * 1.001 + 1e-3;
+    float dy_right = clamp(-b_s, lo_y, hi_y);
+    float dy_left = clamp(b_s, lo_y, hi_y);
+    float x_hi = (sqrt(max(a * q - det * dy_right * dy_right, 0.0)) - b * dy_right) / a;
+    float x_lo = (-sqrt(max(a * q - det * dy_left * dy_left, 0.0)) - b * dy_left) / a;
+    float pad = 1e-3 * (1.0 + x_hi - x_lo);
+    bool in_band = lo_y <= dy_extent && hi_y >= -dy_extent;
+    vec2 range = in_band ? vec2(x_lo - pad, x_hi + pad) : vec2(1e30, -1e30);
+    return det >= 1e-2 * a * c ? range : vec2(-1e30, 1e30);   // NaN: unbounded too
+}
+
+// Whether the ellipse q(p - uv) <= q_max reaches the pixel centres of tile (tx, ty). (The band
+// test of footprint_blocks, one band per tile, was no faster here: docs/PERFORMANCE.md.)
 bool footprint_touches_tile(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
     return footprint_q_min_in_tile(uv, conic, tx, ty) <= q_max;
 }
 
 // The block bits of a pair in tile (tx, ty) (PAIR_BLOCKS_SHIFT): which of the tile's four
-// BLOCK_SIZE x BLOCK_SIZE blocks of pixel centres the ellipse q(p - uv) <= q_max reaches.
+// BLOCK_SIZE x BLOCK_SIZE blocks of pixel centres the ellipse q(p - uv) <= q_max reaches, a
+// row of blocks at a time (footprint_x_range_in_band).
 // Host twin: reference::project::footprint_blocks.
 uint footprint_blocks(vec2 uv, vec3 conic, float q_max, uint tx, uint ty) {
     uint bits = 0u;
-    for (uint b = 0u; b < 4u; ++b) {
-        vec2 corner = vec2(tx * TILE_SIZE + (b & 1u) * BLOCK_SIZE,
-                           ty * TILE_SIZE + (b >> 1u) * BLOCK_SIZE);
-        bool reached = footprint_q_min_in_box(uv, conic, corner, float(BLOCK_SIZE - 1u)) <= q_max;
-        bits |= reached ? 1u << (PAIR_BLOCKS_SHIFT + b) : 0u;
+    for (uint row = 0u; row < 2u; ++row) {
+        float lo_y = float(ty * TILE_SIZE + row * BLOCK_SIZE) - uv.y;
+        vec2 range = footprint_x_range_in_band(conic, q_max, lo_y, lo_y + float(BLOCK_SIZE - 1u));
+        for (uint column = 0u; column < 2u; ++column) {
+            float lo_x = float(tx * TILE_SIZE + column * BLOCK_SIZE) - uv.x;
+            bool reached = range.x <= lo_x + float(BLOCK_SIZE - 1u) && range.y >= lo_x;
+            bits |= reached ? 1u << (PAIR_BLOCKS_SHIFT + row * 2u + column) : 0u;
+        }
     }
     return bits;
 }
