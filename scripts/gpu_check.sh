@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# Issue 37's GPU check, on a machine the `device` tool lends (scripts/gpu_bundle.sh packed
+# .gpu/ first): `bench` on plant and playbot at 1920x1080 and 640x480, `bench --sort 2000000`
+# and a mixed scene's ray-traced `bench --scene`, then every test binary until
+# GPU_CHECK_DEADLINE seconds (480) have passed, on the machine's Vulkan device. Everything goes to $OUT/gpu_check.log (OUT: the device tool's folder, else
+# /tmp/gpu_check). GPU_CHECK_QUICK=1 runs one test binary and short benches, to try the
+# script itself (on lavapipe, say) without spending device time.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+out=${OUT:-/tmp/gpu_check}
+mkdir -p "$out"
+exec > >(tee "$out/gpu_check.log") 2>&1
+g=$PWD/.gpu
+quick=${GPU_CHECK_QUICK:-0}
+[ -f "$g/bin.tar.xz" ] || { echo "no .gpu/bin.tar.xz: run scripts/gpu_bundle.sh first"; exit 2; }
+echo "gpu_check: build $(cat "$g/commit"), $(date -u)"
+
+# A bare machine may have no Vulkan loader: unpack the carried one. NVIDIA's driver files
+# sit under /usr/local/nvidia on the lent machines.
+if ! ldconfig -p | grep -q libvulkan.so.1; then
+    for f in "$g"/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+fi
+icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then
+    export VK_DRIVER_FILES=$icd
+fi
+nvidia-smi -L 2>/dev/null || echo "(no nvidia-smi)"
+
+tar -xJf "$g/bin.tar.xz" -C "$g"
+# The test binaries find the crate, its fixtures and the CLI where they were built.
+built=$(cat "$g/built_in")
+if [ "$built" != "$PWD" ] && [ ! -e "$built" ]; then
+    mkdir -p "$(dirname "$built")"
+    ln -s "$PWD" "$built"
+fi
+mkdir -p "$built/target/release"
+[ -e "$built/target/release/rara" ] || cp "$g/bin/rara" "$built/target/release/rara"
+rara="$g/bin/rara"
+export RARA_REAL_DATA=$g/data
+real=$RARA_REAL_DATA
+
+frames=30
+sizes="1920x1080 640x480"
+[ "$quick" = 1 ] && { frames=2; sizes=640x480; }
+for size in $sizes; do
+    w=${size%x*}
+    h=${size#*x}
+    echo "=== bench plant $size"
+    "$rara" bench "$real/plant_capture_sh0.ply" --cameras "$real/plant_capture_sh0.orbit_cameras.json" \
+        --width "$w" --height "$h" --frames "$frames"
+    echo "=== bench playbot (SOG) $size"
+    "$rara" bench "$real/playbot_lod0_sog/meta.json" \
+        --cameras "$real/playbot_lod0_500k_sh2.orbit_cameras.json" \
+        --width "$w" --height "$h" --frames "$frames"
+done
+echo "=== bench --sort 2000000"
+"$rara" bench --sort 2000000
+echo "=== bench --scene mirror_plant (ray traced) 640x480"
+"$rara" bench --scene examples/scenes/mirror_plant.json \
+    --cameras "$real/plant_capture_sh0.orbit_cameras.json" --width 640 --frames 3 --warmup 1
+echo "=== tests"
+# Each binary's output stays on the machine (the tool brings back 8 files at most); the log
+# gets its counts, its failures and which real-scene cases ran.
+logs=$(mktemp -d)
+deadline=${GPU_CHECK_DEADLINE:-480}
+passed=0
+failed=0
+binaries=("$g"/bin/*)
+[ "$quick" = 1 ] && binaries=("$g/bin/sort")
+for t in "${binaries[@]}"; do
+    name=$(basename "$t")
+    [ "$name" = rara ] && continue
+    # The device tool's call ends at its timeout: leave the rest untested rather than lose the log.
+    if [ "$SECONDS" -gt "$deadline" ]; then
+        echo "$name: not run (past $deadline s)"
+        continue
+    fi
+    start=$(date +%s)
+    (cd "$built" && timeout $((deadline + 40 - SECONDS)) "$t" 2>&1) > "$logs/$name.log"
+    rc=$?
+    p=$(grep -o '[0-9]* passed' "$logs/$name.log" | awk '{s += $1} END {print s + 0}')
+    f=$(grep -o '[0-9]* failed' "$logs/$name.log" | awk '{s += $1} END {print s + 0}')
+    passed=$((passed + p))
+    failed=$((failed + f))
+    echo "$name: rc $rc, $p passed, $f failed, $(($(date +%s) - start)) s"
+    [ "$rc" = 0 ] || grep -E "^test .* FAILED|panicked" "$logs/$name.log" | head -5
+    grep -h "real-scene case" "$logs/$name.log" | sort | uniq -c | sed 's/^/  /'
+done
+echo "tests: $passed passed, $failed failed"
+
+echo "gpu_check: done, $(date -u)"
