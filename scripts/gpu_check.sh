@@ -2,9 +2,10 @@
 # Issue 37's GPU check, on a machine the `device` tool lends (scripts/gpu_bundle.sh packed
 # .gpu/ first): `bench` on plant and playbot at 1920x1080 and 640x480, `bench --sort 2000000`
 # and a mixed scene's ray-traced `bench --scene`, then every test binary until
-# GPU_CHECK_DEADLINE seconds (480) have passed, on the machine's Vulkan device. Everything goes to $OUT/gpu_check.log (OUT: the device tool's folder, else
-# /tmp/gpu_check). GPU_CHECK_QUICK=1 runs one test binary and short benches, to try the
-# script itself (on lavapipe, say) without spending device time.
+# GPU_CHECK_DEADLINE seconds (480) have passed, on the machine's Vulkan device. Everything
+# goes to $OUT/gpu_check.log (OUT: the device tool's folder, else /tmp/gpu_check).
+# GPU_CHECK_QUICK=1 runs one test binary and short benches, to try the script itself (on
+# lavapipe, say) without spending device time.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_check}

@@ -383,6 +383,10 @@ mod tests {
             let touches = footprint_touches_tile(uv, conic, q_max, tx, ty);
             let conditioned = conic.x * conic.z - conic.y * conic.y >= 1e-2 * conic.x * conic.z;
             unconditioned += !conditioned as u32;
+            let q = |p: Vec2| {
+                let d = p - uv;
+                conic.x * d.x * d.x + 2.0 * conic.y * d.x * d.y + conic.z * d.y * d.y
+            };
             for b in 0..4u32 {
                 let corner = origin
                     + Vec2::new(
@@ -390,10 +394,6 @@ mod tests {
                         ((b >> 1) * BLOCK_SIZE) as f32,
                     );
                 let set = bits & (1 << (PAIR_BLOCKS_SHIFT + b)) != 0;
-                let q = |p: Vec2| {
-                    let d = p - uv;
-                    conic.x * d.x * d.x + 2.0 * conic.y * d.x * d.y + conic.z * d.y * d.y
-                };
                 let pixel_min = (0..BLOCK_SIZE * BLOCK_SIZE)
                     .map(
                         |k| q(corner + Vec2::new((k % BLOCK_SIZE) as f32, (k / BLOCK_SIZE) as f32)),
@@ -411,8 +411,7 @@ mod tests {
             }
             // The tile test, against brute force the same way.
             let reached = (0..TILE_SIZE * TILE_SIZE).any(|k| {
-                let d = origin + Vec2::new((k % TILE_SIZE) as f32, (k / TILE_SIZE) as f32) - uv;
-                conic.x * d.x * d.x + 2.0 * conic.y * d.x * d.y + conic.z * d.y * d.y <= q_max
+                q(origin + Vec2::new((k % TILE_SIZE) as f32, (k / TILE_SIZE) as f32)) <= q_max
             });
             assert!(
                 touches || !reached,
