@@ -371,11 +371,14 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
 // with h = n.eye + d (t_p = -h):
 //   u(q) = (h |q|^2 - o'.q) / |q|.
 // The tile's rays fill the convex quadrilateral spanned by the corners' q. The numerator is a
-// quadratic with the isotropic Hessian 2h I, so its extremes over the quadrilateral lie at a
-// corner, at the stationary point of an edge, or at its stationary point in the plane if that
-// lies inside: all of them are evaluated, so the bounds are exact up to rounding (slack below)
-// and to the division by |q|, bounded by |q| <= the largest corner's |q| (|q| is convex) and
-// |q| >= 1/|m| (the plane's distance from the origin).
+// quadratic with the isotropic Hessian 2h I: its bound on one side is exact at a corner, and
+// on the other comes from its tangent plane at the corners' centroid (below). The division by
+// |q| is bounded by |q| <= the largest corner's |q| (|q| is convex) and |q| >= 1/|m| (the
+// plane's distance from the origin); slack (below) covers rounding.
+// The tangent plane took the place of the exact extremes (each edge's stationary point and the
+// plane's, with a test of whether that lies inside): lavapipe, biker 1280x960 under a plane,
+// one thread, cutoff tiles 4.5-5.2 -> 3.8-4.1 ms, with 0.7 % more partial pairs (14,619 ->
+// 14,723 of 56,664) and the same image.
 vec2 tile_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dirs[4]) {
     vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
     float h = dot(pl.xyz, eye) + pl.w;
@@ -392,44 +395,36 @@ vec2 tile_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dirs[4]) {
     if (!(nd_lo > 0.0 || nd_hi < 0.0)) {
         return vec2(-UNBOUNDED, UNBOUNDED);
     }
-    float f_lo = UNBOUNDED;
-    float f_hi = -UNBOUNDED;
+    // With c the corners' centroid, f(q) = f(c) + g.(q - c) + h |q - c|^2 exactly, where
+    // g = 2h c - o'. Over the quadrilateral the linear part is extreme at a corner and the last
+    // term only raises f (h > 0) or lowers it (h < 0): so the corners give f's exact maximum
+    // for h >= 0 (a convex function peaks at a vertex) and its exact minimum for h <= 0, and
+    // the linear part bounds the other side, loose by at most |h| max |q - c|^2.
+    vec3 c = 0.25 * (q[0] + q[1] + q[2] + q[3]);
+    vec3 g = 2.0 * h * c - o;
+    float f_c = h * dot(c, c) - dot(o, c);
+    float corner_lo = UNBOUNDED;
+    float corner_hi = -UNBOUNDED;
+    float linear_lo = UNBOUNDED;
+    float linear_hi = -UNBOUNDED;
     float qq_hi = 0.0;
     for (uint k = 0u; k < 4u; ++k) {
-        // Along the edge q[k] + t e, t in [0, 1]: f = f_k + t (slope + t curve).
-        vec3 a = q[k];
-        vec3 e = q[(k + 1u) & 3u] - a;
-        float aa = dot(a, a);
-        float f_k = h * aa - dot(o, a);
-        float curve = h * dot(e, e);
-        float slope = 2.0 * h * dot(a, e) - dot(o, e);
-        float t = curve != 0.0 ? clamp(-0.5 * slope / curve, 0.0, 1.0) : 0.0;
-        float f_e = f_k + t * (slope + t * curve);
-        f_lo = min(f_lo, min(f_k, f_e));
-        f_hi = max(f_hi, max(f_k, f_e));
+        float aa = dot(q[k], q[k]);
+        float f_k = h * aa - dot(o, q[k]);
+        float linear = dot(g, q[k] - c);
+        corner_lo = min(corner_lo, f_k);
+        corner_hi = max(corner_hi, f_k);
+        linear_lo = min(linear_lo, linear);
+        linear_hi = max(linear_hi, linear);
         qq_hi = max(qq_hi, aa);
     }
+    float f_lo = h >= 0.0 ? f_c + linear_lo : corner_lo;
+    float f_hi = h >= 0.0 ? corner_hi : f_c + linear_hi;
     // m = M^-T n = S R^T n: with rows M_j = (R^T)_j / s_j, m_j = (M_j . n) / |M_j|^2.
     vec3 m = vec3(dot(rec.m0.xyz, pl.xyz) / dot(rec.m0.xyz, rec.m0.xyz),
                   dot(rec.m1.xyz, pl.xyz) / dot(rec.m1.xyz, rec.m1.xyz),
                   dot(rec.m2.xyz, pl.xyz) / dot(rec.m2.xyz, rec.m2.xyz));
     float mm = dot(m, m);
-    if (h != 0.0) {
-        // The gradient 2h q - o' is normal to the plane there: q = (o' + l m) / 2h, m.q = 1.
-        vec3 s = (o + ((2.0 * h - dot(m, o)) / mm) * m) / (2.0 * h);
-        bool left = true;
-        bool right = true;
-        for (uint k = 0u; k < 4u; ++k) {
-            float side = dot(m, cross(q[(k + 1u) & 3u] - q[k], s - q[k]));
-            left = left && side >= 0.0;
-            right = right && side <= 0.0;
-        }
-        if (left || right) {
-            float f_s = h * dot(s, s) - dot(o, s);
-            f_lo = min(f_lo, f_s);
-            f_hi = max(f_hi, f_s);
-        }
-    }
     float q_lo = inversesqrt(mm);
     float q_hi = sqrt(qq_hi);
     // f is a difference of terms up to |h| |q|^2 and |o'| |q|: allow for their rounding, here
