@@ -606,6 +606,8 @@ fn bench_writes_table_json_and_trace() {
         &frames_arg,
         "--warmup",
         "1",
+        "--samples",
+        "2",
         "--json",
         json.to_str().unwrap(),
         "--trace",
@@ -618,6 +620,8 @@ fn bench_writes_table_json_and_trace() {
     }
 
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    // Two renders per plane position, one kept per frame.
+    assert_eq!(report["samples"], 2, "{report}");
     for mode in ["original", "hard", "rara"] {
         let m = &report["modes"][mode];
         assert!(m["median_ms"].as_f64().unwrap() > 0.0, "{mode}: {m}");

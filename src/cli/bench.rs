@@ -35,6 +35,11 @@ pub struct BenchArgs {
     /// Unmeasured frames per mode before the measured ones.
     #[arg(long, default_value_t = 2)]
     warmup: u32,
+    /// Renders of each plane position per mode, the modes taking turns in every round; the
+    /// frame keeps the render whose GPU time is the median (the lower one of an even count),
+    /// so that the per-frame ratios move less with a shared machine's noise.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=99))]
+    samples: u32,
     /// Normal of the sweeping plane (default: the camera's view direction).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_vec3)]
     plane_normal: Option<glam::Vec3>,
@@ -227,7 +232,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let gpu_scene =
         rara::GpuScene::with_sh_precision(&ctx, &scene, super::sh_precision(args.sh_half))?;
     eprintln!(
-        "bench: {} ({} Gaussians, SH {}) at {}x{}, {} frames per mode after {} warm-up, plane normal ({:.3}, {:.3}, {:.3}) d {d0:.4} -> {d1:.4}",
+        "bench: {} ({} Gaussians, SH {}) at {}x{}, {} frames per mode after {} warm-up, {} render(s) per frame, plane normal ({:.3}, {:.3}, {:.3}) d {d0:.4} -> {d1:.4}",
         path.display(),
         scene.len(),
         scene.sh_degree,
@@ -235,6 +240,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         camera.height,
         args.frames,
         args.warmup,
+        args.samples,
         normal.x,
         normal.y,
         normal.z
@@ -280,7 +286,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         crate::TracerArg::Raster => &[rara::Tracer::Raster],
         crate::TracerArg::Ray => &[rara::Tracer::Raster, rara::Tracer::Ray],
     };
-    let total = (args.frames + args.warmup) as u64 * (args.modes.len() * tracers.len()) as u64;
+    let total = (args.frames + args.warmup) as u64
+        * args.samples as u64
+        * (args.modes.len() * tracers.len()) as u64;
     let bar = ProgressBar::new(total)
         .with_style(
             ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed} < {eta}]").unwrap(),
@@ -308,34 +316,28 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             0.0
         };
         let moving = Plane::new(normal, d0 + (d1 - d0) * t)?;
-        for result in &mut results {
-            bar.set_message(result.name());
-            let options = RenderOptions {
-                clip: clip_for(result.mode, &base, moving),
-                tracer: result.tracer,
-                depth_test: (result.mode == BenchMode::Depth).then_some(depth_test),
-                ..RenderOptions::default()
-            };
-            if result.mode == BenchMode::Depth && result.tracer == rara::Tracer::Ray {
-                return Err(Error::InvalidInput(
-                    "bench: the depth mode is the rasterizer's (--tracer raster)".into(),
-                ));
+        // Each round renders this position once in every mode; a frame keeps its mode's
+        // median render.
+        let mut renders: Vec<Vec<FrameStats>> = vec![Vec::new(); results.len()];
+        for _ in 0..args.samples {
+            for (result, mine) in results.iter().zip(&mut renders) {
+                bar.set_message(result.name());
+                mine.push(render_bench_frame(
+                    &mut renderer,
+                    &gpu_scene,
+                    (&camera, &second_eye),
+                    result,
+                    clip_for(result.mode, &base, moving),
+                    depth_test,
+                )?);
+                bar.inc(1);
             }
-            let (_, mut stats) = renderer.render(&gpu_scene, &camera, &options)?;
-            if result.mode == BenchMode::Views2 {
-                // The second view's frame, the same work for another camera: its passes and
-                // times add to the first's.
-                let (_, other) = renderer.render(&gpu_scene, &second_eye, &options)?;
-                stats.gpu_ms += other.gpu_ms;
-                stats.wall_ms += other.wall_ms;
-                for (mine, theirs) in stats.passes.iter_mut().zip(&other.passes) {
-                    mine.ms += theirs.ms;
-                }
+        }
+        if k >= args.warmup {
+            for (result, mut mine) in results.iter_mut().zip(renders) {
+                mine.sort_by(|a, b| a.gpu_ms.total_cmp(&b.gpu_ms));
+                result.frames.push(mine.swap_remove((mine.len() - 1) / 2));
             }
-            if k >= args.warmup {
-                result.frames.push(stats);
-            }
-            bar.inc(1);
         }
     }
     bar.finish_and_clear();
@@ -345,6 +347,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     println!("{}", super::describe_memory(&gpu_scene, &memory));
     if let Some(out) = json_out {
         let mut report = json_report(&ctx, path, &camera, &results);
+        report["samples"] = args.samples.into();
         report["memory"] = super::memory_json(&gpu_scene, &memory);
         let shown = out.path().display().to_string();
         out.write_json(&report)?;
@@ -356,6 +359,40 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         println!("wrote {shown} (open in https://ui.perfetto.dev)");
     }
     Ok(())
+}
+
+/// One render of `result`'s mode (its clip `clip`) from `cameras.0`; the two-view mode adds
+/// the frame of `cameras.1`, its passes and times to the first's.
+fn render_bench_frame(
+    renderer: &mut Renderer,
+    gpu_scene: &rara::GpuScene,
+    cameras: (&rara::Camera, &rara::Camera),
+    result: &ModeResult,
+    clip: Clip,
+    depth_test: rara::DepthTest,
+) -> Result<FrameStats> {
+    if result.mode == BenchMode::Depth && result.tracer == rara::Tracer::Ray {
+        return Err(Error::InvalidInput(
+            "bench: the depth mode is the rasterizer's (--tracer raster)".into(),
+        ));
+    }
+    let options = RenderOptions {
+        clip,
+        tracer: result.tracer,
+        depth_test: (result.mode == BenchMode::Depth).then_some(depth_test),
+        ..RenderOptions::default()
+    };
+    let (_, mut stats) = renderer.render(gpu_scene, cameras.0, &options)?;
+    if result.mode == BenchMode::Views2 {
+        // The second view's frame, the same work for another camera.
+        let (_, other) = renderer.render(gpu_scene, cameras.1, &options)?;
+        stats.gpu_ms += other.gpu_ms;
+        stats.wall_ms += other.wall_ms;
+        for (mine, theirs) in stats.passes.iter_mut().zip(&other.passes) {
+            mine.ms += theirs.ms;
+        }
+    }
+    Ok(stats)
 }
 
 /// The clip of `mode` with the sweeping plane at `moving`.
@@ -377,11 +414,16 @@ fn print_table(
     results: &[ModeResult],
 ) {
     println!(
-        "{} at {}x{}, {} frames per mode, on {} ({})",
+        "{} at {}x{}, {} frames per mode{}, on {} ({})",
         path.display(),
         camera.width,
         camera.height,
         args.frames,
+        if args.samples > 1 {
+            format!(" (each the median of {} renders)", args.samples)
+        } else {
+            String::new()
+        },
         ctx.info().name,
         ctx.info().driver
     );
