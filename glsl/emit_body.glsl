@@ -5,8 +5,8 @@
 // written: the host sees the total, grows the buffers and renders the frame again.
 //
 // RECORD_CUTOFF_PAIRS (emit_rara, rara clipping by planes with the mass weight): each
-// cutoff splat also records where its pairs start, and the first invocation writes the
-// dispatch of the cutoff-tiles stage (cutoff_tiles), which classifies those pairs by tile.
+// cutoff splat also records where its pairs start, for the cutoff-tiles stage (cutoff_tiles),
+// which classifies those pairs by tile (its dispatch arguments come from linear_args.comp).
 // That work runs only for cutoff splats: done here, every invocation of a SIMD vector would
 // pay it, masked, for every tile of its own (plant at 640x480: emit 13 -> 63 ms).
 //
@@ -35,10 +35,8 @@ layout(push_constant) uniform Push {
     U32s offsets;       // exclusive prefix sum of tiles touched, in depth order
     U32s keys;          // out: tile ids
     U32s values;        // out: splat indices
-    // RECORD_CUTOFF_PAIRS only:
-    U32s counters;
-    DispatchArgs cutoff_args;   // out: the cutoff-tiles dispatch
-    U64s cutoff_pairs;          // out: per cutoff record (first pair, splat index), packed
+    // RECORD_CUTOFF_PAIRS only, out: per cutoff record (first pair, splat index), packed.
+    U64s cutoff_pairs;
     U32s progress;      // in (rounds after the first) and out: per drawn splat, its next slot
     uint round_index;
 } pc;
@@ -47,11 +45,6 @@ void main() {
     // Before any branch: once per SIMD vector on a CPU driver (load_clip_params in clip.glsl).
     FrameParams f = load_frame_params(pc.frame);
     uint j = linear_index();
-#ifdef RECORD_CUTOFF_PAIRS
-    if (j == 0u && pc.round_index == 0u) {
-        pc.cutoff_args.v[0] = uvec4(linear_grid(pc.counters.v[COUNTER_CUTOFF]), 0u);
-    }
-#endif
     if (j >= pc.drawn.v[0]) {
         return;
     }

@@ -10,8 +10,8 @@ use std::ffi::CStr;
 
 use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
 use super::sort::SortBuffers;
-use super::FrameRecording;
-use crate::constants::COUNTER_VISIBLE;
+use super::{FrameRecording, LinearArgsPush};
+use crate::constants::{COUNTER_CUTOFF, COUNTER_VISIBLE};
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{Buffer, Context, LazyPipeline};
@@ -34,10 +34,6 @@ pub struct EmitPush {
     pub keys: u64,
     /// Out: values (splat indices).
     pub values: u64,
-    /// The frame's counters (`emit_rara` only: the number of cutoff splats).
-    pub counters: u64,
-    /// Out (`emit_rara` only): the cutoff-tiles stage's indirect dispatch arguments.
-    pub cutoff_args: u64,
     /// Out (`emit_rara` only): per cutoff record, its splat's (first pair, splat index).
     pub cutoff_pairs: u64,
     /// Scratch of a `u32` per drawn Gaussian: where a splat whose tile rectangle goes on past
@@ -49,11 +45,12 @@ pub struct EmitPush {
     pub pad: u32,
 }
 
-/// The emit kernels: plain, and recording the cutoff splats' pairs (each built when a frame
-/// first needs it).
+/// The emit kernels: plain, and recording the cutoff splats' pairs, with the kernel that
+/// writes the cutoff-tiles stage's dispatch arguments (each built when a frame first needs it).
 pub struct Emit {
     plain: LazyPipeline,
     cutoff_pairs: LazyPipeline,
+    cutoff_args: LazyPipeline,
 }
 
 impl Emit {
@@ -65,15 +62,25 @@ impl Emit {
         let build = |name: &'static CStr, spirv: &'static [u32]| {
             LazyPipeline::new::<EmitPush>(ctx, name, spirv, texels)
         };
-        Ok(match texels {
-            Some(_) => Emit {
-                plain: build(c"emit_texels", shaders::EMIT_TEXELS),
-                cutoff_pairs: build(c"emit_rara_texels", shaders::EMIT_RARA_TEXELS),
-            },
-            None => Emit {
-                plain: build(c"emit", shaders::EMIT),
-                cutoff_pairs: build(c"emit_rara", shaders::EMIT_RARA),
-            },
+        let (plain, cutoff_pairs) = match texels {
+            Some(_) => (
+                build(c"emit_texels", shaders::EMIT_TEXELS),
+                build(c"emit_rara_texels", shaders::EMIT_RARA_TEXELS),
+            ),
+            None => (
+                build(c"emit", shaders::EMIT),
+                build(c"emit_rara", shaders::EMIT_RARA),
+            ),
+        };
+        Ok(Emit {
+            plain,
+            cutoff_pairs,
+            cutoff_args: LazyPipeline::new::<LinearArgsPush>(
+                ctx,
+                c"linear_args",
+                shaders::LINEAR_ARGS,
+                None,
+            ),
         })
     }
 
@@ -81,7 +88,8 @@ impl Emit {
     /// the GPU, in depth `order`): the pairs into the first buffers of `sort`, in
     /// [`super::tile_rect_rounds`] rounds with a barrier after each. With `cutoff_pairs` (the
     /// cutoff-tiles stage's buffer), the kernel also lists where each cutoff splat's pairs
-    /// start and the dispatch arguments of [`super::cutoff_tiles::CutoffTiles::record`].
+    /// start, and a one-invocation kernel before it writes the dispatch arguments of
+    /// [`super::cutoff_tiles::CutoffTiles::record`] from the frame's cutoff count.
     /// `progress` is scratch of a `u32` per Gaussian for the rounds (the depth sort's other key
     /// buffer, free by then).
     pub fn record(
@@ -101,8 +109,6 @@ impl Emit {
             offsets: f.at.slots,
             keys: sort.keys[0].address,
             values: sort.values[0].address,
-            counters: f.at.counters,
-            cutoff_args: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_ARGS_OFFSET),
             cutoff_pairs: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
             progress,
             round_index: 0,
@@ -114,8 +120,22 @@ impl Emit {
             &self.plain
         }
         .get()?;
+        let cutoff_args = match cutoff_pairs {
+            Some(pairs) => Some((
+                self.cutoff_args.get()?,
+                LinearArgsPush {
+                    count: f.at.counter(COUNTER_CUTOFF),
+                    args: pairs.address + CUTOFF_ARGS_OFFSET,
+                },
+            )),
+            None => None,
+        };
         let rounds = super::tile_rect_rounds(f.tile_count());
         f.pass(c"emit", |f| {
+            // Ordered before the cutoff-tiles stage by the barrier after emit's rounds.
+            if let Some((kernel, push)) = &cutoff_args {
+                kernel.dispatch(f.cmd, push, [1, 1, 1]);
+            }
             for round_index in 0..rounds {
                 let push = EmitPush {
                     round_index,

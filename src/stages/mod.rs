@@ -120,6 +120,17 @@ pub fn tile_rect_rounds(tiles: u32) -> u32 {
     tiles.div_ceil(crate::constants::TILE_RECT_CHUNK).max(1)
 }
 
+/// Push constants of `glsl/linear_args.comp`, which writes at `args` the indirect dispatch
+/// arguments of a linear kernel ([`linear_grid`]) over the `u32` count at `count`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct LinearArgsPush {
+    /// The items (a `u32` the GPU wrote).
+    pub(crate) count: u64,
+    /// Out: the dispatch arguments (16 bytes).
+    pub(crate) args: u64,
+}
+
 /// Workgroup counts of a linear kernel over `items` (GLSL `linear_grid` in `common.glsl`): rows
 /// of at most [`LINEAR_GRID_X`] workgroups, as only 65,535 per dimension are guaranteed.
 pub(crate) fn linear_grid(items: u32) -> [u32; 3] {

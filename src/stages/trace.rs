@@ -1,7 +1,7 @@
 //! The ray tracer (SPEC section 7, issue 32): a BVH built on the GPU ([`super::bvh`]) every
 //! frame, then `glsl/trace_body.glsl` per pixel with a buffer of the k = 16 closest hits, in
 //! rounds of a bounded number of steps per ray (lavapipe's loop cap). A round runs over the
-//! rays the previous one left live (`glsl/trace_args.comp` sizes its indirect dispatch), so
+//! rays the previous one left live (`glsl/linear_args.comp` sizes its indirect dispatch), so
 //! nothing on the host waits between rounds and a frame records into an engine's command
 //! buffer like the rasterizer's ([`crate::Renderer::record`]). Every clip mode works. The
 //! rays write the per-pixel (colour, transmittance) state that the write-target stage turns
@@ -11,7 +11,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::bvh::{BvhBuffers, BvhBuild};
-use super::linear_grid;
+use super::{linear_grid, LinearArgsPush};
 use crate::camera::Camera;
 use crate::constants::{
     TRACE_COUNTER_CAPPED, TRACE_COUNTER_FOUND, TRACE_COUNTER_OVERFLOW, TRACE_COUNTER_PASSES,
@@ -140,15 +140,6 @@ struct TracePush {
     ray_base: u32,
     batch_rays: u32,
     stride: u32,
-    pad: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct ArgsPush {
-    live: u64,
-    args: u64,
-    round: u32,
     pad: u32,
 }
 
@@ -673,7 +664,8 @@ impl RayTracer {
         } else {
             None
         };
-        let args = ComputePipeline::new::<ArgsPush>(ctx, c"trace_args", shaders::TRACE_ARGS);
+        let args =
+            ComputePipeline::new::<LinearArgsPush>(ctx, c"linear_args", shaders::LINEAR_ARGS);
         let bvh = BvhBuild::new(ctx);
         let (args, bvh) = match (args, bvh) {
             (Ok(a), Ok(b)) => (a, b),
@@ -867,11 +859,9 @@ impl RayTracer {
                     kernel.dispatch_with_sets(cmd, &push, &sets, linear_grid(push.batch_rays));
                 } else {
                     let slot = batch as u64 * max + round as u64;
-                    let args = ArgsPush {
-                        live: push.live,
-                        args: bufs.args.address + 16 * (slot - round as u64),
-                        round,
-                        pad: 0,
+                    let args = LinearArgsPush {
+                        count: push.live + 4 * (round - 1) as u64,
+                        args: bufs.args.address + 16 * slot,
                     };
                     self.args.dispatch(cmd, &args, [1, 1, 1]);
                     compute_barrier(ctx, cmd);
