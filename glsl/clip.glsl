@@ -65,6 +65,23 @@ CutoffRecord volume_cutoff_record(vec3 c0, vec3 c1, vec3 c2, vec3 s, vec3 rel) {
                         vec4(w2, -dot(w2, rel)));
 }
 
+// The cutoff record of Gaussian g seen from eye: a flat one's (SPEC section 6: the normal is
+// the first axis of R whose scale is 0) or a volume one's.
+CutoffRecord gaussian_cutoff_record(Gaussian g, vec3 eye) {
+    vec3 r0, r1, r2;
+    quat_rows(g.rot, r0, r1, r2);
+    vec3 c0 = vec3(r0.x, r1.x, r2.x);
+    vec3 c1 = vec3(r0.y, r1.y, r2.y);
+    vec3 c2 = vec3(r0.z, r1.z, r2.z);
+    vec3 s = g.scale.xyz;
+    vec3 rel = g.pos_opacity.xyz - eye;
+    uint axis = flat_axis(s);
+    if (axis < 3u) {
+        return flat_cutoff_record(axis == 0u ? c0 : (axis == 1u ? c1 : c2), rel);
+    }
+    return volume_cutoff_record(c0, c1, c2, s, rel);
+}
+
 // Whether a frame may hold flat Gaussians (SPEC section 6), whose cutoff records and weights
 // take branches of their own: a specialization constant, false in the rasterize kernels of
 // frames without any (FLAT_SPLATS_CONSTANT_ID; stages::rasterize), so that a CPU driver, which

@@ -6,7 +6,7 @@
 //
 // RECORD_CUTOFF_PAIRS (emit_rara, rara clipping by planes with the mass weight): each
 // cutoff splat also records where its pairs start, for the cutoff-tiles stage (cutoff_tiles),
-// which classifies those pairs by tile (its dispatch arguments come from linear_args.comp).
+// which classifies those pairs by tile (its dispatch arguments are written after project).
 // That work runs only for cutoff splats: done here, every invocation of a SIMD vector would
 // pay it, masked, for every tile of its own (plant at 640x480: emit 13 -> 63 ms).
 //

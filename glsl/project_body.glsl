@@ -2,8 +2,12 @@
 // the clip region (dropped / drawn / cutoff), culls, projects the 3D covariance to a 2D conic,
 // finds the screen radius and the touched tiles, evaluates the SH colour, and writes the
 // ProjectedSplat record, the number of tiles touched (0 = not drawn) that sizes the tile lists,
-// and a drawn flag that the depth-order stage scans into each drawn Gaussian's sort slot. Cutoff Gaussians also get a compact side record (CutoffRecord)
-// for the rasterizer's per-pixel weight; the others cost nothing extra.
+// and a drawn flag that the depth-order stage scans into each drawn Gaussian's sort slot. A
+// drawn cutoff Gaussian also takes the next cutoff record index, stored in its splat, and is
+// listed under it; cutoff_records.comp then writes the records (CutoffRecord, for the
+// rasterizer's per-pixel weight) in a dispatch over the list. Written here, a record's six
+// 64-bit stores ran on a CPU driver, masked, in every SIMD vector of every frame (lavapipe,
+// playbot at 640x480 under a plane, one thread: project 34.0-36.4 -> 30.7-33.2 ms without).
 //
 // Included by project_deg<D> (SH of degree D in 32-bit floats) and project_deg<D>_sh16
 // (SH_HALF: half floats, two to a uint).
@@ -22,7 +26,7 @@ layout(push_constant) uniform Push {
     U32s drawn;         // out: 1 for a Gaussian that touches a tile, else 0 (scanned next)
     U32s counters;
     ClipParamsRef clip;
-    CutoffRecords cutoffs;  // out: one record per cutoff Gaussian, packed
+    U32s cutoff_gaussians;  // out: per cutoff record, its Gaussian (0 on other frames)
     U32s cutoff_regions;    // out, with several clipped objects: `region` per cutoff record
     uint first;             // the Gaussians [first, end) this dispatch projects
     uint end;
@@ -64,8 +68,8 @@ void skip(uint i) {
     store_vec4(splat_block(pc.splats, i, 2u), vec4(0.0, 0.0, 0.0, SKIPPED_RADIUS));
 }
 
-// Projects Gaussian i; returns true when it is drawn as cutoff, with its side record in rec.
-bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
+// Projects Gaussian i; returns true when it is drawn as cutoff.
+bool project(FrameParams f, ClipParams clip, uint i) {
     Gaussian g = fetch_gaussian(i);
     vec3 mu = g.pos_opacity.xyz;
     uint kind = clip_classify(clip, mu, g.scale.xyz);
@@ -157,20 +161,14 @@ bool project(FrameParams f, ClipParams clip, uint i, out CutoffRecord rec) {
     store_splat(pc.splats, i, p);
     pc.tiles_touched.v[i] = touched;
     pc.drawn.v[i] = 1u;
-    if (kind != CLASS_CUTOFF) {
-        return false;
-    }
-    vec3 c0 = vec3(r0.x, r1.x, r2.x);
-    vec3 c1 = vec3(r0.y, r1.y, r2.y);
-    vec3 c2 = vec3(r0.z, r1.z, r2.z);
-    uint axis = flat_axis(s);
-    if (axis < 3u) {
-        // Flat (SPEC section 6): the normal is the first axis of R whose scale is 0.
-        rec = flat_cutoff_record(axis == 0u ? c0 : (axis == 1u ? c1 : c2), rel);
-        return true;
-    }
-    rec = volume_cutoff_record(c0, c1, c2, s, rel);
-    return true;
+    return kind == CLASS_CUTOFF;
+}
+
+// Lists cutoff Gaussian i under record `index`, which its splat names.
+void list_cutoff(uint i, uint index) {
+    pc.cutoff_gaussians.v[index] = i;
+    pc.splats.v[i].cutoff = index;
+    store_cutoff_region(index);
 }
 
 void main() {
@@ -182,18 +180,14 @@ void main() {
     // dispatch per object, each with its region in pc.clip: per-Gaussian regions would load
     // the parameters per lane, a scalar loop over the lanes per word on a CPU driver.
     uint i = pc.first + linear_index();
-    CutoffRecord rec;
 #ifdef SCENE_TEXELS
-    // Side records are packed by one global atomic per cutoff Gaussian. A CPU driver runs the
+    // Record indices are packed by one global atomic per cutoff Gaussian. A CPU driver runs the
     // atomic as a loop over the vector's cutoff lanes, where the GPU kernels' workgroup
     // aggregation below costs three barriers, at which its 32 SIMD vectors of a workgroup take
     // turns (lavapipe, render --repeat 10, three runs each in turn: project 47.0 -> 42.0 ms on
     // playbot, 10.7 -> 9.4 ms on plant, also under rara).
-    if (i < pc.end && project(f, clip, i, rec)) {
-        uint index = atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u);
-        store_cutoff_record(pc.cutoffs, index, rec);
-        pc.splats.v[i].cutoff = index;
-        store_cutoff_region(index);
+    if (i < pc.end && project(f, clip, i)) {
+        list_cutoff(i, atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u));
     }
 #else
     uint lid = gl_LocalInvocationIndex;
@@ -201,8 +195,8 @@ void main() {
         wg_cutoff_count = 0u;
     }
     barrier();
-    bool cutoff = i < pc.end && project(f, clip, i, rec);
-    // Side records are packed: a slot within the workgroup, then one global atomic per
+    bool cutoff = i < pc.end && project(f, clip, i);
+    // Record indices are packed: a slot within the workgroup, then one global atomic per
     // workgroup for the base.
     uint slot = cutoff ? atomicAdd(wg_cutoff_count, 1u) : 0u;
     barrier();
@@ -213,10 +207,7 @@ void main() {
     }
     barrier();
     if (cutoff) {
-        uint index = wg_cutoff_base + slot;
-        store_cutoff_record(pc.cutoffs, index, rec);
-        pc.splats.v[i].cutoff = index;
-        store_cutoff_region(index);
+        list_cutoff(i, wg_cutoff_base + slot);
     }
 #endif
 }

@@ -144,9 +144,10 @@ pub(crate) struct FrameResources {
     pub(crate) counters: Buffer,
     /// Cutoff side records, one slot per Gaussian; allocated on the first rara frame.
     pub(crate) cutoffs: Option<Buffer>,
-    /// With the records: the cutoff-tiles stage's dispatch arguments (16 B at
-    /// [`crate::stages::cutoff_tiles::CUTOFF_ARGS_OFFSET`]), then per record its splat's (first pair, splat index) at
-    /// [`CUTOFF_PAIRS_OFFSET`].
+    /// With the records: the dispatch arguments over the cutoff records (16 B at
+    /// [`crate::stages::cutoff_tiles::CUTOFF_ARGS_OFFSET`], for the cutoff-records and
+    /// cutoff-tiles stages), then at [`CUTOFF_PAIRS_OFFSET`] per record its Gaussian (project's
+    /// list), which emit overwrites with its splat's (first pair, splat index).
     pub(crate) cutoff_pairs: Option<Buffer>,
     pub(crate) splats: Buffer,
     pub(crate) tiles_touched: Buffer,

@@ -669,7 +669,7 @@ impl Renderer {
             ))
         .then_some(buffer_target);
         // The kernels this frame runs, each built when a frame first needs it.
-        self.project.prepare(scene)?;
+        self.project.prepare(scene, rara)?;
         if !(rara && object_clips.is_some()) {
             self.rasterize.prepare(
                 rara.then_some(options.clip.weight),
@@ -723,8 +723,15 @@ impl Renderer {
             grid: (gx, gy),
         };
         let scan = (&self.prefix_sum, &f.slots_scan);
-        self.project
-            .record(&mut rec, scene, object_clips.map(|o| &o.project));
+        // Rara frames list their cutoff Gaussians in the cutoff-pairs buffer, and project's
+        // pass writes their records (emit later overwrites the list with the pairs' starts).
+        let records_list = if rara { f.cutoff_pairs.as_ref() } else { None };
+        self.project.record(
+            &mut rec,
+            scene,
+            object_clips.map(|o| &o.project),
+            records_list,
+        );
         self.depth_order
             .record_sorted(&mut rec, scene.count, scan, &self.sort, &f.sort);
         let depth_order = f.sort.values[DEPTH_ORDER_BUFFER].address;

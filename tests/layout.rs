@@ -113,7 +113,7 @@ fn gpu_struct_layouts_match_spirv() {
         offset_of!(GpuCutoffRecord, m1),
         offset_of!(GpuCutoffRecord, m2),
     ];
-    assert_layout(shaders::PROJECT_DEG3, "CutoffRecord", &cutoff);
+    assert_layout(shaders::CUTOFF_RECORDS, "CutoffRecord", &cutoff);
     let node = [
         offset_of!(rara::stages::bvh::GpuBvhNode, lo),
         offset_of!(rara::stages::bvh::GpuBvhNode, left),

@@ -19,11 +19,11 @@ use crate::error::Result;
 use crate::shaders;
 use crate::vk::{Buffer, Context, LazyPipeline};
 
-/// Offset of the cutoff-tiles dispatch arguments in the frame's cutoff-pairs buffer (which emit
-/// fills under rara clipping by planes with the mass weight).
+/// Offset of the dispatch arguments over the cutoff records in the frame's cutoff-pairs buffer
+/// (written after project on rara frames; the cutoff-records and cutoff-tiles stages read them).
 pub const CUTOFF_ARGS_OFFSET: u64 = 0;
 /// Offset of the (first pair, splat index) entries in the cutoff-pairs buffer, one per cutoff
-/// record.
+/// record (before emit writes them, project's list of the cutoff Gaussians).
 pub const CUTOFF_PAIRS_OFFSET: u64 = 16;
 
 /// Device addresses the cutoff-tiles kernel reads and writes.
@@ -79,7 +79,7 @@ impl CutoffTiles {
 
     /// Records the pass "cutoff tiles": one workgroup per
     /// [`crate::constants::LINEAR_WORKGROUP`] cutoff splats, which share their pairs out
-    /// (`glsl/cutoff_tiles_body.glsl`), dispatched indirectly from the arguments emit wrote in
+    /// (`glsl/cutoff_tiles_body.glsl`), dispatched indirectly from the arguments project wrote in
     /// `pairs` (the frame's cutoff-pairs buffer), over the pairs emit wrote into the first
     /// buffers of `sort`; flags the tiles that keep a weighted pair at `tile_flags` (0: none),
     /// then a barrier. `flat`: whether the frame may hold flat Gaussians.

@@ -8,10 +8,10 @@ use bytemuck::{Pod, Zeroable};
 
 use std::ffi::CStr;
 
-use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
+use super::cutoff_tiles::CUTOFF_PAIRS_OFFSET;
 use super::sort::SortBuffers;
-use super::{FrameRecording, LinearArgsPush};
-use crate::constants::{COUNTER_CUTOFF, COUNTER_VISIBLE};
+use super::FrameRecording;
+use crate::constants::COUNTER_VISIBLE;
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::{Buffer, Context, LazyPipeline};
@@ -45,12 +45,11 @@ pub struct EmitPush {
     pub pad: u32,
 }
 
-/// The emit kernels: plain, and recording the cutoff splats' pairs, with the kernel that
-/// writes the cutoff-tiles stage's dispatch arguments (each built when a frame first needs it).
+/// The emit kernels: plain, and recording the cutoff splats' pairs (each built when a frame
+/// first needs it).
 pub struct Emit {
     plain: LazyPipeline,
     cutoff_pairs: LazyPipeline,
-    cutoff_args: LazyPipeline,
 }
 
 impl Emit {
@@ -75,12 +74,6 @@ impl Emit {
         Ok(Emit {
             plain,
             cutoff_pairs,
-            cutoff_args: LazyPipeline::new::<LinearArgsPush>(
-                ctx,
-                c"linear_args",
-                shaders::LINEAR_ARGS,
-                None,
-            ),
         })
     }
 
@@ -88,8 +81,8 @@ impl Emit {
     /// the GPU, in depth `order`): the pairs into the first buffers of `sort`, in
     /// [`super::tile_rect_rounds`] rounds with a barrier after each. With `cutoff_pairs` (the
     /// cutoff-tiles stage's buffer), the kernel also lists where each cutoff splat's pairs
-    /// start, and a one-invocation kernel before it writes the dispatch arguments of
-    /// [`super::cutoff_tiles::CutoffTiles::record`] from the frame's cutoff count.
+    /// start (the dispatch arguments of [`super::cutoff_tiles::CutoffTiles::record`] are
+    /// project's, [`super::project::Project::record`]).
     /// `progress` is scratch of a `u32` per Gaussian for the rounds (the depth sort's other key
     /// buffer, free by then).
     pub fn record(
@@ -120,22 +113,8 @@ impl Emit {
             &self.plain
         }
         .get()?;
-        let cutoff_args = match cutoff_pairs {
-            Some(pairs) => Some((
-                self.cutoff_args.get()?,
-                LinearArgsPush {
-                    count: f.at.counter(COUNTER_CUTOFF),
-                    args: pairs.address + CUTOFF_ARGS_OFFSET,
-                },
-            )),
-            None => None,
-        };
         let rounds = super::tile_rect_rounds(f.tile_count());
         f.pass(c"emit", |f| {
-            // Ordered before the cutoff-tiles stage by the barrier after emit's rounds.
-            if let Some((kernel, push)) = &cutoff_args {
-                kernel.dispatch(f.cmd, push, [1, 1, 1]);
-            }
             for round_index in 0..rounds {
                 let push = EmitPush {
                     round_index,

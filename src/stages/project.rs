@@ -5,12 +5,14 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
-use super::FrameRecording;
+use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
+use super::{FrameRecording, LinearArgsPush};
+use crate::constants::COUNTER_CUTOFF;
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::precision::ShPrecision;
 use crate::shaders;
-use crate::vk::{ComputePipeline, Context, LazyPipeline};
+use crate::vk::{Buffer, ComputePipeline, Context, LazyPipeline};
 
 /// Device addresses the project kernel reads and writes.
 #[repr(C)]
@@ -32,8 +34,8 @@ pub struct ProjectPush {
     pub counters: u64,
     /// `ClipParams`.
     pub clip: u64,
-    /// Cutoff side records (0 when the frame is not rara-clipped).
-    pub cutoffs: u64,
+    /// Out: per cutoff record, its Gaussian (0 when the frame is not rara-clipped).
+    pub cutoff_gaussians: u64,
     /// Out, with several objects clipped by regions of their own: `region` per cutoff record
     /// (else 0).
     pub cutoff_regions: u64,
@@ -69,9 +71,23 @@ struct TouchedPush {
     pad: u32,
 }
 
+/// What `glsl/cutoff_records.comp` reads and writes.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RecordsPush {
+    frame: u64,
+    gaussians: u64,
+    counters: u64,
+    /// Per cutoff record, its Gaussian (project's list).
+    cutoff_gaussians: u64,
+    /// Out: the records.
+    cutoffs: u64,
+}
+
 /// The project kernel, in one variant per SH degree (0 to 3) and storage precision: a CPU
 /// driver runs every band's code under a mask whatever the scene's degree, so each scene gets
-/// the kernel that holds only its own bands.
+/// the kernel that holds only its own bands. Under rara clipping the kernels that write the
+/// listed cutoff Gaussians' records follow it.
 pub struct Project {
     /// Indexed by SH degree; each built when a frame first needs it ([`Project::prepare`]).
     sh32: [LazyPipeline; 4],
@@ -79,6 +95,10 @@ pub struct Project {
     sh16: [LazyPipeline; 4],
     /// The later rounds' count of tiles touched (`project_touched.comp`).
     touched: ComputePipeline,
+    /// Rara frames: the dispatch arguments over the cutoff records (`linear_args.comp`).
+    records_args: LazyPipeline,
+    /// Rara frames: the records of the listed cutoff Gaussians (`cutoff_records.comp`).
+    records: LazyPipeline,
 }
 
 /// A project kernel: its name, and its SPIR-V reading through buffer loads and through the
@@ -152,6 +172,18 @@ impl Project {
                 c"project_touched",
                 shaders::PROJECT_TOUCHED,
             )?,
+            records_args: LazyPipeline::new::<LinearArgsPush>(
+                ctx,
+                c"linear_args",
+                shaders::LINEAR_ARGS,
+                None,
+            ),
+            records: LazyPipeline::new::<RecordsPush>(
+                ctx,
+                c"cutoff_records",
+                shaders::CUTOFF_RECORDS,
+                None,
+            ),
         })
     }
 
@@ -165,8 +197,13 @@ impl Project {
     }
 
     /// Builds the kernel `scene` needs, if it was not yet: call it before [`Project::record`].
-    pub fn prepare(&self, scene: &GpuScene) -> Result<()> {
-        self.kernel(scene).get().map(|_| ())
+    pub fn prepare(&self, scene: &GpuScene, rara: bool) -> Result<()> {
+        self.kernel(scene).get()?;
+        if rara {
+            self.records_args.get()?;
+            self.records.get()?;
+        }
+        Ok(())
     }
 
     /// Records stage 1 of a frame, the pass "project": every Gaussian of `scene` classified,
@@ -174,12 +211,17 @@ impl Project {
     /// [`TILE_RECT_CHUNK`](crate::constants::TILE_RECT_CHUNK) tiles, then the later rounds of
     /// the count of tiles touched ([`super::tile_rect_rounds`]). The texel kernels read the
     /// frame's texel views. With `object_clips` each object is projected by a dispatch of its
-    /// own, against its own region.
+    /// own, against its own region. With `cutoff_pairs` (the frame's cutoff-pairs buffer, on
+    /// rara frames), project lists the cutoff Gaussians there; then, still in the pass, one
+    /// invocation writes the dispatch arguments over the cutoff records (at
+    /// [`CUTOFF_ARGS_OFFSET`], where the cutoff-tiles stage finds them too) and
+    /// `cutoff_records` writes the records at `f.at.cutoffs`, each followed by a barrier.
     pub fn record(
         &self,
         f: &mut FrameRecording,
         scene: &GpuScene,
         object_clips: Option<&ObjectClipRanges>,
+        cutoff_pairs: Option<&Buffer>,
     ) {
         let kernel = self.kernel(scene).built();
         let push = ProjectPush {
@@ -191,7 +233,7 @@ impl Project {
             drawn: f.at.slots,
             counters: f.at.counters,
             clip: f.at.clip,
-            cutoffs: f.at.cutoffs,
+            cutoff_gaussians: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
             cutoff_regions: 0,
             first: 0,
             end: scene.count,
@@ -230,6 +272,28 @@ impl Project {
                     pad: 0,
                 };
                 self.touched.dispatch(f.cmd, &touched, grid);
+                f.barrier();
+            }
+            if let Some(pairs) = cutoff_pairs {
+                let args = LinearArgsPush {
+                    count: f.at.counter(COUNTER_CUTOFF),
+                    args: pairs.address + CUTOFF_ARGS_OFFSET,
+                };
+                self.records_args.built().dispatch(f.cmd, &args, [1, 1, 1]);
+                f.barrier();
+                let records = RecordsPush {
+                    frame: push.frame,
+                    gaussians: push.gaussians,
+                    counters: push.counters,
+                    cutoff_gaussians: push.cutoff_gaussians,
+                    cutoffs: f.at.cutoffs,
+                };
+                self.records.built().dispatch_indirect(
+                    f.cmd,
+                    &records,
+                    pairs.raw,
+                    CUTOFF_ARGS_OFFSET,
+                );
                 f.barrier();
             }
         });
