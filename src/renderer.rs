@@ -723,8 +723,9 @@ impl Renderer {
             grid: (gx, gy),
         };
         let scan = (&self.prefix_sum, &f.slots_scan);
-        // Rara frames list their cutoff Gaussians in the cutoff-pairs buffer, and project's
-        // pass writes their records (emit later overwrites the list with the pairs' starts).
+        // Rara frames list their cutoff Gaussians in the cutoff-pairs buffer, and the pass
+        // "cutoff records" after project writes their records (emit later overwrites the list
+        // with the pairs' starts).
         let records_list = if rara { f.cutoff_pairs.as_ref() } else { None };
         self.project.record(
             &mut rec,

@@ -632,6 +632,12 @@ fn bench_writes_table_json_and_trace() {
                 "{mode} lacks {pass}: {m}"
             );
         }
+        // The cutoff Gaussians' records are rara's own pass, timed apart from project.
+        assert_eq!(
+            m["passes"].get("cutoff records").is_some(),
+            mode == "rara",
+            "{mode}: {m}"
+        );
         // bench draws into an RGBA8 buffer over the background: on a CPU driver the strips
         // rasterizer writes it itself, and the frames have no write-target pass.
         let cpu_driver = report["device"].as_str().unwrap().contains("llvmpipe");

@@ -182,8 +182,10 @@ pub fn render(
             ctx.info().name,
             ctx.info().driver
         );
+        // Names padded to the longest, so that the times line up.
+        let width = passes.iter().map(|(name, _)| name.len()).max().unwrap_or(0);
         for (name, mut v) in passes {
-            println!("  {name:<12} {:8.2} ms", median(&mut v));
+            println!("  {name:<width$} {:8.2} ms", median(&mut v));
         }
     }
     Ok(())

@@ -212,8 +212,8 @@ impl Project {
     /// the count of tiles touched ([`super::tile_rect_rounds`]). The texel kernels read the
     /// frame's texel views. With `object_clips` each object is projected by a dispatch of its
     /// own, against its own region. With `cutoff_pairs` (the frame's cutoff-pairs buffer, on
-    /// rara frames), project lists the cutoff Gaussians there; then, still in the pass, one
-    /// invocation writes the dispatch arguments over the cutoff records (at
+    /// rara frames), project lists the cutoff Gaussians there; then the pass "cutoff records":
+    /// one invocation writes the dispatch arguments over the cutoff records (at
     /// [`CUTOFF_ARGS_OFFSET`], where the cutoff-tiles stage finds them too) and
     /// `cutoff_records` writes the records at `f.at.cutoffs`, each followed by a barrier.
     pub fn record(
@@ -274,7 +274,9 @@ impl Project {
                 self.touched.dispatch(f.cmd, &touched, grid);
                 f.barrier();
             }
-            if let Some(pairs) = cutoff_pairs {
+        });
+        if let Some(pairs) = cutoff_pairs {
+            f.pass(c"cutoff records", |f| {
                 let args = LinearArgsPush {
                     count: f.at.counter(COUNTER_CUTOFF),
                     args: pairs.address + CUTOFF_ARGS_OFFSET,
@@ -295,7 +297,7 @@ impl Project {
                     CUTOFF_ARGS_OFFSET,
                 );
                 f.barrier();
-            }
-        });
+            });
+        }
     }
 }
