@@ -49,6 +49,13 @@ Gaussian fetch_gaussian(uint i) {
 }
 #endif
 
+// Whether this kernel lists the cutoff Gaussians: the host builds it with false for frames
+// without rara clipping, which have none. A CPU driver runs the listing's atomic and stores,
+// masked, in every SIMD vector whether or not a lane is cutoff (lavapipe, 640x480 unclipped,
+// `render --repeat 8`, one thread, four rounds in turn: project playbot 55.9-58.0 ->
+// 35.6-50.4 ms, plant 8.8-13.1 -> 8.2-11.5 ms).
+layout(constant_id = PROJECT_LISTS_CUTOFF_CONSTANT_ID) const bool LISTS_CUTOFF = true;
+
 #ifndef SCENE_TEXELS
 shared uint wg_cutoff_count;
 shared uint wg_cutoff_base;
@@ -187,16 +194,20 @@ void main() {
     // aggregation below costs three barriers, at which its 32 SIMD vectors of a workgroup take
     // turns (lavapipe, render --repeat 10, three runs each in turn: project 47.0 -> 42.0 ms on
     // playbot, 10.7 -> 9.4 ms on plant, also under rara).
-    if (i < pc.end && project(f, clip, i)) {
+    bool cutoff = i < pc.end && project(f, clip, i);
+    if (LISTS_CUTOFF && cutoff) {
         list_cutoff(i, atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u));
     }
 #else
     uint lid = gl_LocalInvocationIndex;
+    bool cutoff = i < pc.end && project(f, clip, i);
+    if (!LISTS_CUTOFF) {
+        return;   // uniform: a constant
+    }
     if (lid == 0u) {
         wg_cutoff_count = 0u;
     }
     barrier();
-    bool cutoff = i < pc.end && project(f, clip, i);
     // Record indices are packed: a slot within the workgroup, then one global atomic per
     // workgroup for the base.
     uint slot = cutoff ? atomicAdd(wg_cutoff_count, 1u) : 0u;

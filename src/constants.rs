@@ -195,6 +195,9 @@ pub const TARGET_OVER_CONSTANT_ID: u32 = 1;
 /// background, in place of the per-pixel state (frames of one round, no depth; see
 /// `Renderer::record`).
 pub const RASTER_WRITES_TARGET_CONSTANT_ID: u32 = 2;
+/// Specialization constant id of `LISTS_CUTOFF` (`glsl/project_body.glsl`): the project kernels
+/// of frames without rara clipping, which have no cutoff Gaussian, are built with it false.
+pub const PROJECT_LISTS_CUTOFF_CONSTANT_ID: u32 = 3;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -315,6 +318,10 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     (
         "RASTER_WRITES_TARGET_CONSTANT_ID",
         RASTER_WRITES_TARGET_CONSTANT_ID,
+    ),
+    (
+        "PROJECT_LISTS_CUTOFF_CONSTANT_ID",
+        PROJECT_LISTS_CUTOFF_CONSTANT_ID,
     ),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),

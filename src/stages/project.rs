@@ -7,7 +7,7 @@ use std::ffi::CStr;
 
 use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
 use super::{FrameRecording, LinearArgsPush};
-use crate::constants::COUNTER_CUTOFF;
+use crate::constants::{COUNTER_CUTOFF, PROJECT_LISTS_CUTOFF_CONSTANT_ID};
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::precision::ShPrecision;
@@ -90,9 +90,16 @@ struct RecordsPush {
 /// listed cutoff Gaussians' records follow it.
 pub struct Project {
     /// Indexed by SH degree; each built when a frame first needs it ([`Project::prepare`]).
+    /// These list the cutoff Gaussians (rara frames).
     sh32: [LazyPipeline; 4],
     /// Indexed by SH degree.
     sh16: [LazyPipeline; 4],
+    /// The same kernels built without the cutoff listing (`LISTS_CUTOFF` false), for frames
+    /// without rara clipping: a CPU driver would run its atomic and stores, masked, in every
+    /// SIMD vector.
+    sh32_unlisted: [LazyPipeline; 4],
+    /// Indexed by SH degree.
+    sh16_unlisted: [LazyPipeline; 4],
     /// The later rounds' count of tiles touched (`project_touched.comp`).
     touched: ComputePipeline,
     /// Rara frames: the dispatch arguments over the cutoff records (`linear_args.comp`).
@@ -164,9 +171,16 @@ impl Project {
             LazyPipeline::new::<ProjectPush>(ctx, name, spirv, texels)
         };
         let build_all = |table: &[Variant; 4]| table.each_ref().map(build);
+        let unlisted = |table: &[Variant; 4]| {
+            table
+                .each_ref()
+                .map(|v| build(v).specialized(&[(PROJECT_LISTS_CUTOFF_CONSTANT_ID, 0)]))
+        };
         Ok(Project {
             sh32: build_all(&SH32_KERNELS),
             sh16: build_all(&SH16_KERNELS),
+            sh32_unlisted: unlisted(&SH32_KERNELS),
+            sh16_unlisted: unlisted(&SH16_KERNELS),
             touched: ComputePipeline::new::<TouchedPush>(
                 ctx,
                 c"project_touched",
@@ -187,18 +201,21 @@ impl Project {
         })
     }
 
-    /// The kernel for `scene`'s SH degree and precision.
-    fn kernel(&self, scene: &GpuScene) -> &LazyPipeline {
-        let kernels = match scene.sh_precision {
-            ShPrecision::F32 => &self.sh32,
-            ShPrecision::F16 => &self.sh16,
+    /// The kernel for `scene`'s SH degree and precision; with `rara`, the one that lists the
+    /// cutoff Gaussians.
+    fn kernel(&self, scene: &GpuScene, rara: bool) -> &LazyPipeline {
+        let kernels = match (scene.sh_precision, rara) {
+            (ShPrecision::F32, true) => &self.sh32,
+            (ShPrecision::F16, true) => &self.sh16,
+            (ShPrecision::F32, false) => &self.sh32_unlisted,
+            (ShPrecision::F16, false) => &self.sh16_unlisted,
         };
         &kernels[scene.sh_degree.min(3) as usize]
     }
 
     /// Builds the kernel `scene` needs, if it was not yet: call it before [`Project::record`].
     pub fn prepare(&self, scene: &GpuScene, rara: bool) -> Result<()> {
-        self.kernel(scene).get()?;
+        self.kernel(scene, rara).get()?;
         if rara {
             self.records_args.get()?;
             self.records.get()?;
@@ -223,7 +240,7 @@ impl Project {
         object_clips: Option<&ObjectClipRanges>,
         cutoff_pairs: Option<&Buffer>,
     ) {
-        let kernel = self.kernel(scene).built();
+        let kernel = self.kernel(scene, cutoff_pairs.is_some()).built();
         let push = ProjectPush {
             frame: f.at.params,
             gaussians: scene.gaussians.address,
