@@ -359,6 +359,15 @@ pub fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
     })
 }
 
+/// Prints each pass's median milliseconds, a line per pass, the names padded to the longest
+/// so that the times line up (`render --repeat`).
+pub fn print_pass_medians(passes: Vec<(&str, Vec<f64>)>) {
+    let width = passes.iter().map(|(name, _)| name.len()).max().unwrap_or(0);
+    for (name, mut v) in passes {
+        println!("  {name:<width$} {:8.2} ms", median(&mut v));
+    }
+}
+
 pub fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
     let n = values.len();
@@ -641,11 +650,7 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             ctx.info().name,
             ctx.info().driver
         );
-        // Names padded to the longest, so that the times line up.
-        let width = passes.iter().map(|(name, _)| name.len()).max().unwrap_or(0);
-        for (name, mut v) in passes {
-            println!("  {name:<width$} {:8.2} ms", median(&mut v));
-        }
+        print_pass_medians(passes);
     }
     Ok(())
 }

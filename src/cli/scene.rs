@@ -10,7 +10,7 @@ use rara::reference::raytrace::RayTraceOptions;
 use rara::stages::mixed::{GpuMixedScene, MixedFrameStats, MixedTracer};
 use rara::{Camera, Context, Error, Result};
 
-use crate::{load_scene, median};
+use crate::{load_scene, median, print_pass_medians};
 
 /// Loads a scene file, each splat scene through the CLI's loader (its progress and warnings),
 /// and says what it holds. `background` overrides the file's.
@@ -182,11 +182,7 @@ pub fn render(
             ctx.info().name,
             ctx.info().driver
         );
-        // Names padded to the longest, so that the times line up.
-        let width = passes.iter().map(|(name, _)| name.len()).max().unwrap_or(0);
-        for (name, mut v) in passes {
-            println!("  {name:<width$} {:8.2} ms", median(&mut v));
-        }
+        print_pass_medians(passes);
     }
     Ok(())
 }
