@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Issue 37's GPU check, on a machine the `device` tool lends (scripts/gpu_bundle.sh packed
-# .gpu/ first): `bench` on plant and playbot at 1920x1080 and 640x480, `bench --sort 2000000`
+# .gpu/ first): `bench` on plant and playbot at 1920x1080, 1280x960 and 640x480 (GPU_CHECK_SIZES), `bench --sort 2000000`
 # and a mixed scene's ray-traced `bench --scene`, then every test binary until
 # GPU_CHECK_DEADLINE seconds (480) have passed, on the machine's Vulkan device. Everything
 # goes to $OUT/gpu_check.log (OUT: the device tool's folder, else /tmp/gpu_check).
@@ -42,7 +42,7 @@ export RARA_REAL_DATA=$g/data
 real=$RARA_REAL_DATA
 
 frames=30
-sizes="1920x1080 640x480"
+sizes=${GPU_CHECK_SIZES:-"1920x1080 1280x960 640x480"}
 [ "$quick" = 1 ] && { frames=2; sizes=640x480; }
 for size in $sizes; do
     w=${size%x*}
