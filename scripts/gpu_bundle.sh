@@ -2,10 +2,11 @@
 # Packs what the GPU check (scripts/gpu_check.sh, issue 37's first GPU numbers) needs into .gpu/
 # (git-ignored through .git/info/exclude) for the `device` tool, which carries at most 64 MiB
 # and whose machine has no toolchain and no network: the CLI and every test binary of this
-# build, stripped, in one tar.xz (about 14 MB); the Vulkan loader's Debian package (a bare
-# machine may lack it); the real scenes the benches and the real-scene tests read (plant and
-# biker as PLY, playbot as its published SOG, 8 MB against the PLY's 82 MB). Then, on a lent
-# machine: run(command="bash scripts/gpu_check.sh", carry=[".gpu"], timeout_s=540).
+# build, stripped, in one tar.xz (about 14 MB); the Debian packages of the Vulkan loader and of
+# glvnd (a bare machine may lack them); the real scenes the benches and the real-scene tests
+# read (plant and biker as PLY, playbot as its published SOG, 8 MB against the PLY's 82 MB).
+# Then, on a lent machine: run(command="bash scripts/gpu_check.sh", carry=[".gpu"],
+# timeout_s=540).
 # Usage: scripts/gpu_bundle.sh (RARA_REAL_DATA, else ../shared/data/real).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -51,6 +52,9 @@ done
 cp "$real/playbot_lod0_500k_sh2.orbit_cameras.json" "$out/data/"
 cp -r "$real/originals/playbot_lod0_sog" "$out/data/"
 
-(cd "$out" && apt-get download -qq libvulkan1)
+# The Vulkan loader, and glvnd's libraries, without which NVIDIA's driver gives the loader no
+# vkCreateInstance ("Found no drivers"; the device tool's recipe carries the same packages).
+(cd "$out" && apt-get download -qq libvulkan1 libglvnd0 libglx0 libgl1 libegl1 libopengl0 \
+    libgles2)
 du -sh "$out"
 echo "ready: run(command=\"bash scripts/gpu_check.sh\", carry=[\".gpu\"], timeout_s=540)"

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Issue 37's GPU check, on a machine the `device` tool lends (scripts/gpu_bundle.sh packed
-# .gpu/ first): `bench` on plant and playbot at 1920x1080, 1280x960 and 640x480 (GPU_CHECK_SIZES), `bench --sort 2000000`
-# and a mixed scene's ray-traced `bench --scene`, then every test binary until
-# GPU_CHECK_DEADLINE seconds (480) have passed, on the machine's Vulkan device. Everything
-# goes to $OUT/gpu_check.log (OUT: the device tool's folder, else /tmp/gpu_check).
+# .gpu/ first): `bench` on plant and playbot at 1920x1080, 1280x960 and 640x480
+# (GPU_CHECK_SIZES), `bench --sort 2000000` and a mixed scene's ray-traced `bench --scene`,
+# then every test binary until GPU_CHECK_DEADLINE seconds (480) have passed, on the machine's
+# Vulkan device. Everything goes to $OUT/gpu_check.log (OUT: the device tool's folder, else
+# /tmp/gpu_check), and the whole output of up to six failing test binaries beside it.
 # GPU_CHECK_QUICK=1 runs one test binary and short benches, to try the script itself (on
-# lavapipe, say) without spending device time.
+# lavapipe, say) without spending device time; GPU_CHECK_BENCH=0 runs the tests alone.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_check}
@@ -16,12 +17,11 @@ quick=${GPU_CHECK_QUICK:-0}
 [ -f "$g/bin.tar.xz" ] || { echo "no .gpu/bin.tar.xz: run scripts/gpu_bundle.sh first"; exit 2; }
 echo "gpu_check: build $(cat "$g/commit"), $(date -u)"
 
-# A bare machine may have no Vulkan loader: unpack the carried one. NVIDIA's driver files
-# sit under /usr/local/nvidia on the lent machines.
-if ! ldconfig -p | grep -q libvulkan.so.1; then
-    for f in "$g"/*.deb; do dpkg -x "$f" /; done
-    ldconfig
-fi
+# A bare machine may have no Vulkan loader, and NVIDIA's Vulkan driver (libGLX_nvidia, under
+# /usr/local/nvidia on the lent machines) gives the loader no vkCreateInstance without glvnd's
+# libraries: unpack the carried packages.
+for f in "$g"/*.deb; do dpkg -x "$f" /; done
+ldconfig
 icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then
     export VK_DRIVER_FILES=$icd
@@ -41,25 +41,28 @@ rara="$g/bin/rara"
 export RARA_REAL_DATA=$g/data
 real=$RARA_REAL_DATA
 
-frames=30
-sizes=${GPU_CHECK_SIZES:-"1920x1080 1280x960 640x480"}
-[ "$quick" = 1 ] && { frames=2; sizes=640x480; }
-for size in $sizes; do
-    w=${size%x*}
-    h=${size#*x}
-    echo "=== bench plant $size"
-    "$rara" bench "$real/plant_capture_sh0.ply" --cameras "$real/plant_capture_sh0.orbit_cameras.json" \
-        --width "$w" --height "$h" --frames "$frames"
-    echo "=== bench playbot (SOG) $size"
-    "$rara" bench "$real/playbot_lod0_sog/meta.json" \
-        --cameras "$real/playbot_lod0_500k_sh2.orbit_cameras.json" \
-        --width "$w" --height "$h" --frames "$frames"
-done
-echo "=== bench --sort 2000000"
-"$rara" bench --sort 2000000
-echo "=== bench --scene mirror_plant (ray traced) 640x480"
-"$rara" bench --scene examples/scenes/mirror_plant.json \
-    --cameras "$real/plant_capture_sh0.orbit_cameras.json" --width 640 --frames 3 --warmup 1
+if [ "${GPU_CHECK_BENCH:-1}" = 1 ]; then
+    frames=30
+    sizes=${GPU_CHECK_SIZES:-"1920x1080 1280x960 640x480"}
+    [ "$quick" = 1 ] && { frames=2; sizes=640x480; }
+    for size in $sizes; do
+        w=${size%x*}
+        h=${size#*x}
+        echo "=== bench plant $size"
+        "$rara" bench "$real/plant_capture_sh0.ply" \
+            --cameras "$real/plant_capture_sh0.orbit_cameras.json" \
+            --width "$w" --height "$h" --frames "$frames"
+        echo "=== bench playbot (SOG) $size"
+        "$rara" bench "$real/playbot_lod0_sog/meta.json" \
+            --cameras "$real/playbot_lod0_500k_sh2.orbit_cameras.json" \
+            --width "$w" --height "$h" --frames "$frames"
+    done
+    echo "=== bench --sort 2000000"
+    "$rara" bench --sort 2000000
+    echo "=== bench --scene mirror_plant (ray traced) 640x480"
+    "$rara" bench --scene examples/scenes/mirror_plant.json \
+        --cameras "$real/plant_capture_sh0.orbit_cameras.json" --width 640 --frames 3 --warmup 1
+fi
 echo "=== tests"
 # Each binary's output stays on the machine (the tool brings back 8 files at most); the log
 # gets its counts, its failures and which real-scene cases ran.
@@ -85,7 +88,10 @@ for t in "${binaries[@]}"; do
     passed=$((passed + p))
     failed=$((failed + f))
     echo "$name: rc $rc, $p passed, $f failed, $(($(date +%s) - start)) s"
-    [ "$rc" = 0 ] || grep -E "^test .* FAILED|panicked" "$logs/$name.log" | head -5
+    if [ "$rc" != 0 ]; then
+        grep -E "^test .* FAILED|panicked" "$logs/$name.log" | head -5
+        [ "$(ls "$out" | wc -l)" -le 6 ] && cp "$logs/$name.log" "$out/test_$name.log"
+    fi
     grep -h "real-scene case" "$logs/$name.log" | sort | uniq -c | sed 's/^/  /'
 done
 echo "tests: $passed passed, $failed failed"

@@ -201,16 +201,20 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
             "engine frame {index} ({tracer:?}): {compared} pixels compared, largest difference \
              {worst:.2}/255, {ties} channels past 1/255"
         );
-        // A value exactly halfway between two levels (the synthetic scene's quantised colours
-        // make some) is rounded up by the reference (floor(x * 255 + 0.5)) and to even by
-        // lavapipe's store to the unorm image: one level before the vignette, so up to 0.5 + v
-        // after it, in a handful of channels. The ray tracer's reference finds its hits in
-        // f64 where the GPU works in f32: a hit whose order or alpha threshold f32 cannot
-        // decide moves a few pixels further (the bound of tests/trace.rs, 4 levels but for
-        // such pixels).
-        let (most, most_ties) = match tracer {
-            rara::Tracer::Raster => (1.5, 8),
-            rara::Tracer::Ray => (8.0, 64),
+        // The image takes two stores to rgba8, and Vulkan lets a store to a unorm format
+        // return either of the two levels nearest the value ("should" round to nearest): one
+        // level off before the vignette and under one after it, so under 2 levels against the
+        // reference's rounding (floor(x * 255 + 0.5)) and its vignette. lavapipe rounds to
+        // nearest (to even at a half, where the synthetic scene's quantised colours put a
+        // handful of channels past 1 level); NVIDIA 580 put 1,555 channels (0.7 %) past 1
+        // level, at most 1.55. The ray tracer's reference finds its hits in f64 where the GPU
+        // works in f32: a hit whose order or alpha threshold f32 cannot decide moves a few
+        // pixels further (the bound of tests/trace.rs, 4 levels but for such pixels; NVIDIA:
+        // 3.07 at most, 1,645 channels past 1 level).
+        let most_ties = compared * 3 / 100; // 1 % of the channels
+        let most = match tracer {
+            rara::Tracer::Raster => 1.999,
+            rara::Tracer::Ray => 8.0,
         };
         assert!(worst <= most, "frame {index} differs by {worst}/255");
         assert!(

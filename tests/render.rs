@@ -243,8 +243,17 @@ fn stages_match_cpu_twins(scene: &Scene, cam: &Camera, raster: (f64, u8)) {
     assert_eq!(acc, stats.intersections);
 
     // emit + sort + tile ranges: every tile's list equals the CPU's (depth, index) order, each
-    // pair with the blocks of the tile that its splat's footprint reaches.
-    let cpu_lists = tile_lists(&cpu_splats, cam);
+    // pair with the blocks of the tile that its splat's footprint reaches. Ordered by the GPU's
+    // depths, as the depth order above: NVIDIA's depths differ from the CPU's in the last bit
+    // (fused multiply-adds), which swapped two near-equal splats in a tile's list.
+    let by_gpu_depth: Vec<_> = cpu_splats
+        .iter()
+        .map(|c| reference::project::ProjectedSplat {
+            depth: mid.splats[c.index as usize].depth,
+            ..*c
+        })
+        .collect();
+    let cpu_lists = tile_lists(&by_gpu_depth, cam);
     let grid_x = reference::project::tile_grid(cam).0;
     for (tile, list) in cpu_lists.iter().enumerate() {
         let [start, end] = mid.ranges[tile];

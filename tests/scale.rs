@@ -274,10 +274,13 @@ fn half_precision_sh() {
     );
     let rounded = ShPrecision::F16.round_scene(&scene);
     assert_ne!(rounded.sh, scene.sh, "rounding changed nothing");
+    // Up to 8 levels in a few pixels: NVIDIA's depths differ from the CPU's in the last bit
+    // (fused multiply-adds), which can swap two overlapping splats of near-equal depth (view 1
+    // there: PSNR 81 dB, 5 levels in 15 pixels; lavapipe matches the CPU's floats).
     for (k, camera) in shell_cameras(320, 240).iter().step_by(3).enumerate() {
         let (gpu, _) = renderer.render(&half, camera, &options()).unwrap();
         let cpu = reference::render(&rounded, camera, &options());
-        common::check_images(&format!("sh16_shell_view{k}"), &gpu, &cpu, 50.0, 4);
+        common::check_images(&format!("sh16_shell_view{k}"), &gpu, &cpu, 50.0, 8);
     }
     // Replacing the contents keeps the precision; 400k SH3 Gaussians are 38 MB of halves, more
     // than one 32 MiB staging chunk, so the chunked conversion is exercised across a boundary.
@@ -289,7 +292,7 @@ fn half_precision_sh() {
     let camera = shell_cameras(160, 120)[1];
     let (gpu, _) = renderer.render(&half, &camera, &options()).unwrap();
     let cpu = reference::render(&ShPrecision::F16.round_scene(&big), &camera, &options());
-    common::check_images("sh16_shell_400k", &gpu, &cpu, 50.0, 4);
+    common::check_images("sh16_shell_400k", &gpu, &cpu, 50.0, 8);
 
     for stem in [
         "kacytran_indoor_iter7000_sh3",

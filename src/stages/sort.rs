@@ -748,6 +748,13 @@ impl RadixSort {
         self.segment_min_keys = min_keys.map(|n| n.max(1));
     }
 
+    /// Whether this sorter can segment a sort ([`RadixSort::set_segment_min_keys`]): the
+    /// own-counts layout on a CPU device only, whose caches keep what the local kernels write
+    /// and read back in one dispatch coherent (a GPU's texture cache need not).
+    pub fn can_segment(&self) -> bool {
+        self.segments.is_some()
+    }
+
     /// Whether this sort takes and gives packed pairs ([`RadixSort::record_form`]): in the
     /// own-counts layout.
     pub fn sorts_packed(&self) -> bool {
