@@ -216,7 +216,11 @@ fn synthetic_scenes_are_deterministic_and_as_described() {
 /// A scene's header in the INRIA layout with lines spliced in (`before` ahead of the vertex
 /// element, `inside` after its properties), and its payload as written.
 fn spliced(scene: &Scene, encoding: PlyEncoding, before: &str, inside: &str) -> (String, Vec<u8>) {
-    let path = tmp(&format!("splice_{}.ply", std::process::id()));
+    // A file of its own per call: tests run on threads of one process, and one test's
+    // remove_file took another's file away (seen on a 16-core machine).
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path = tmp(&format!("splice_{call}.ply"));
     write_ply(scene, &path, encoding).unwrap();
     let bytes = std::fs::read(&path).unwrap();
     std::fs::remove_file(&path).ok();
