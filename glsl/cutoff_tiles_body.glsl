@@ -116,6 +116,157 @@ uint flat_tile_class(CutoffRecord rec, vec3 eye, vec3 dirs[4], uint planes, uint
     return (invert ? outside_some : inside_all) ? TILE_CLASS_FULL : TILE_CLASS_PARTIAL;
 }
 
+// Pair counts of what one pair's classification did, summed per invocation.
+struct PairTally {
+    uint weight_one;
+    uint empty;
+};
+
+// Classifies the pair at `slot` of cutoff splat `p` (record `rec`): rewrites its key (empty) or
+// its value (weight 1) and flags its tile where it stays weighted.
+void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord rec, uint slot,
+                   uint tile_count, bool tile_lists, inout PairTally tally) {
+#ifdef SPLAT_TEXELS
+    uint tile = texelFetch(emitted_keys, int(slot)).x;
+#else
+    uint tile = pc.keys.v[slot];
+#endif
+    uvec2 xy = uvec2(tile % f.size.z, tile / f.size.z);
+    // The rays through the corners of the tile's pixels that the splat can reach (alpha
+    // >= 1/255 needs q <= footprint_q_max), in order around them: the weight elsewhere in
+    // the tile changes no pixel, and a footprint that covers part of the tile often sees
+    // only weight 1 or 0 where the tile as a whole sees both.
+    vec4 box = footprint_pixel_box_in_tile(p.uv, p.conic, footprint_q_max(p.opacity),
+                                           xy.x, xy.y);
+    vec3 dirs[4] = vec3[4](pixel_ray(f, box.xy), pixel_ray(f, box.zy),
+                           pixel_ray(f, box.zw), pixel_ray(f, box.xw));
+    float q_min = footprint_q_min_in_tile(p.uv, p.conic, xy.x, xy.y);
+    float peak_alpha = p.opacity * exp(-0.5 * q_min);
+    // A flat splat's weight is a step along its plane (SPEC section 6): the mass
+    // bounds, worked out in the whitened frame it does not have, give way to
+    // flat_tile_class.
+    bool flat_splat = FLAT_SPLATS && cutoff_record_is_flat(rec);
+    TileMassBounds bounds = tile_mass_bounds_none();
+    uint bounded_planes = flat_splat ? 0u : config.w;
+    for (uint plane = 0u; plane < bounded_planes; ++plane) {
+        tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(plane),
+                                                        f.cam_pos.xyz, dirs));
+    }
+    uint tile_class;
+    if (flat_splat) {
+        tile_class = peak_alpha < 0.99 / 255.0
+                   ? TILE_CLASS_EMPTY
+                   : flat_tile_class(rec, f.cam_pos.xyz, dirs, config.w, config.z);
+    } else {
+        tile_class = cutoff_tile_class(config.z, bounds, peak_alpha);
+    }
+    // No pixel centre of the tile in the footprint's bounding box: nothing to draw.
+    tile_class = box.x > box.z || box.y > box.w ? TILE_CLASS_EMPTY : tile_class;
+    if (tile_class == TILE_CLASS_EMPTY) {
+        pc.keys.v[slot] = tile_count;
+        ++tally.empty;
+    } else if (tile_class == TILE_CLASS_FULL) {
+        pc.values.v[slot] &= ~PAIR_WEIGHTED;   // keeps the block bits
+        ++tally.weight_one;
+    } else if (tile_lists) {
+        pc.tile_flags.v[tile] = 1u;
+    }
+}
+
+// The splat of cutoff record k and the range of its pairs, [slot, end).
+void cutoff_splat(FrameParams f, uint k, out ProjectedSplat p, out CutoffRecord rec,
+                  out uint slot, out uint end) {
+    uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
+    uint i = first.y;
+#ifdef SPLAT_TEXELS
+    p = texel_splat(i);
+    rec = texel_cutoff_record(k);
+    uint touched = texelFetch(tiles_touched, int(i)).x;
+#else
+    p = load_splat(pc.splats, i);
+    rec = load_cutoff_record(pc.cutoffs, k);
+    uint touched = pc.tiles_touched.v[i];
+#endif
+    slot = first.x;
+    end = max(first.x, min(first.x + touched, f.scene.w));
+}
+
+#ifdef BALANCED_PAIRS
+#define WG_SCAN_SIZE LINEAR_WORKGROUP
+#include "workgroup_scan.glsl"
+
+// Steps of the search for a pair's record: log2(LINEAR_WORKGROUP).
+#define CUTOFF_TILES_SEARCH_STEPS 8u
+#if LINEAR_WORKGROUP != 256
+#error "CUTOFF_TILES_SEARCH_STEPS is log2(LINEAR_WORKGROUP)"
+#endif
+
+// Per cutoff record of the workgroup, by scan rank: its first pair, and the sum of the pair
+// counts of the records before it (the workgroup's total past the records it has).
+shared uint record_first_pair[LINEAR_WORKGROUP];
+shared uint record_pairs_before[LINEAR_WORKGROUP];
+
+void main() {
+    FrameParams f = load_frame_params(pc.frame);
+    uvec4 config = pc.clip.p.config;
+    uint group_first = linear_index() - gl_LocalInvocationIndex;
+    uint group_end = min(group_first + LINEAR_WORKGROUP, pc.counters.v[COUNTER_CUTOFF]);
+    uint records = group_end - min(group_first, group_end);
+    uint tile_count = f.size.z * f.size.w;
+    bool tile_lists = uint64_t(pc.tile_flags) != 0ul;
+    // Each invocation counts the pairs of one record, in scan order.
+    uint rank = workgroup_scan_rank();
+    uint slot = 0u;
+    uint end = 0u;
+    if (rank < records) {
+        ProjectedSplat p;
+        CutoffRecord rec;
+        cutoff_splat(f, group_first + rank, p, rec, slot, end);
+    }
+    uint total;
+    uint before = workgroup_exclusive_scan(end - slot, total);
+    record_first_pair[rank] = slot;
+    record_pairs_before[rank] = rank < records ? before : total;
+    barrier();
+    // Pair j of the workgroup's records belongs to the last record whose pairs start at or
+    // before it: a binary search over the ranks, and the invocations take the pairs in turn.
+    // So a splat over many tiles shares them out instead of one invocation walking them all
+    // (the pass took as long as the cutoff splat with the most tiles).
+    PairTally tally = PairTally(0u, 0u);
+    // Loop cap: a pass is this loop's iteration, the search's (if a driver keeps its loop)
+    // and the planes'.
+    uint passes_left = CUTOFF_TILES_LOOP_BUDGET / (1u + CUTOFF_TILES_SEARCH_STEPS + config.w);
+    uint j = gl_LocalInvocationIndex;
+    for (; j < total && passes_left > 0u; j += LINEAR_WORKGROUP, --passes_left) {
+        // The last rank whose pairs start at or before j (record_pairs_before grows with the
+        // rank, and is 0 at rank 0): steps of LINEAR_WORKGROUP / 2, / 4, ... 1.
+        uint lo = 0u;
+        [[unroll]] for (uint step = LINEAR_WORKGROUP / 2u; step > 0u; step >>= 1u) {
+            if (record_pairs_before[lo + step] <= j) {
+                lo += step;
+            }
+        }
+        ProjectedSplat p;
+        CutoffRecord rec;
+        uint first;
+        uint last;
+        cutoff_splat(f, group_first + lo, p, rec, first, last);
+        classify_pair(f, config, p, rec, record_first_pair[lo] + (j - record_pairs_before[lo]),
+                      tile_count, tile_lists, tally);
+    }
+    // Out of passes (lavapipe's loop cap): the pairs left stay unclassified, weighted.
+    if (tile_lists && j < total) {
+        pc.tile_flags.v[tile_count] = 1u;
+    }
+    if (end > slot) {
+        atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS], end - slot);
+    }
+    if (tally.weight_one + tally.empty > 0u) {
+        atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE], tally.weight_one);
+        atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_EMPTY], tally.empty);
+    }
+}
+#else
 // The next cutoff record of the workgroup's LINEAR_WORKGROUP to take.
 shared uint next_record;
 
@@ -132,12 +283,10 @@ void main() {
     uint tile_count = f.size.z * f.size.w;
     uint slot = 0u;
     uint end = 0u;
-    uint i = 0u;
     ProjectedSplat p;
     CutoffRecord rec;
     uint pairs = 0u;
-    uint weight_one = 0u;
-    uint empty = 0u;
+    PairTally tally = PairTally(0u, 0u);
     bool live = true;
     uint passes_left = CUTOFF_TILES_LOOP_BUDGET / (1u + config.w);
     bool tile_lists = uint64_t(pc.tile_flags) != 0ul;
@@ -146,68 +295,12 @@ void main() {
             uint k = atomicAdd(next_record, 1u);
             live = k < group_end;
             if (live) {
-                uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
-                i = first.y;
-#ifdef SPLAT_TEXELS
-                p = texel_splat(i);
-                rec = texel_cutoff_record(k);
-                uint touched = texelFetch(tiles_touched, int(i)).x;
-#else
-                p = load_splat(pc.splats, i);
-                rec = load_cutoff_record(pc.cutoffs, k);
-                uint touched = pc.tiles_touched.v[i];
-#endif
-                slot = first.x;
-                end = max(first.x, min(first.x + touched, f.scene.w));
+                cutoff_splat(f, k, p, rec, slot, end);
                 pairs += end - slot;
             }
         }
         if (live && slot < end) {
-#ifdef SPLAT_TEXELS
-            uint tile = texelFetch(emitted_keys, int(slot)).x;
-#else
-            uint tile = pc.keys.v[slot];
-#endif
-            uvec2 xy = uvec2(tile % f.size.z, tile / f.size.z);
-            // The rays through the corners of the tile's pixels that the splat can reach (alpha
-            // >= 1/255 needs q <= footprint_q_max), in order around them: the weight elsewhere in
-            // the tile changes no pixel, and a footprint that covers part of the tile often sees
-            // only weight 1 or 0 where the tile as a whole sees both.
-            vec4 box = footprint_pixel_box_in_tile(p.uv, p.conic, footprint_q_max(p.opacity),
-                                                   xy.x, xy.y);
-            vec3 dirs[4] = vec3[4](pixel_ray(f, box.xy), pixel_ray(f, box.zy),
-                                   pixel_ray(f, box.zw), pixel_ray(f, box.xw));
-            float q_min = footprint_q_min_in_tile(p.uv, p.conic, xy.x, xy.y);
-            float peak_alpha = p.opacity * exp(-0.5 * q_min);
-            // A flat splat's weight is a step along its plane (SPEC section 6): the mass
-            // bounds, worked out in the whitened frame it does not have, give way to
-            // flat_tile_class.
-            bool flat_splat = FLAT_SPLATS && cutoff_record_is_flat(rec);
-            TileMassBounds bounds = tile_mass_bounds_none();
-            uint bounded_planes = flat_splat ? 0u : config.w;
-            for (uint plane = 0u; plane < bounded_planes; ++plane) {
-                tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(plane),
-                                                                f.cam_pos.xyz, dirs));
-            }
-            uint tile_class;
-            if (flat_splat) {
-                tile_class = peak_alpha < 0.99 / 255.0
-                           ? TILE_CLASS_EMPTY
-                           : flat_tile_class(rec, f.cam_pos.xyz, dirs, config.w, config.z);
-            } else {
-                tile_class = cutoff_tile_class(config.z, bounds, peak_alpha);
-            }
-            // No pixel centre of the tile in the footprint's bounding box: nothing to draw.
-            tile_class = box.x > box.z || box.y > box.w ? TILE_CLASS_EMPTY : tile_class;
-            if (tile_class == TILE_CLASS_EMPTY) {
-                pc.keys.v[slot] = tile_count;
-                ++empty;
-            } else if (tile_class == TILE_CLASS_FULL) {
-                pc.values.v[slot] &= ~PAIR_WEIGHTED;   // keeps the block bits
-                ++weight_one;
-            } else if (tile_lists) {
-                pc.tile_flags.v[tile] = 1u;
-            }
+            classify_pair(f, config, p, rec, slot, tile_count, tile_lists, tally);
             ++slot;
         }
         --passes_left;
@@ -218,7 +311,8 @@ void main() {
     }
     if (pairs > 0u) {
         atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS], pairs);
-        atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE], weight_one);
-        atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_EMPTY], empty);
+        atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE], tally.weight_one);
+        atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS_EMPTY], tally.empty);
     }
 }
+#endif

@@ -12,7 +12,17 @@ const VARIANTS: &[Variant] = &[
         body: "cutoff_tiles_body.glsl",
         defines: &[],
         about: &[
-            "Stage 4b, cutoff tiles, reading through buffer loads (GPUs; see cutoff_tiles_body.glsl).",
+            "Stage 4b, cutoff tiles, a splat's pairs walked by the invocation that takes it, through",
+            "buffer loads (GPUs, RARA_CUTOFF_TILES=splats; see cutoff_tiles_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "cutoff_tiles_balanced",
+        body: "cutoff_tiles_body.glsl",
+        defines: &["BALANCED_PAIRS"],
+        about: &[
+            "Stage 4b, cutoff tiles, the pairs of a workgroup's cutoff splats shared out over its",
+            "invocations (GPUs; see cutoff_tiles_body.glsl).",
         ],
     },
     Variant {

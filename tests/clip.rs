@@ -556,18 +556,39 @@ fn tile_class_cases() -> Vec<(&'static str, Scene, Camera)> {
 /// The per-tile classes of cutoff pairs (`stages::cutoff_tiles`) only save work: the image is
 /// the same with and without them to within rounding, for planes, a box and a cutaway, while
 /// some of the cutoff pairs are drawn plain or left out (45 % in these small frames, 58-69 %
-/// in the bench's). A sphere is not classified.
+/// in the bench's). A sphere is not classified. Both rasterizer layouts, whose cutoff-tiles
+/// kernels share the pairs out differently (whole splats per invocation through texel views,
+/// a workgroup's pairs over its invocations through buffer loads), classify the same pairs
+/// the same way.
 #[test]
 fn cutoff_tile_classes_change_no_pixel() {
     let ctx = common::context();
-    let mut renderer = Renderer::new(&ctx).unwrap();
+    let mut counts_by_layout = Vec::new();
+    for layout in [RasterLayout::Strips, RasterLayout::PixelPerInvocation] {
+        let mut renderer = Renderer::with_raster_layout(&ctx, layout).unwrap();
+        counts_by_layout.push(tile_classes_change_no_pixel(&mut renderer, layout));
+    }
+    assert_eq!(
+        counts_by_layout[0], counts_by_layout[1],
+        "classes by layout"
+    );
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// `cutoff_tile_classes_change_no_pixel` in one layout: each case's (cutoff pairs, weight 1,
+/// empty).
+fn tile_classes_change_no_pixel(
+    renderer: &mut Renderer,
+    layout: RasterLayout,
+) -> Vec<(u32, u32, u32)> {
+    let mut counts = Vec::new();
     let (mut all, mut weight_one, mut empty) = (0u64, 0u64, 0u64);
     for (name, scene, camera) in tile_class_cases() {
         let gpu_scene = renderer.upload(&scene).unwrap();
         for (region_name, region) in regions(&scene) {
             let options = over_grey(Clip::rara(region));
             let ((plain, plain_stats), (classified, stats)) =
-                render_without_and_with_tile_classes(&mut renderer, &gpu_scene, &camera, &options);
+                render_without_and_with_tile_classes(renderer, &gpu_scene, &camera, &options);
             assert_eq!(
                 plain_stats.cutoff_pairs, 0,
                 "{name} {region_name}: switched off"
@@ -579,16 +600,21 @@ fn cutoff_tile_classes_change_no_pixel() {
                 stats.cutoff_pairs
             );
             eprintln!(
-                "  {name} {region_name}: {} cutoff pairs, {} weight 1, {} empty",
+                "  {layout:?} {name} {region_name}: {} cutoff pairs, {} weight 1, {} empty",
                 stats.cutoff_pairs, stats.cutoff_pairs_weight_one, stats.cutoff_pairs_empty
             );
             common::check_images(
-                &format!("cutoff_tile_classes_{name}_{region_name}"),
+                &format!("cutoff_tile_classes_{layout:?}_{name}_{region_name}"),
                 &classified,
                 &plain,
                 60.0,
                 1,
             );
+            counts.push((
+                stats.cutoff_pairs,
+                stats.cutoff_pairs_weight_one,
+                stats.cutoff_pairs_empty,
+            ));
             all += stats.cutoff_pairs as u64;
             weight_one += stats.cutoff_pairs_weight_one as u64;
             empty += stats.cutoff_pairs_empty as u64;
@@ -603,7 +629,7 @@ fn cutoff_tile_classes_change_no_pixel() {
         (weight_one + empty) * 10 >= all,
         "{weight_one} weight 1 + {empty} empty of {all}"
     );
-    common::assert_no_validation_messages(&ctx);
+    counts
 }
 
 /// The split of the tiles by rasterize kernel (`stages::tile_lists`, the strips rasterizer
@@ -651,11 +677,20 @@ fn tile_lists_change_no_pixel() {
 /// pairs in all) outrun the cutoff-tiles kernel's loop budget (CUTOFF_TILES_LOOP_BUDGET) on a
 /// CPU driver, whose first SIMD vector of 8 invocations takes the workgroup's splats in turn.
 /// The pairs it leaves unclassified are drawn exactly, so the image matches the one without tile
-/// classes.
+/// classes. The other layout's kernel shares the 230,000 pairs out over the workgroup, within
+/// the budget, and matches too.
 #[test]
 fn cutoff_tiles_past_the_loop_budget_change_no_pixel() {
     let ctx = common::context();
-    let mut renderer = Renderer::new(&ctx).unwrap();
+    for layout in [RasterLayout::Strips, RasterLayout::PixelPerInvocation] {
+        let mut renderer = Renderer::with_raster_layout(&ctx, layout).unwrap();
+        cutoff_tiles_past_the_loop_budget(&mut renderer);
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// `cutoff_tiles_past_the_loop_budget_change_no_pixel` in `renderer`'s layout.
+fn cutoff_tiles_past_the_loop_budget(renderer: &mut Renderer) {
     let mut scene = rara::synth::shell(0, 0, 1);
     let mut rng = Rng::new(7);
     for _ in 0..300 {
@@ -689,9 +724,10 @@ fn cutoff_tiles_past_the_loop_budget_change_no_pixel() {
         ..RenderOptions::default()
     };
     let ((plain, _), (classified, stats)) =
-        render_without_and_with_tile_classes(&mut renderer, &gpu_scene, &camera, &options);
+        render_without_and_with_tile_classes(renderer, &gpu_scene, &camera, &options);
+    let layout = renderer.raster_layout();
     eprintln!(
-        "{} cutoff splats, {} cutoff pairs, {} weight 1, {} empty",
+        "{layout:?}: {} cutoff splats, {} cutoff pairs, {} weight 1, {} empty",
         stats.cutoff, stats.cutoff_pairs, stats.cutoff_pairs_weight_one, stats.cutoff_pairs_empty
     );
     assert!(stats.cutoff >= 256, "{} cutoff splats", stats.cutoff);
@@ -703,11 +739,16 @@ fn cutoff_tiles_past_the_loop_budget_change_no_pixel() {
     assert!(stats.cutoff_pairs_weight_one + stats.cutoff_pairs_empty > 0);
     // Pairs left unclassified may be weighted in any tile: on a CPU driver (the strips
     // rasterizer, whose tile lists this is) every tile takes the weighted kernel.
-    if renderer.raster_layout() == RasterLayout::Strips {
+    if layout == RasterLayout::Strips {
         assert_eq!(stats.weighted_tiles, 80 * 60, "weighted tiles");
     }
-    common::check_images("cutoff_tiles_loop_budget", &classified, &plain, 60.0, 1);
-    common::assert_no_validation_messages(&ctx);
+    common::check_images(
+        &format!("cutoff_tiles_loop_budget_{layout:?}"),
+        &classified,
+        &plain,
+        60.0,
+        1,
+    );
 }
 
 /// What the GPU made of each Gaussian in the last frame.
