@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 37's GPU check, on a machine the `device` tool lends (scripts/gpu_bundle.sh packed
 # .gpu/ first): `bench` on plant and playbot at 1920x1080, 1280x960 and 640x480
-# (GPU_CHECK_SIZES), `bench --sort 2000000` and a mixed scene's ray-traced `bench --scene`,
+# (GPU_CHECK_SIZES), plant at 1920x1080 again with RARA_CUTOFF_TILES=splats, `bench --sort
+# 2000000` and a mixed scene's ray-traced `bench --scene`,
 # then every test binary until GPU_CHECK_DEADLINE seconds (480) have passed, on the machine's
 # Vulkan device. Everything goes to $OUT/gpu_check.log (OUT: the device tool's folder, else
 # /tmp/gpu_check), and the whole output of up to six failing test binaries beside it.
@@ -57,6 +58,14 @@ if [ "${GPU_CHECK_BENCH:-1}" = 1 ]; then
             --cameras "$real/playbot_lod0_500k_sh2.orbit_cameras.json" \
             --width "$w" --height "$h" --frames "$frames"
     done
+    # The GPU layout's cutoff tiles, pairs shared over the workgroup (the default) against
+    # whole splats per invocation, where the pass was longest (plant at 1920x1080).
+    if [ "$quick" != 1 ]; then
+        echo "=== bench plant 1920x1080, RARA_CUTOFF_TILES=splats"
+        RARA_CUTOFF_TILES=splats "$rara" bench "$real/plant_capture_sh0.ply" \
+            --cameras "$real/plant_capture_sh0.orbit_cameras.json" \
+            --width 1920 --height 1080 --frames "$frames"
+    fi
     echo "=== bench --sort 2000000"
     "$rara" bench --sort 2000000
     echo "=== bench --scene mirror_plant (ray traced) 640x480"
@@ -101,6 +110,10 @@ for t in "${binaries[@]}"; do
     # Timed out (the trace binary did once on an H200, every test of it unreported after
     # 136 s): its tests one at a time, so the log names the one that does not end.
     if [ "$rc" = 124 ]; then
+        # A GPU fault (an Xid) would show here; a hung process, in the compute apps.
+        dmesg 2>/dev/null | grep -i -E 'xid|nvrm' | tail -5 | sed 's/^/  dmesg: /'
+        nvidia-smi --query-compute-apps=pid,used_memory --format=csv,noheader 2>/dev/null \
+            | sed 's/^/  still on the GPU: /'
         tests=$(cd "$built" && "$t" --list --format terse 2>/dev/null | sed -n 's/: test$//p')
         for test in $tests; do
             [ "$SECONDS" -gt "$deadline" ] && break
