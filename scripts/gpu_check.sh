@@ -40,6 +40,9 @@ mkdir -p "$built/target/release"
 [ -e "$built/target/release/rara" ] || cp "$g/bin/rara" "$built/target/release/rara"
 rara="$g/bin/rara"
 export RARA_REAL_DATA=$g/data
+# A submission that has not finished after 20 s says so (RARA_GPU_WARN_S), so a test that
+# hangs shows whether the GPU or the host holds it up (the tests one at a time: --nocapture).
+export RARA_GPU_WARN_S=${RARA_GPU_WARN_S:-20}
 real=$RARA_REAL_DATA
 
 if [ "${GPU_CHECK_BENCH:-1}" = 1 ]; then

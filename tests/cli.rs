@@ -86,6 +86,37 @@ const BASE: [&str; 14] = [
     "rot_0", "rot_1", "rot_2", "rot_3",
 ];
 
+/// A wait for the GPU past `RARA_GPU_WARN_S` says so on stderr and goes on: the frame is the
+/// same. Set to a microsecond, which no frame's submission takes less than.
+#[test]
+fn a_long_wait_for_the_gpu_is_reported() {
+    let (scene, cams) = good_scene();
+    let render = |name: &str, warn: Option<&str>| {
+        let out = dir().join(name);
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_rara"));
+        cmd.args(render_args(
+            scene.to_str().unwrap(),
+            cams.to_str().unwrap(),
+            out.to_str().unwrap(),
+        ));
+        if let Some(w) = warn {
+            cmd.env("RARA_GPU_WARN_S", w);
+        }
+        let o = cmd.output().expect("run rara");
+        assert_success(&o);
+        (
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+            image::open(&out).unwrap().to_rgba8(),
+        )
+    };
+    let (quiet, image) = render("wait_default.png", None);
+    let (warned, same) = render("wait_warned.png", Some("0.000001"));
+    let needle = "the GPU has not finished a submission after 0.000001 s; still waiting";
+    assert!(!quiet.contains("has not finished"), "{quiet}");
+    assert!(warned.contains(needle), "{warned}");
+    assert_eq!(image, same, "the frame changed");
+}
+
 #[test]
 fn render_and_info_succeed() {
     let (scene, cams) = good_scene();

@@ -535,17 +535,36 @@ impl Context {
         result
     }
 
-    /// Submits a recorded command buffer to the queue and waits for it on a fence.
+    /// Submits a recorded command buffer to the queue and waits for it on a fence. A wait past
+    /// `RARA_GPU_WARN_S` seconds (60 by default; 0: never) says so on stderr once and goes on
+    /// waiting: the work may still end, and what it uses must not be freed before it does.
     pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {
         let device = &self.shared.device;
         let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
             .vk("vkCreateFence")?;
         let cmds = [cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        let warn_after = gpu_warn_seconds();
+        let first_wait = if warn_after > 0.0 {
+            (warn_after * 1e9).min(u64::MAX as f64) as u64
+        } else {
+            u64::MAX
+        };
         let result = unsafe { device.queue_submit(self.shared.queue, &submit, fence) }
             .vk("vkQueueSubmit")
             .and_then(|_| {
-                unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+                match unsafe { device.wait_for_fences(&[fence], true, first_wait) } {
+                    Err(vk::Result::TIMEOUT) => {
+                        eprintln!(
+                            "rara: the GPU has not finished a submission after {warn_after} s; \
+                             still waiting (a kernel that does not end, or a device far too \
+                             slow for the work)"
+                        );
+                        unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }
+                    }
+                    other => other,
+                }
+                .vk("vkWaitForFences")
             });
         unsafe { device.destroy_fence(fence, None) };
         result
@@ -674,5 +693,20 @@ fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
         pipeline_statistics: unsafe { instance.get_physical_device_features(pd) }
             .pipeline_statistics_query
             == vk::TRUE,
+    }
+}
+
+/// After how long [`Context::submit_and_wait`] says that it is still waiting for the GPU:
+/// `RARA_GPU_WARN_S` seconds (fractions allowed; 0: never), else 60, far past the longest
+/// submission of the suite or the benches on lavapipe (seconds), so that a process held up by
+/// the GPU says so rather than hanging in silence.
+fn gpu_warn_seconds() -> f64 {
+    const DEFAULT_SECONDS: f64 = 60.0;
+    match std::env::var("RARA_GPU_WARN_S") {
+        Ok(v) => match v.trim().parse::<f64>() {
+            Ok(s) if s >= 0.0 && s.is_finite() => s,
+            _ => DEFAULT_SECONDS,
+        },
+        Err(_) => DEFAULT_SECONDS,
     }
 }
