@@ -173,22 +173,28 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
     }
 }
 
-// The splat of cutoff record k and the range of its pairs, [slot, end).
-void cutoff_splat(FrameParams f, uint k, out ProjectedSplat p, out CutoffRecord rec,
-                  out uint slot, out uint end) {
+// The range of cutoff record k's pairs, [slot, end), and its splat's index.
+void cutoff_pairs(FrameParams f, uint k, out uint slot, out uint end, out uint splat) {
     uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
-    uint i = first.y;
+    splat = first.y;
 #ifdef SPLAT_TEXELS
-    p = texel_splat(i);
-    rec = texel_cutoff_record(k);
-    uint touched = texelFetch(tiles_touched, int(i)).x;
+    uint touched = texelFetch(tiles_touched, int(splat)).x;
 #else
-    p = load_splat(pc.splats, i);
-    rec = load_cutoff_record(pc.cutoffs, k);
-    uint touched = pc.tiles_touched.v[i];
+    uint touched = pc.tiles_touched.v[splat];
 #endif
     slot = first.x;
     end = max(first.x, min(first.x + touched, f.scene.w));
+}
+
+// Cutoff record k and its splat, index `splat`.
+void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec) {
+#ifdef SPLAT_TEXELS
+    p = texel_splat(splat);
+    rec = texel_cutoff_record(k);
+#else
+    p = load_splat(pc.splats, splat);
+    rec = load_cutoff_record(pc.cutoffs, k);
+#endif
 }
 
 #ifdef BALANCED_PAIRS
@@ -201,9 +207,10 @@ void cutoff_splat(FrameParams f, uint k, out ProjectedSplat p, out CutoffRecord 
 #error "CUTOFF_TILES_SEARCH_STEPS is log2(LINEAR_WORKGROUP)"
 #endif
 
-// Per cutoff record of the workgroup, by scan rank: its first pair, and the sum of the pair
-// counts of the records before it (the workgroup's total past the records it has).
+// Per cutoff record of the workgroup, by scan rank: its first pair, its splat, and the sum of
+// the pair counts of the records before it (the workgroup's total past the records it has).
 shared uint record_first_pair[LINEAR_WORKGROUP];
+shared uint record_splat[LINEAR_WORKGROUP];
 shared uint record_pairs_before[LINEAR_WORKGROUP];
 
 void main() {
@@ -218,14 +225,14 @@ void main() {
     uint rank = workgroup_scan_rank();
     uint slot = 0u;
     uint end = 0u;
+    uint splat = 0u;
     if (rank < records) {
-        ProjectedSplat p;
-        CutoffRecord rec;
-        cutoff_splat(f, group_first + rank, p, rec, slot, end);
+        cutoff_pairs(f, group_first + rank, slot, end, splat);
     }
     uint total;
     uint before = workgroup_exclusive_scan(end - slot, total);
     record_first_pair[rank] = slot;
+    record_splat[rank] = splat;
     record_pairs_before[rank] = rank < records ? before : total;
     barrier();
     // Pair j of the workgroup's records belongs to the last record whose pairs start at or
@@ -248,9 +255,7 @@ void main() {
         }
         ProjectedSplat p;
         CutoffRecord rec;
-        uint first;
-        uint last;
-        cutoff_splat(f, group_first + lo, p, rec, first, last);
+        cutoff_splat(group_first + lo, record_splat[lo], p, rec);
         classify_pair(f, config, p, rec, record_first_pair[lo] + (j - record_pairs_before[lo]),
                       tile_count, tile_lists, tally);
     }
@@ -295,7 +300,9 @@ void main() {
             uint k = atomicAdd(next_record, 1u);
             live = k < group_end;
             if (live) {
-                cutoff_splat(f, k, p, rec, slot, end);
+                uint splat;
+                cutoff_pairs(f, k, slot, end, splat);
+                cutoff_splat(k, splat, p, rec);
                 pairs += end - slot;
             }
         }
