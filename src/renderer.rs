@@ -1370,9 +1370,6 @@ fn copy_regions_to_host(
     let to_transfer = vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
         .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
-    let to_host = vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-        .dst_access_mask(vk::AccessFlags::HOST_READ);
     unsafe {
         device.cmd_pipeline_barrier(
             cmd,
@@ -1391,14 +1388,6 @@ fn copy_regions_to_host(
             }];
             device.cmd_copy_buffer(cmd, source.raw, readback.raw, &region);
         }
-        device.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::HOST,
-            vk::DependencyFlags::empty(),
-            &[to_host],
-            &[],
-            &[],
-        );
     }
+    crate::vk::host_read_barrier(ctx, cmd);
 }

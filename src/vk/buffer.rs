@@ -234,22 +234,10 @@ impl Buffer {
                 dst_offset: 0,
                 size: len,
             };
-            let device = self.ctx.device();
-            device.cmd_copy_buffer(cmd, self.raw, readback.raw, &[region]);
-            // A fence's wait makes the device's writes visible to the host only through a
-            // barrier to the host's reads (the Vulkan spec, "Fences").
-            let to_host = vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ);
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::HOST,
-                vk::DependencyFlags::empty(),
-                &[to_host],
-                &[],
-                &[],
-            );
+            self.ctx
+                .device()
+                .cmd_copy_buffer(cmd, self.raw, readback.raw, &[region]);
+            super::host_read_barrier(&self.ctx, cmd);
         })?;
         Ok(readback.mapped()[..len as usize].to_vec())
     }

@@ -9,5 +9,5 @@ pub mod requirements;
 
 pub use buffer::{Buffer, MemoryLocation};
 pub use context::{BorrowedDevice, Context, ContextDesc, DeviceInfo, Validation};
-pub use pipeline::{compute_barrier, ComputePipeline, LazyPipeline};
+pub use pipeline::{compute_barrier, host_read_barrier, ComputePipeline, LazyPipeline};
 pub use requirements::{requirements, EnabledFeatures, Optional, Requirements};

@@ -365,3 +365,23 @@ pub fn compute_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
         )
     };
 }
+
+/// Makes transfer writes recorded before it visible to the host's reads once the submission's
+/// fence is waited on (a fence's wait alone covers device accesses only: the Vulkan spec,
+/// "Fences").
+pub fn host_read_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+    let barrier = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ);
+    unsafe {
+        ctx.device().cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[barrier],
+            &[],
+            &[],
+        )
+    };
+}
