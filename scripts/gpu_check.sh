@@ -30,7 +30,12 @@ if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then
 fi
 nvidia-smi -L 2>/dev/null || echo "(no nvidia-smi)"
 
-tar -xJf "$g/bin.tar.xz" -C "$g"
+# Unpacked outside the checkout: .gpu/ must stay small enough to travel (64 MiB) when the
+# script was tried here first.
+unpacked=$(mktemp -d)
+trap 'rm -rf "$unpacked"' EXIT
+tar -xJf "$g/bin.tar.xz" -C "$unpacked"
+bin=$unpacked/bin
 # The test binaries find the crate, its fixtures and the CLI where they were built.
 built=$(cat "$g/built_in")
 if [ "$built" != "$PWD" ] && [ ! -e "$built" ]; then
@@ -38,8 +43,8 @@ if [ "$built" != "$PWD" ] && [ ! -e "$built" ]; then
     ln -s "$PWD" "$built"
 fi
 mkdir -p "$built/target/release"
-[ -e "$built/target/release/rara" ] || cp "$g/bin/rara" "$built/target/release/rara"
-rara="$g/bin/rara"
+[ -e "$built/target/release/rara" ] || cp "$bin/rara" "$built/target/release/rara"
+rara="$bin/rara"
 export RARA_REAL_DATA=$g/data
 # A submission that has not finished after 20 s says so (RARA_GPU_WARN_S), so a test that
 # hangs shows whether the GPU or the host holds it up (the tests one at a time: --nocapture).
@@ -96,8 +101,8 @@ deadline=${GPU_CHECK_DEADLINE:-480}
 binary_limit=${GPU_CHECK_BINARY_LIMIT:-120}
 passed=0
 failed=0
-binaries=("$g"/bin/*)
-[ "$quick" = 1 ] && binaries=("$g/bin/sort")
+binaries=("$bin"/*)
+[ "$quick" = 1 ] && binaries=("$bin/sort")
 for t in "${binaries[@]}"; do
     name=$(basename "$t")
     [ "$name" = rara ] && continue
