@@ -86,6 +86,29 @@ const BASE: [&str; 14] = [
     "rot_0", "rot_1", "rot_2", "rot_3",
 ];
 
+/// A machine whose Vulkan loader finds no driver gets an error that says what to install, not
+/// the loader's code alone.
+#[test]
+fn no_vulkan_driver_is_a_clear_error() {
+    let (scene, cams) = good_scene();
+    let out = dir().join("no_driver.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args(render_args(
+            scene.to_str().unwrap(),
+            cams.to_str().unwrap(),
+            out.to_str().unwrap(),
+        ))
+        // The loader's list of driver manifests, then its older name: a file that is not there.
+        .env("VK_DRIVER_FILES", "/nonexistent/rara_no_icd.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/rara_no_icd.json")
+        .output()
+        .expect("run rara");
+    assert_error(
+        &o,
+        &["no Vulkan driver found", "mesa-vulkan-drivers", "libglvnd0"],
+    );
+}
+
 /// A wait for the GPU past `RARA_GPU_WARN_S` says so on stderr and goes on: the frame is the
 /// same. Set to a microsecond, which no frame's submission takes less than.
 #[test]

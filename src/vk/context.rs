@@ -230,8 +230,13 @@ impl Context {
             .application_info(&app)
             .enabled_layer_names(&layer_ptrs)
             .enabled_extension_names(&ext_ptrs);
-        let instance =
-            unsafe { entry.create_instance(&instance_info, None) }.vk("vkCreateInstance")?;
+        let instance = match unsafe { entry.create_instance(&instance_info, None) } {
+            // The loader found no driver that answers: say which to install.
+            Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => {
+                return Err(Error::NoSuitableDevice(NO_DRIVER_HINT.into()))
+            }
+            other => other.vk("vkCreateInstance")?,
+        };
 
         let messages: Box<Mutex<Vec<String>>> = Box::default();
         let debug = if validation && has_debug_utils {
@@ -695,6 +700,14 @@ fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
             == vk::TRUE,
     }
 }
+
+/// The error of a Vulkan loader that found no driver (vkCreateInstance:
+/// VK_ERROR_INCOMPATIBLE_DRIVER).
+const NO_DRIVER_HINT: &str = "no Vulkan driver found (vkCreateInstance: \
+    VK_ERROR_INCOMPATIBLE_DRIVER). On the CPU, Mesa's lavapipe: apt-get install \
+    mesa-vulkan-drivers. With an NVIDIA GPU: its driver's Vulkan ICD, and glvnd's libraries \
+    (apt-get install libglvnd0 libglx0), without which NVIDIA's ICD gives the loader no \
+    vkCreateInstance (a bare container). VK_LOADER_DEBUG=driver shows what the loader tried.";
 
 /// After how long [`Context::submit_and_wait`] says that it is still waiting for the GPU:
 /// `RARA_GPU_WARN_S` seconds (fractions allowed; 0: never), else 60, far past the longest
