@@ -274,9 +274,10 @@ fn half_precision_sh() {
     );
     let rounded = ShPrecision::F16.round_scene(&scene);
     assert_ne!(rounded.sh, scene.sh, "rounding changed nothing");
-    // Up to 8 levels in a few pixels: NVIDIA's depths differ from the CPU's in the last bit
-    // (fused multiply-adds), which can swap two overlapping splats of near-equal depth (view 1
-    // there: PSNR 81 dB, 5 levels in 15 pixels; lavapipe matches the CPU's floats).
+    // Up to 8 levels in a few pixels: NVIDIA's floats differ from the CPU's in the last bits
+    // (fused multiply-adds), enough to swap two overlapping splats of near-equal depth (seen in
+    // tests/render.rs's tile lists) or to move one across a threshold; view 1 there: PSNR
+    // 81 dB, 5 levels in 15 pixels (lavapipe matches the CPU's floats).
     for (k, camera) in shell_cameras(320, 240).iter().step_by(3).enumerate() {
         let (gpu, _) = renderer.render(&half, camera, &options()).unwrap();
         let cpu = reference::render(&rounded, camera, &options());
