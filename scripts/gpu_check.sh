@@ -21,9 +21,16 @@ echo "gpu_check: build $(cat "$g/commit"), $(date -u)"
 
 # A bare machine may have no Vulkan loader, and NVIDIA's Vulkan driver (libGLX_nvidia, under
 # /usr/local/nvidia on the lent machines) gives the loader no vkCreateInstance without glvnd's
-# libraries: unpack the carried packages.
-for f in "$g"/*.deb; do dpkg -x "$f" /; done
-ldconfig
+# libraries: unpack the carried packages where one of their libraries is missing (not over a
+# system that has them all, such as this one when the script is tried here).
+for lib in libvulkan.so.1 libGLdispatch.so.0 libGLX.so.0 libGL.so.1 libEGL.so.1 \
+    libOpenGL.so.0 libGLESv2.so.2; do
+    if ! ldconfig -p | grep -q "^[[:space:]]*$lib "; then
+        for f in "$g"/*.deb; do dpkg -x "$f" /; done
+        ldconfig
+        break
+    fi
+done
 icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f "$icd" ]; then
     export VK_DRIVER_FILES=$icd
