@@ -49,22 +49,27 @@ Gaussian fetch_gaussian(uint i) {
 }
 #endif
 
-// Whether this kernel lists the cutoff Gaussians: the host builds it with false for frames
-// without rara clipping, which have none. A CPU driver runs the listing's atomic and stores,
-// masked, in every SIMD vector whether or not a lane is cutoff (lavapipe, 640x480 unclipped,
-// `render --repeat 8`, one thread, four rounds in turn: project playbot 55.9-58.0 ->
-// 35.6-50.4 ms, plant 8.8-13.1 -> 8.2-11.5 ms).
-layout(constant_id = PROJECT_LISTS_CUTOFF_CONSTANT_ID) const bool LISTS_CUTOFF = true;
+// What this kernel writes for the cutoff Gaussians (PROJECT_LISTS_*): nothing in frames
+// without rara clipping, which have none; each one's record index and the Gaussian under it in
+// rara frames; also the record's region with several clipped objects. A CPU driver runs every
+// store and atomic of the listing, masked, in every SIMD vector whether or not a lane is
+// cutoff, so each frame's kernel holds only what it writes (lavapipe, 640x480 unclipped,
+// `render --repeat 8`, one thread, four rounds in turn: project playbot 55.9-58.0 -> 35.6-50.4
+// ms, plant 8.8-13.1 -> 8.2-11.5 ms without the listing).
+layout(constant_id = PROJECT_LISTS_CUTOFF_CONSTANT_ID) const uint LISTS_CUTOFF =
+    PROJECT_LISTS_RECORDS;
 
 #ifndef SCENE_TEXELS
 shared uint wg_cutoff_count;
 shared uint wg_cutoff_base;
 #endif
 
-// With several clipped objects, which region cutoff record `index` is weighted by (the
-// rasterizer's OBJECT_CLIPS kernels read it).
-void store_cutoff_region(uint index) {
-    if (uint64_t(pc.cutoff_regions) != 0ul) {
+// Lists cutoff Gaussian i under record `index`: the Gaussian for the records' pass and, with
+// several clipped objects, which region the record is weighted by (the rasterizer's
+// OBJECT_CLIPS kernels read it). The splat names the record itself.
+void list_cutoff(uint i, uint index) {
+    pc.cutoff_gaussians.v[index] = i;
+    if (LISTS_CUTOFF == PROJECT_LISTS_REGIONS) {
         pc.cutoff_regions.v[index] = pc.region;
     }
 }
@@ -164,19 +169,27 @@ bool project(FrameParams f, ClipParams clip, uint i) {
     p.opacity = g.pos_opacity.w;
     p.conic = conic;
     p.cutoff = NO_CUTOFF;
+#ifdef SCENE_TEXELS
+    // The texel kernels (CPU drivers) pack record indices by one global atomic per cutoff
+    // Gaussian, a loop over the vector's cutoff lanes there, where the GPU kernels' workgroup
+    // aggregation (main) costs three barriers, at which a workgroup's 32 SIMD vectors take
+    // turns (lavapipe, render --repeat 10, three runs each in turn: project 47.0 -> 42.0 ms on
+    // playbot, 10.7 -> 9.4 ms on plant, also under rara). The index goes out with the splat's
+    // own stores rather than in a store of its own, masked in every SIMD vector (lavapipe,
+    // playbot at 640x480 under a plane, `render --repeat 3`, one thread, eight rounds in turn:
+    // project 32.2-32.7 -> 31.5 ms at best, 30.8-31.2 without the region's store, which only
+    // frames of several clipped objects now build; hard clipping's 29.2-29.6).
+    if (LISTS_CUTOFF != PROJECT_LISTS_NONE && kind == CLASS_CUTOFF) {
+        p.cutoff = atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u);
+        list_cutoff(i, p.cutoff);
+    }
+#endif
     p.color = color;
     p.radius = radius;
     store_splat(pc.splats, i, p);
     pc.tiles_touched.v[i] = touched;
     pc.drawn.v[i] = 1u;
     return kind == CLASS_CUTOFF;
-}
-
-// Lists cutoff Gaussian i under record `index`, which its splat names.
-void list_cutoff(uint i, uint index) {
-    pc.cutoff_gaussians.v[index] = i;
-    pc.splats.v[i].cutoff = index;
-    store_cutoff_region(index);
 }
 
 void main() {
@@ -189,19 +202,14 @@ void main() {
     // the parameters per lane, a scalar loop over the lanes per word on a CPU driver.
     uint i = pc.first + linear_index();
 #ifdef SCENE_TEXELS
-    // Record indices are packed by one global atomic per cutoff Gaussian. A CPU driver runs the
-    // atomic as a loop over the vector's cutoff lanes, where the GPU kernels' workgroup
-    // aggregation below costs three barriers, at which its 32 SIMD vectors of a workgroup take
-    // turns (lavapipe, render --repeat 10, three runs each in turn: project 47.0 -> 42.0 ms on
-    // playbot, 10.7 -> 9.4 ms on plant, also under rara).
-    bool cutoff = i < pc.end && project(f, clip, i);
-    if (LISTS_CUTOFF && cutoff) {
-        list_cutoff(i, atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u));
+    // project lists a cutoff Gaussian itself.
+    if (i < pc.end) {
+        project(f, clip, i);
     }
 #else
     uint lid = gl_LocalInvocationIndex;
     bool cutoff = i < pc.end && project(f, clip, i);
-    if (!LISTS_CUTOFF) {
+    if (LISTS_CUTOFF == PROJECT_LISTS_NONE) {
         return;   // uniform: a constant
     }
     if (lid == 0u) {
@@ -219,7 +227,9 @@ void main() {
     }
     barrier();
     if (cutoff) {
-        list_cutoff(i, wg_cutoff_base + slot);
+        uint index = wg_cutoff_base + slot;
+        pc.splats.v[i].cutoff = index;
+        list_cutoff(i, index);
     }
 #endif
 }

@@ -195,9 +195,17 @@ pub const TARGET_OVER_CONSTANT_ID: u32 = 1;
 /// background, in place of the per-pixel state (frames of one round, no depth; see
 /// `Renderer::record`).
 pub const RASTER_WRITES_TARGET_CONSTANT_ID: u32 = 2;
-/// Specialization constant id of `LISTS_CUTOFF` (`glsl/project_body.glsl`): the project kernels
-/// of frames without rara clipping, which have no cutoff Gaussian, are built with it false.
+/// Specialization constant id of `LISTS_CUTOFF` (`glsl/project_body.glsl`): what the project
+/// kernels write for the cutoff Gaussians, one of the `PROJECT_LISTS_*` values.
 pub const PROJECT_LISTS_CUTOFF_CONSTANT_ID: u32 = 3;
+/// `LISTS_CUTOFF` of frames without rara clipping, which have no cutoff Gaussian: nothing.
+pub const PROJECT_LISTS_NONE: u32 = 0;
+/// `LISTS_CUTOFF` of rara frames: each cutoff Gaussian's record index, in its splat, and the
+/// Gaussian under that index, for the records' pass.
+pub const PROJECT_LISTS_RECORDS: u32 = 1;
+/// `LISTS_CUTOFF` of rara frames of several objects clipped by regions of their own: also
+/// each record's region.
+pub const PROJECT_LISTS_REGIONS: u32 = 2;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -323,6 +331,9 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
         "PROJECT_LISTS_CUTOFF_CONSTANT_ID",
         PROJECT_LISTS_CUTOFF_CONSTANT_ID,
     ),
+    ("PROJECT_LISTS_NONE", PROJECT_LISTS_NONE),
+    ("PROJECT_LISTS_RECORDS", PROJECT_LISTS_RECORDS),
+    ("PROJECT_LISTS_REGIONS", PROJECT_LISTS_REGIONS),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),
     ("CLIP_MODE_RARA", CLIP_MODE_RARA),

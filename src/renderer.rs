@@ -24,7 +24,7 @@ use crate::stages::depth_order::{DepthOrder, DEPTH_ORDER_BUFFER};
 use crate::stages::emit::Emit;
 use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
-use crate::stages::project::{ObjectClipRanges, Project};
+use crate::stages::project::{CutoffListing, ObjectClipRanges, Project};
 use crate::stages::rasterize::{RasterLayout, Rasterize};
 use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
@@ -669,7 +669,8 @@ impl Renderer {
             ))
         .then_some(buffer_target);
         // The kernels this frame runs, each built when a frame first needs it.
-        self.project.prepare(scene, rara)?;
+        self.project
+            .prepare(scene, CutoffListing::of(rara, object_clips.is_some()))?;
         if !(rara && object_clips.is_some()) {
             self.rasterize.prepare(
                 rara.then_some(options.clip.weight),

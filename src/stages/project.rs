@@ -7,7 +7,10 @@ use std::ffi::CStr;
 
 use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
 use super::{FrameRecording, LinearArgsPush};
-use crate::constants::{COUNTER_CUTOFF, PROJECT_LISTS_CUTOFF_CONSTANT_ID};
+use crate::constants::{
+    COUNTER_CUTOFF, PROJECT_LISTS_CUTOFF_CONSTANT_ID, PROJECT_LISTS_NONE, PROJECT_LISTS_RECORDS,
+    PROJECT_LISTS_REGIONS,
+};
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::precision::ShPrecision;
@@ -84,22 +87,49 @@ struct RecordsPush {
     cutoffs: u64,
 }
 
-/// The project kernel, in one variant per SH degree (0 to 3) and storage precision: a CPU
-/// driver runs every band's code under a mask whatever the scene's degree, so each scene gets
-/// the kernel that holds only its own bands. Under rara clipping the kernels that write the
-/// listed cutoff Gaussians' records follow it.
+/// What a frame's project kernel writes for the cutoff Gaussians (`LISTS_CUTOFF` in
+/// `glsl/project_body.glsl`): a CPU driver runs the listing's atomic and stores, masked, in
+/// every SIMD vector of project, so each frame gets a kernel with only what it needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CutoffListing {
+    /// Frames without rara clipping: no cutoff Gaussian.
+    None,
+    /// Rara frames: each cutoff Gaussian's record index and the Gaussian under it.
+    Records,
+    /// Rara frames of several objects clipped by regions of their own: also each record's
+    /// region.
+    RecordsAndRegions,
+}
+
+impl CutoffListing {
+    /// The listing a frame needs: `rara` clipped or not, with `object_regions` (several objects
+    /// clipped by regions of their own) or not.
+    pub fn of(rara: bool, object_regions: bool) -> Self {
+        match (rara, object_regions) {
+            (false, _) => CutoffListing::None,
+            (true, false) => CutoffListing::Records,
+            (true, true) => CutoffListing::RecordsAndRegions,
+        }
+    }
+
+    /// The value of `LISTS_CUTOFF`.
+    fn constant(self) -> u32 {
+        match self {
+            CutoffListing::None => PROJECT_LISTS_NONE,
+            CutoffListing::Records => PROJECT_LISTS_RECORDS,
+            CutoffListing::RecordsAndRegions => PROJECT_LISTS_REGIONS,
+        }
+    }
+}
+
+/// The project kernel, in one variant per SH degree (0 to 3), storage precision and cutoff
+/// listing ([`CutoffListing`]): a CPU driver runs every band's code under a mask whatever the
+/// scene's degree, so each scene gets the kernel that holds only its own bands. Under rara
+/// clipping the kernels that write the listed cutoff Gaussians' records follow it.
 pub struct Project {
-    /// Indexed by SH degree; each built when a frame first needs it ([`Project::prepare`]).
-    /// These list the cutoff Gaussians (rara frames).
-    sh32: [LazyPipeline; 4],
-    /// Indexed by SH degree.
-    sh16: [LazyPipeline; 4],
-    /// The same kernels built without the cutoff listing (`LISTS_CUTOFF` false), for frames
-    /// without rara clipping: a CPU driver would run its atomic and stores, masked, in every
-    /// SIMD vector.
-    sh32_unlisted: [LazyPipeline; 4],
-    /// Indexed by SH degree.
-    sh16_unlisted: [LazyPipeline; 4],
+    /// Indexed by [`CutoffListing`], storage precision (32-bit, then half floats) and SH
+    /// degree; each built when a frame first needs it ([`Project::prepare`]).
+    kernels: [[[LazyPipeline; 4]; 2]; 3],
     /// The later rounds' count of tiles touched (`project_touched.comp`).
     touched: ComputePipeline,
     /// Rara frames: the dispatch arguments over the cutoff records (`linear_args.comp`).
@@ -170,17 +200,20 @@ impl Project {
             let spirv = if texels.is_some() { fetches } else { loads };
             LazyPipeline::new::<ProjectPush>(ctx, name, spirv, texels)
         };
-        let build_all = |table: &[Variant; 4]| table.each_ref().map(build);
-        let unlisted = |table: &[Variant; 4]| {
-            table
-                .each_ref()
-                .map(|v| build(v).specialized(&[(PROJECT_LISTS_CUTOFF_CONSTANT_ID, 0)]))
+        let listed = |listing: CutoffListing| {
+            [&SH32_KERNELS, &SH16_KERNELS].map(|table| {
+                table.each_ref().map(|v| {
+                    build(v).specialized(&[(PROJECT_LISTS_CUTOFF_CONSTANT_ID, listing.constant())])
+                })
+            })
         };
         Ok(Project {
-            sh32: build_all(&SH32_KERNELS),
-            sh16: build_all(&SH16_KERNELS),
-            sh32_unlisted: unlisted(&SH32_KERNELS),
-            sh16_unlisted: unlisted(&SH16_KERNELS),
+            kernels: [
+                CutoffListing::None,
+                CutoffListing::Records,
+                CutoffListing::RecordsAndRegions,
+            ]
+            .map(listed),
             touched: ComputePipeline::new::<TouchedPush>(
                 ctx,
                 c"project_touched",
@@ -201,22 +234,20 @@ impl Project {
         })
     }
 
-    /// The kernel for `scene`'s SH degree and precision; with `rara`, the one that lists the
-    /// cutoff Gaussians.
-    fn kernel(&self, scene: &GpuScene, rara: bool) -> &LazyPipeline {
-        let kernels = match (scene.sh_precision, rara) {
-            (ShPrecision::F32, true) => &self.sh32,
-            (ShPrecision::F16, true) => &self.sh16,
-            (ShPrecision::F32, false) => &self.sh32_unlisted,
-            (ShPrecision::F16, false) => &self.sh16_unlisted,
+    /// The kernel for `scene`'s SH degree and precision with `listing`.
+    fn kernel(&self, scene: &GpuScene, listing: CutoffListing) -> &LazyPipeline {
+        let precision = match scene.sh_precision {
+            ShPrecision::F32 => 0,
+            ShPrecision::F16 => 1,
         };
-        &kernels[scene.sh_degree.min(3) as usize]
+        &self.kernels[listing as usize][precision][scene.sh_degree.min(3) as usize]
     }
 
-    /// Builds the kernel `scene` needs, if it was not yet: call it before [`Project::record`].
-    pub fn prepare(&self, scene: &GpuScene, rara: bool) -> Result<()> {
-        self.kernel(scene, rara).get()?;
-        if rara {
+    /// Builds the kernels a frame of `scene` with `listing` needs, if they were not yet: call
+    /// it before [`Project::record`] with the same listing.
+    pub fn prepare(&self, scene: &GpuScene, listing: CutoffListing) -> Result<()> {
+        self.kernel(scene, listing).get()?;
+        if listing != CutoffListing::None {
             self.records_args.get()?;
             self.records.get()?;
         }
@@ -240,7 +271,8 @@ impl Project {
         object_clips: Option<&ObjectClipRanges>,
         cutoff_pairs: Option<&Buffer>,
     ) {
-        let kernel = self.kernel(scene, cutoff_pairs.is_some()).built();
+        let listing = CutoffListing::of(cutoff_pairs.is_some(), object_clips.is_some());
+        let kernel = self.kernel(scene, listing).built();
         let push = ProjectPush {
             frame: f.at.params,
             gaussians: scene.gaussians.address,
