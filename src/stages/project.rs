@@ -93,12 +93,12 @@ struct RecordsPush {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CutoffListing {
     /// Frames without rara clipping: no cutoff Gaussian.
-    None,
+    None = 0,
     /// Rara frames: each cutoff Gaussian's record index and the Gaussian under it.
-    Records,
+    Records = 1,
     /// Rara frames of several objects clipped by regions of their own: also each record's
     /// region.
-    RecordsAndRegions,
+    RecordsAndRegions = 2,
 }
 
 impl CutoffListing {
@@ -127,8 +127,8 @@ impl CutoffListing {
 /// scene's degree, so each scene gets the kernel that holds only its own bands. Under rara
 /// clipping the kernels that write the listed cutoff Gaussians' records follow it.
 pub struct Project {
-    /// Indexed by [`CutoffListing`], storage precision (32-bit, then half floats) and SH
-    /// degree; each built when a frame first needs it ([`Project::prepare`]).
+    /// Indexed by [`CutoffListing`] (its discriminant), storage precision (32-bit, then half
+    /// floats) and SH degree; each built when a frame first needs it ([`Project::prepare`]).
     kernels: [[[LazyPipeline; 4]; 2]; 3],
     /// The later rounds' count of tiles touched (`project_touched.comp`).
     touched: ComputePipeline,
