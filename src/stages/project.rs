@@ -90,15 +90,17 @@ struct RecordsPush {
 /// What a frame's project kernel writes for the cutoff Gaussians (`LISTS_CUTOFF` in
 /// `glsl/project_body.glsl`): a CPU driver runs the listing's atomic and stores, masked, in
 /// every SIMD vector of project, so each frame gets a kernel with only what it needs.
+/// Its discriminant is the value of `LISTS_CUTOFF`, and indexes [`Project`]'s kernels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
 pub enum CutoffListing {
     /// Frames without rara clipping: no cutoff Gaussian.
-    None = 0,
+    None = PROJECT_LISTS_NONE,
     /// Rara frames: each cutoff Gaussian's record index and the Gaussian under it.
-    Records = 1,
+    Records = PROJECT_LISTS_RECORDS,
     /// Rara frames of several objects clipped by regions of their own: also each record's
     /// region.
-    RecordsAndRegions = 2,
+    RecordsAndRegions = PROJECT_LISTS_REGIONS,
 }
 
 impl CutoffListing {
@@ -111,15 +113,6 @@ impl CutoffListing {
             (true, true) => CutoffListing::RecordsAndRegions,
         }
     }
-
-    /// The value of `LISTS_CUTOFF`.
-    fn constant(self) -> u32 {
-        match self {
-            CutoffListing::None => PROJECT_LISTS_NONE,
-            CutoffListing::Records => PROJECT_LISTS_RECORDS,
-            CutoffListing::RecordsAndRegions => PROJECT_LISTS_REGIONS,
-        }
-    }
 }
 
 /// The project kernel, in one variant per SH degree (0 to 3), storage precision and cutoff
@@ -127,8 +120,9 @@ impl CutoffListing {
 /// scene's degree, so each scene gets the kernel that holds only its own bands. Under rara
 /// clipping the kernels that write the listed cutoff Gaussians' records follow it.
 pub struct Project {
-    /// Indexed by [`CutoffListing`] (its discriminant), storage precision (32-bit, then half
-    /// floats) and SH degree; each built when a frame first needs it ([`Project::prepare`]).
+    /// Indexed by [`CutoffListing`] (its discriminant; `Project::new` builds them in that
+    /// order), storage precision (32-bit, then half floats) and SH degree; each built when a
+    /// frame first needs it ([`Project::prepare`]).
     kernels: [[[LazyPipeline; 4]; 2]; 3],
     /// The later rounds' count of tiles touched (`project_touched.comp`).
     touched: ComputePipeline,
@@ -203,7 +197,7 @@ impl Project {
         let listed = |listing: CutoffListing| {
             [&SH32_KERNELS, &SH16_KERNELS].map(|table| {
                 table.each_ref().map(|v| {
-                    build(v).specialized(&[(PROJECT_LISTS_CUTOFF_CONSTANT_ID, listing.constant())])
+                    build(v).specialized(&[(PROJECT_LISTS_CUTOFF_CONSTANT_ID, listing as u32)])
                 })
             })
         };
