@@ -12,8 +12,14 @@ data="${RARA_REAL_DATA:-../shared/data/real}"
 if [ -d "$data" ]; then echo "real scenes: $data"; else echo "real scenes: none at $data (those cases are skipped)"; fi
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
+# A test binary killed by a signal (a crash inside the Vulkan driver, say) dumps core in the
+# repository root, its working directory; crash_report below prints where it died.
+ulimit -c unlimited 2>/dev/null || true
+rm -f core core.[0-9]*
 status=0
 cargo test --release "$@" -- --show-output 2>&1 | tee "$log" || status=$?
+. scripts/crash_report.sh
+crash_report "$log"
 # One closing line over all test binaries (cargo prints one summary per binary). libtest has no
 # runtime skip: a test that found none of its real scenes passes having checked nothing, so a
 # test whose output (--show-output prints it under "---- NAME stdout ----") holds "TEST SKIPPED:"
