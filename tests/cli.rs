@@ -4,6 +4,8 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+mod common;
+
 fn rara(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_rara"))
         .args(args)
@@ -24,9 +26,7 @@ fn rara_piped(args: &[&str]) -> std::process::Child {
 }
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rara-cli-tests-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::process_dir("rara-cli-tests")
 }
 
 fn write(name: &str, bytes: &[u8]) -> PathBuf {

@@ -151,4 +151,5 @@ fn every_kernel_passes_spirv_val() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -2,14 +2,14 @@
 
 use std::io::Write;
 
+mod common;
+
 use glam::{Quat, Vec3};
 use rara::ply::{load_ply, write_ply, PlyEncoding};
 use rara::Scene;
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("rara-ply-tests-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::process_dir("rara-ply-tests").join(name)
 }
 
 fn assert_close(a: &Scene, b: &Scene) {

@@ -64,6 +64,36 @@ pub fn tempdir(name: &str) -> PathBuf {
     dir
 }
 
+/// The calling test process's folder `{prefix}-{pid}` under the system's temp dir, for files its
+/// tests share. A test binary has no hook at its exit to remove it, so the first call of a
+/// process removes the folders of `prefix` that processes no longer running left (where
+/// `/proc` tells), and runs don't pile them up.
+pub fn process_dir(prefix: &str) -> PathBuf {
+    static SWEPT: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    let tmp = std::env::temp_dir();
+    let mut swept = SWEPT.lock().unwrap();
+    if !swept.iter().any(|p| p == prefix) && Path::new("/proc/self").exists() {
+        swept.push(prefix.to_string());
+        let entries = std::fs::read_dir(&tmp).into_iter().flatten().flatten();
+        for entry in entries {
+            let name = entry.file_name();
+            let Some(pid) = name
+                .to_str()
+                .and_then(|n| n.strip_prefix(prefix)?.strip_prefix('-'))
+                .and_then(|p| p.parse::<u32>().ok())
+            else {
+                continue;
+            };
+            if pid != std::process::id() && !Path::new("/proc").join(pid.to_string()).exists() {
+                std::fs::remove_dir_all(entry.path()).ok();
+            }
+        }
+    }
+    let dir = tmp.join(format!("{prefix}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// Marks the calling test as having checked nothing: `scripts/test.sh` counts a test whose
 /// output holds this line as skipped, not passed, in its closing line (libtest has no skip).
 pub fn test_skipped(why: &str) {
