@@ -140,6 +140,10 @@ for t in "${binaries[@]}"; do
         dmesg 2>/dev/null | grep -i -E 'xid|nvrm' | tail -5 | sed 's/^/  dmesg: /'
         nvidia-smi --query-compute-apps=pid,used_memory --format=csv,noheader 2>/dev/null \
             | sed 's/^/  still on the GPU: /'
+        # A bare machine compiles every kernel cold: the driver's shader cache growing between
+        # the first run and the reruns below points at compile time rather than a hang.
+        du -sh "$HOME/.nv" "${XDG_CACHE_HOME:-$HOME/.cache}/nvidia" 2>/dev/null \
+            | sed 's/^/  driver shader cache: /'
         tests=$(cd "$built" && "$t" --list --format terse 2>/dev/null | sed -n 's/: test$//p')
         for test in $tests; do
             [ "$SECONDS" -gt "$deadline" ] && break
@@ -149,6 +153,8 @@ for t in "${binaries[@]}"; do
             echo "  $test alone: rc $?, $(($(date +%s) - one)) s"
             grep -v '^$' "$logs/$name.$test.log" | tail -2 | sed 's/^/    /'
         done
+        du -sh "$HOME/.nv" "${XDG_CACHE_HOME:-$HOME/.cache}/nvidia" 2>/dev/null \
+            | sed 's/^/  driver shader cache after the reruns: /'
     fi
 done
 echo "tests: $passed passed, $failed failed"
