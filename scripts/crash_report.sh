@@ -11,7 +11,6 @@ crash_report() {
     echo "=== crash report: a test binary died of a signal but left no core dump here" \
       "(kernel.core_pattern: $(cat /proc/sys/kernel/core_pattern 2>/dev/null))"
   fi
-
   for core in core core.[0-9]*; do
     [ -f "$core" ] || continue
     echo "=== crash report: $core ($(du -h "$core" | cut -f1))"

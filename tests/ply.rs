@@ -2,11 +2,11 @@
 
 use std::io::Write;
 
-mod common;
-
 use glam::{Quat, Vec3};
 use rara::ply::{load_ply, write_ply, PlyEncoding};
 use rara::Scene;
+
+mod common;
 
 fn tmp(name: &str) -> std::path::PathBuf {
     common::process_dir("rara-ply-tests").join(name)

@@ -71,7 +71,9 @@ pub fn tempdir(name: &str) -> PathBuf {
 pub fn process_dir(prefix: &str) -> PathBuf {
     static SWEPT: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
     let tmp = std::env::temp_dir();
-    let mut swept = SWEPT.lock().unwrap();
+    let mut swept = SWEPT
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     if !swept.iter().any(|p| p == prefix) && Path::new("/proc/self").exists() {
         swept.push(prefix.to_string());
         let entries = std::fs::read_dir(&tmp).into_iter().flatten().flatten();
