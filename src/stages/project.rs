@@ -103,6 +103,13 @@ pub enum CutoffListing {
     RecordsAndRegions = PROJECT_LISTS_REGIONS,
 }
 
+// `Project::new` builds the kernels in the order of the discriminants, which index them.
+const _: () = assert!(
+    CutoffListing::None as u32 == 0
+        && CutoffListing::Records as u32 == 1
+        && CutoffListing::RecordsAndRegions as u32 == 2
+);
+
 impl CutoffListing {
     /// The listing a frame needs: `rara` clipped or not, with `object_regions` (several objects
     /// clipped by regions of their own) or not.
