@@ -26,7 +26,7 @@ fn rara_piped(args: &[&str]) -> std::process::Child {
 }
 
 fn dir() -> PathBuf {
-    common::process_dir("rara-cli-tests")
+    common::tempdir("cli")
 }
 
 fn write(name: &str, bytes: &[u8]) -> PathBuf {

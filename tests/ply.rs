@@ -9,7 +9,7 @@ use rara::Scene;
 mod common;
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    common::process_dir("rara-ply-tests").join(name)
+    common::tempdir("ply").join(name)
 }
 
 fn assert_close(a: &Scene, b: &Scene) {

@@ -57,31 +57,25 @@ pub fn real_scene(stem: &str) -> Option<(PathBuf, Option<PathBuf>)> {
     Some((ply, cams.is_file().then_some(cams)))
 }
 
-/// A fresh folder for the calling test binary's files, `name` telling its tests apart.
-pub fn tempdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rara_test_{name}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// The calling test process's folder `{prefix}-{pid}` under the system's temp dir, for files its
-/// tests share. A test binary has no hook at its exit to remove it, so the first call of a
-/// process removes the folders of `prefix` that processes no longer running left (where
+/// The calling test process's folder `rara_test_{name}_{pid}` under the system's temp dir,
+/// `name` telling its tests (or test binaries) apart. A test binary has no hook at its exit,
+/// so a folder its tests share, or one a failed test left, stays behind: the first call of a
+/// process with `name` removes that name's folders whose process is no longer running (where
 /// `/proc` tells), and runs don't pile them up.
-pub fn process_dir(prefix: &str) -> PathBuf {
+pub fn tempdir(name: &str) -> PathBuf {
     static SWEPT: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
     let tmp = std::env::temp_dir();
+    let prefix = format!("rara_test_{name}_");
     let mut swept = SWEPT
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
-    if !swept.iter().any(|p| p == prefix) && Path::new("/proc/self").exists() {
-        swept.push(prefix.to_string());
+    if !swept.contains(&prefix) && Path::new("/proc/self").exists() {
         let entries = std::fs::read_dir(&tmp).into_iter().flatten().flatten();
         for entry in entries {
-            let name = entry.file_name();
-            let Some(pid) = name
+            let file_name = entry.file_name();
+            let Some(pid) = file_name
                 .to_str()
-                .and_then(|n| n.strip_prefix(prefix)?.strip_prefix('-'))
+                .and_then(|n| n.strip_prefix(&prefix))
                 .and_then(|p| p.parse::<u32>().ok())
             else {
                 continue;
@@ -90,8 +84,9 @@ pub fn process_dir(prefix: &str) -> PathBuf {
                 std::fs::remove_dir_all(entry.path()).ok();
             }
         }
+        swept.push(prefix.clone());
     }
-    let dir = tmp.join(format!("{prefix}-{}", std::process::id()));
+    let dir = tmp.join(format!("{prefix}{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
