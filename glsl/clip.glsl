@@ -451,6 +451,81 @@ vec2 tile_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dirs[4]) {
                 f_hi / (f_hi >= 0.0 ? q_lo : q_hi) + slack);
 }
 
+// Bounds (u_lo, u_hi) of tile_plane_u_range's u over the rays through the splat's footprint
+// ellipse, (p - uv)^T K (p - uv) <= q_max for the conic K, rather than a box of them: the
+// box's corners lie outside the ellipse, and the weight there often differs from the weight
+// anywhere the splat draws. For a ray d(p) (not normalised; affine in the pixel p),
+// u = N / (|n.d| sqrt(a)) with N = h a - (n.d) (o'.d'), a = |d'|^2, d' = M d(p). With
+// p = uv + L v over the unit disc (L L^T = q_max K^-1), d' = d'_c + W v, so n.d and o'.d' are
+// affine in v and a and N quadratics: each is bounded by its centre value, plus or minus its
+// gradient's length, plus its 2x2 Hessian's extreme eigenvalues, and u by interval division.
+// dir_c is the ray through uv, across and down the rays' steps per pixel in x and y.
+// Counted exactly on plant at 1280x960 under a plane, 32 % of the pairs the box's bounds left
+// partial add nothing to any pixel or see weight 1 wherever they draw; this bound, taken with
+// the box's, turns a tenth of them plain or empty (27,661 -> 24,918 partial pairs; biker
+// 14,731 -> 13,441, playbot 23,748 -> 22,339), the same images. It depends on the splat
+// only, so cutoff_records works it out once per record.
+vec2 ellipse_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dir_c, vec3 across,
+                           vec3 down, vec3 conic, float q_max) {
+    float det = conic.x * conic.z - conic.y * conic.y;
+    float q = max(q_max, 0.0);
+    // L (lower triangular) of q K^-1 = q / det [[C, -B], [-B, A]].
+    float l11 = sqrt(q * conic.z / det);
+    float l21 = -q * conic.y / (det * l11);
+    float l22 = sqrt(q / conic.z);
+    mat3 m = transpose(mat3(rec.m0.xyz, rec.m1.xyz, rec.m2.xyz));   // rows m0, m1, m2
+    vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
+    vec3 dc = m * dir_c;
+    vec3 w1 = m * (l11 * across + l21 * down);
+    vec3 w2 = m * (l22 * down);
+    vec3 n = pl.xyz;
+    float h = dot(n, eye) + pl.w;
+    // n.d = nd_c + e.v
+    float nd_c = dot(n, dir_c);
+    vec2 e = vec2(dot(n, l11 * across + l21 * down), dot(n, l22 * down));
+    float e_len = length(e);
+    float nd_lo = nd_c - e_len;
+    float nd_hi = nd_c + e_len;
+    if (!(nd_lo > 0.0 || nd_hi < 0.0)) {
+        return vec2(-UNBOUNDED, UNBOUNDED);
+    }
+    float and_lo = min(abs(nd_lo), abs(nd_hi));
+    float and_hi = max(abs(nd_lo), abs(nd_hi));
+    // o'.d' = od_c + k.v; a = a_c + 2 g_a.v + v^T G v.
+    float od_c = dot(o, dc);
+    vec2 k = vec2(dot(o, w1), dot(o, w2));
+    float a_c = dot(dc, dc);
+    vec2 g_a = vec2(dot(w1, dc), dot(w2, dc));
+    vec3 gram = vec3(dot(w1, w1), dot(w1, w2), dot(w2, w2));   // G = [[x, y], [y, z]]
+    float gram_max = 0.5 * (gram.x + gram.z)
+                   + sqrt(0.25 * (gram.x - gram.z) * (gram.x - gram.z) + gram.y * gram.y);
+    // |d'| within |d'_c| +- the largest singular value of W.
+    float sigma = sqrt(max(gram_max, 0.0));
+    float len_c = sqrt(a_c);
+    float sa_lo = max(len_c - sigma, 0.0);
+    float sa_hi = len_c + sigma;
+    // N = h a - nd od = N_c + g.v + v^T H v.
+    float n_c = h * a_c - nd_c * od_c;
+    vec2 g = 2.0 * h * g_a - nd_c * k - od_c * e;
+    vec3 hm = h * gram - vec3(e.x * k.x, 0.5 * (e.x * k.y + e.y * k.x), e.y * k.y);
+    float h_mid = 0.5 * (hm.x + hm.z);
+    float h_rad = sqrt(0.25 * (hm.x - hm.z) * (hm.x - hm.z) + hm.y * hm.y);
+    float g_len = length(g);
+    float n_lo = n_c - g_len + min(h_mid - h_rad, 0.0);
+    float n_hi = n_c + g_len + max(h_mid + h_rad, 0.0);
+    float den_lo = and_lo * sa_lo;
+    float den_hi = and_hi * sa_hi;
+    // Rounding: N is a difference of terms up to |h| a and |nd| |o'.d'|, worked out here and
+    // per pixel by the rasterizer.
+    float od_hi = abs(od_c) + length(k);
+    float slack_n = 1e-5 * (abs(h) * sa_hi * sa_hi + and_hi * od_hi);
+    n_lo -= slack_n;
+    n_hi += slack_n;
+    float u_lo = n_lo >= 0.0 ? n_lo / den_hi : (den_lo > 0.0 ? n_lo / den_lo : -UNBOUNDED);
+    float u_hi = n_hi <= 0.0 ? n_hi / den_hi : (den_lo > 0.0 ? n_hi / den_lo : UNBOUNDED);
+    return vec2(u_lo, u_hi);
+}
+
 // Bounds over a tile's rays of the mass a cutoff splat keeps, gathered plane by plane from
 // tile_plane_u_range. Along any ray the mass inside the intersection K of the half-spaces is
 // at most that of each half-space, min_k Phi(u_hi,k), and the mass outside K at most the sum

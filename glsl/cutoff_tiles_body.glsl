@@ -5,6 +5,8 @@
 // to any pixel of its tile gets the key `tile count`, which the sort puts after every tile and the
 // tile-ranges stage leaves out. Either way the pair keeps its slot, so the counts of the earlier
 // stages stay exact. Dispatched indirectly over the cutoff splats, so the rest pay nothing.
+// The weight's bounds are the tighter of each pair's over the footprint's box in its tile and
+// the splat's over its whole footprint ellipse (cutoff_records.comp, pc.cutoff_bounds).
 //
 // Each workgroup takes LINEAR_WORKGROUP cutoff splats and shares their pairs out: every pass of
 // an invocation's loop classifies one pair, and an invocation whose splat has no pair left takes
@@ -69,6 +71,9 @@ layout(push_constant) uniform Push {
     // Out, with the tile lists (CPU drivers; else 0): per tile, set where a pair stays
     // weighted, and at [tile count] when pairs were left unclassified (tile_lists.comp).
     U32s tile_flags;
+    // Per cutoff record, the splat's TileMassBounds over its footprint ellipse (u_keep, lost;
+    // cutoff_records.comp), or 0: none.
+    U64s cutoff_bounds;
 } pc;
 
 // Plane k of the clip region. The texel kernel fetches it, a gather on a CPU driver. A load
@@ -146,8 +151,9 @@ struct PairTally {
 
 // Classifies the pair at `slot` of cutoff splat `p` (record `rec`): rewrites its key (empty) or
 // its value (weight 1) and flags its tile where it stays weighted.
-void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord rec, uint slot,
-                   uint tile_count, bool tile_lists, inout PairTally tally) {
+void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord rec,
+                   TileMassBounds ellipse, uint slot, uint tile_count, bool tile_lists,
+                   inout PairTally tally) {
 #ifdef SPLAT_TEXELS
     uint tile = texelFetch(emitted_keys, int(slot)).x;
 #else
@@ -174,6 +180,10 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
         tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(plane),
                                                         f.cam_pos.xyz, dirs));
     }
+    // The same bounds over the footprint ellipse, which the records' pass worked out for the
+    // splat (cutoff_records.comp): each is an upper bound, so the smaller holds.
+    bounds.u_keep = min(bounds.u_keep, ellipse.u_keep);
+    bounds.lost = min(bounds.lost, ellipse.lost);
     uint tile_class;
     if (flat_splat) {
         tile_class = peak_alpha < 0.99 / 255.0
@@ -208,8 +218,9 @@ void cutoff_pairs(FrameParams f, uint k, out uint slot, out uint end, out uint s
     end = max(first.x, min(first.x + touched, f.scene.w));
 }
 
-// Cutoff record k and its splat, index `splat`.
-void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec) {
+// Cutoff record k, its splat (index `splat`) and the splat's bounds over its ellipse.
+void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec,
+                  out TileMassBounds ellipse) {
 #ifdef SPLAT_TEXELS
     p = texel_splat(splat);
     rec = texel_cutoff_record(k);
@@ -217,6 +228,11 @@ void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec
     p = load_splat(pc.splats, splat);
     rec = load_cutoff_record(pc.cutoffs, k);
 #endif
+    ellipse = tile_mass_bounds_none();
+    if (uint64_t(pc.cutoff_bounds) != 0ul) {
+        vec2 b = uintBitsToFloat(unpackUint2x32(pc.cutoff_bounds.v[k]));
+        ellipse = TileMassBounds(b.x, b.y);
+    }
 }
 
 #ifdef BALANCED_PAIRS
@@ -277,9 +293,11 @@ void main() {
         }
         ProjectedSplat p;
         CutoffRecord rec;
-        cutoff_splat(group_first + lo, record_splat[lo], p, rec);
-        classify_pair(f, config, p, rec, record_first_pair[lo] + (j - record_pairs_before[lo]),
-                      tile_count, tile_lists, tally);
+        TileMassBounds ellipse;
+        cutoff_splat(group_first + lo, record_splat[lo], p, rec, ellipse);
+        classify_pair(f, config, p, rec, ellipse,
+                      record_first_pair[lo] + (j - record_pairs_before[lo]), tile_count,
+                      tile_lists, tally);
     }
     // Out of passes (lavapipe's loop cap): the pairs left stay unclassified, weighted.
     if (tile_lists && j < total) {
@@ -312,6 +330,7 @@ void main() {
     uint end = 0u;
     ProjectedSplat p;
     CutoffRecord rec;
+    TileMassBounds ellipse;
     uint pairs = 0u;
     PairTally tally = PairTally(0u, 0u);
     bool live = true;
@@ -324,12 +343,12 @@ void main() {
             if (live) {
                 uint splat;
                 cutoff_pairs(f, k, slot, end, splat);
-                cutoff_splat(k, splat, p, rec);
+                cutoff_splat(k, splat, p, rec, ellipse);
                 pairs += end - slot;
             }
         }
         if (live && slot < end) {
-            classify_pair(f, config, p, rec, slot, tile_count, tile_lists, tally);
+            classify_pair(f, config, p, rec, ellipse, slot, tile_count, tile_lists, tally);
             ++slot;
         }
         --passes_left;

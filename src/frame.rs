@@ -11,7 +11,7 @@ use crate::constants::{
 };
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GpuClipParams, GpuCutoffRecord, GpuFrameParams, GpuProjectedSplat};
+use crate::gpu_types::{GpuClipParams, GpuFrameParams, GpuProjectedSplat, CUTOFF_RECORD_BYTES};
 use crate::stages::cutoff_tiles::CUTOFF_PAIRS_OFFSET;
 use crate::stages::depth_order::DEPTH_ORDER_BUFFER;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
@@ -470,9 +470,10 @@ impl FrameSlot {
                 sorted: 0,
             });
         }
-        // One side-record slot per Gaussian of the scene: (re)allocated when a rara frame needs
-        // more than the last one did.
-        let cutoff_bytes = gaussians.max(1) as u64 * std::mem::size_of::<GpuCutoffRecord>() as u64;
+        // One side-record slot per Gaussian of the scene, then one slot of its ellipse bounds
+        // (two floats; stages::cutoff_tiles): (re)allocated when a rara frame needs more than
+        // the last one did.
+        let cutoff_bytes = gaussians.max(1) as u64 * (CUTOFF_RECORD_BYTES + 8);
         let frame = self.resources.as_mut().unwrap();
         if rara
             && !frame

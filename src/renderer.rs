@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 pub use crate::frame::FrameStats;
 use crate::frame::{FrameMemory, FrameSlot, ObjectBuffers};
 pub use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{GpuClipParams, GpuFrameParams};
+use crate::gpu_types::{GpuClipParams, GpuFrameParams, CUTOFF_RECORD_BYTES};
 use crate::objects::ObjectTransform;
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
@@ -717,6 +717,12 @@ impl Renderer {
                 tiles_touched: f.tiles_touched.address,
                 slots: f.slots.address,
                 cutoffs: cutoffs_address,
+                // After the records (FrameSlot::prepare sizes the buffer for both).
+                cutoff_bounds: if cutoff_pairs.is_some() {
+                    cutoffs_address + scene.count as u64 * CUTOFF_RECORD_BYTES
+                } else {
+                    0
+                },
                 ranges: f.ranges.address,
                 state: f.state.address,
             },
@@ -1244,6 +1250,7 @@ impl Renderer {
             tiles_touched: 0,
             slots: 0,
             cutoffs: 0,
+            cutoff_bounds: 0,
             ranges: 0,
             state: bufs.state.address,
         };

@@ -51,6 +51,9 @@ pub struct CutoffTilesPush {
     /// Out, with the tile lists ([`super::tile_lists`]; else 0): per tile, set where a pair
     /// stays weighted, and after the last tile, set when pairs were left unclassified.
     pub tile_flags: u64,
+    /// Per cutoff record, its splat's bounds over the footprint ellipse (cutoff records), or
+    /// 0: none.
+    pub cutoff_bounds: u64,
 }
 
 /// The cutoff-tiles kernel.
@@ -110,6 +113,7 @@ impl CutoffTiles {
             keys: sort.keys[0].address,
             values: sort.values[0].address,
             tile_flags,
+            cutoff_bounds: f.at.cutoff_bounds,
         };
         f.pass(c"cutoff tiles", |f| {
             kernel.dispatch_indirect_in(f.cmd, &push, f.texels, pairs.raw, CUTOFF_ARGS_OFFSET);

@@ -29,6 +29,9 @@ pub struct FrameAddresses {
     pub slots: u64,
     /// Cutoff side records, or 0 on frames that are not rara-clipped.
     pub cutoffs: u64,
+    /// Per cutoff record, its splat's bounds over the footprint ellipse, in frames that
+    /// classify cutoff pairs by tile (`stages::cutoff_tiles`); else 0.
+    pub cutoff_bounds: u64,
     /// Each tile's run of sorted pairs.
     pub ranges: u64,
     /// The rasterizer's per-pixel state.

@@ -85,6 +85,13 @@ struct RecordsPush {
     cutoff_gaussians: u64,
     /// Out: the records.
     cutoffs: u64,
+    /// The projected splats.
+    splats: u64,
+    /// The frame's `ClipParams`.
+    clip: u64,
+    /// Out, in frames that classify cutoff pairs by tile (else 0): per record, its splat's
+    /// bounds over the footprint ellipse (`ellipse_plane_u_range` in `glsl/clip.glsl`).
+    cutoff_bounds: u64,
 }
 
 /// What a frame's project kernel writes for the cutoff Gaussians (`LISTS_CUTOFF` in
@@ -339,6 +346,9 @@ impl Project {
                     counters: push.counters,
                     cutoff_gaussians: push.cutoff_gaussians,
                     cutoffs: f.at.cutoffs,
+                    splats: f.at.splats,
+                    clip: f.at.clip,
+                    cutoff_bounds: f.at.cutoff_bounds,
                 };
                 self.records.built().dispatch_indirect(
                     f.cmd,
