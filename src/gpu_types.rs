@@ -140,14 +140,14 @@ pub struct GpuCutoffRecord {
     pub m2: [f32; 4],
 }
 
+/// Bytes of one [`GpuCutoffRecord`].
+pub const CUTOFF_RECORD_BYTES: u64 = std::mem::size_of::<GpuCutoffRecord>() as u64;
+
 const _: () = assert!(std::mem::size_of::<GpuGaussian>() == 48);
 const _: () =
     assert!(std::mem::size_of::<GpuClipParams>() == crate::constants::CLIP_PARAMS_BYTES as usize);
 const _: () = assert!(std::mem::size_of::<GpuClipParams>() == 48 + 16 * MAX_CLIP_PLANES as usize);
 const _: () = assert!(std::mem::size_of::<GpuCutoffRecord>() == 48);
-
-/// Bytes of one [`GpuCutoffRecord`].
-pub const CUTOFF_RECORD_BYTES: u64 = std::mem::size_of::<GpuCutoffRecord>() as u64;
 const _: () = assert!(std::mem::size_of::<GpuProjectedSplat>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuFrameParams>() == 128);
 const _: () = assert!(std::mem::size_of::<GpuSortInfo>() == 128);
