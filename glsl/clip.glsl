@@ -515,6 +515,9 @@ vec2 ellipse_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dir_c, vec3
     float n_hi = n_c + g_len + max(h_mid + h_rad, 0.0);
     float den_lo = and_lo * sa_lo;
     float den_hi = and_hi * sa_hi;
+    if (!(den_hi > 0.0)) {  // no direction to speak of (a degenerate record): no bound
+        return vec2(-UNBOUNDED, UNBOUNDED);
+    }
     // Rounding: N is a difference of terms up to |h| a and |nd| |o'.d'|, worked out here and
     // per pixel by the rasterizer.
     float od_hi = abs(od_c) + length(k);
