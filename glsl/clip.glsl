@@ -451,6 +451,13 @@ vec2 tile_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dirs[4]) {
                 f_hi / (f_hi >= 0.0 ? q_lo : q_hi) + slack);
 }
 
+// The eigenvalues (smaller, larger) of the symmetric 2x2 matrix [[s.x, s.y], [s.y, s.z]].
+vec2 symmetric2_eigenvalues(vec3 s) {
+    float mid = 0.5 * (s.x + s.z);
+    float rad = sqrt(0.25 * (s.x - s.z) * (s.x - s.z) + s.y * s.y);
+    return vec2(mid - rad, mid + rad);
+}
+
 // Bounds (u_lo, u_hi) of tile_plane_u_range's u over the rays through the splat's footprint
 // ellipse, (p - uv)^T K (p - uv) <= q_max for the conic K, rather than a box of them: the
 // box's corners lie outside the ellipse, and the weight there often differs from the weight
@@ -475,14 +482,17 @@ vec2 ellipse_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dir_c, vec3
     float l22 = sqrt(q / conic.z);
     mat3 m = transpose(mat3(rec.m0.xyz, rec.m1.xyz, rec.m2.xyz));   // rows m0, m1, m2
     vec3 o = vec3(rec.m0.w, rec.m1.w, rec.m2.w);
+    // The ray's change along the disc's two axes: d(uv + L v) = dir_c + v.x step1 + v.y step2.
+    vec3 step1 = l11 * across + l21 * down;
+    vec3 step2 = l22 * down;
     vec3 dc = m * dir_c;
-    vec3 w1 = m * (l11 * across + l21 * down);
-    vec3 w2 = m * (l22 * down);
+    vec3 w1 = m * step1;
+    vec3 w2 = m * step2;
     vec3 n = pl.xyz;
     float h = dot(n, eye) + pl.w;
     // n.d = nd_c + e.v
     float nd_c = dot(n, dir_c);
-    vec2 e = vec2(dot(n, l11 * across + l21 * down), dot(n, l22 * down));
+    vec2 e = vec2(dot(n, step1), dot(n, step2));
     float e_len = length(e);
     float nd_lo = nd_c - e_len;
     float nd_hi = nd_c + e_len;
@@ -497,22 +507,19 @@ vec2 ellipse_plane_u_range(CutoffRecord rec, vec4 pl, vec3 eye, vec3 dir_c, vec3
     float a_c = dot(dc, dc);
     vec2 g_a = vec2(dot(w1, dc), dot(w2, dc));
     vec3 gram = vec3(dot(w1, w1), dot(w1, w2), dot(w2, w2));   // G = [[x, y], [y, z]]
-    float gram_max = 0.5 * (gram.x + gram.z)
-                   + sqrt(0.25 * (gram.x - gram.z) * (gram.x - gram.z) + gram.y * gram.y);
     // |d'| within |d'_c| +- the largest singular value of W.
-    float sigma = sqrt(max(gram_max, 0.0));
+    float sigma = sqrt(max(symmetric2_eigenvalues(gram).y, 0.0));
     float len_c = sqrt(a_c);
     float sa_lo = max(len_c - sigma, 0.0);
     float sa_hi = len_c + sigma;
     // N = h a - nd od = N_c + g.v + v^T H v.
     float n_c = h * a_c - nd_c * od_c;
     vec2 g = 2.0 * h * g_a - nd_c * k - od_c * e;
-    vec3 hm = h * gram - vec3(e.x * k.x, 0.5 * (e.x * k.y + e.y * k.x), e.y * k.y);
-    float h_mid = 0.5 * (hm.x + hm.z);
-    float h_rad = sqrt(0.25 * (hm.x - hm.z) * (hm.x - hm.z) + hm.y * hm.y);
+    vec2 h_eigen = symmetric2_eigenvalues(
+        h * gram - vec3(e.x * k.x, 0.5 * (e.x * k.y + e.y * k.x), e.y * k.y));
     float g_len = length(g);
-    float n_lo = n_c - g_len + min(h_mid - h_rad, 0.0);
-    float n_hi = n_c + g_len + max(h_mid + h_rad, 0.0);
+    float n_lo = n_c - g_len + min(h_eigen.x, 0.0);
+    float n_hi = n_c + g_len + max(h_eigen.y, 0.0);
     float den_lo = and_lo * sa_lo;
     float den_hi = and_hi * sa_hi;
     if (!(den_hi > 0.0)) {  // no direction to speak of (a degenerate record): no bound

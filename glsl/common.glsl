@@ -155,6 +155,15 @@ vec3 pixel_ray(FrameParams f, vec2 pixel) {
     return c.x * f.world_to_cam0.xyz + c.y * f.world_to_cam1.xyz + f.world_to_cam2.xyz;
 }
 
+// How pixel_ray changes from one pixel to the next across a row (+x) and down a column (+y).
+vec3 pixel_ray_across(FrameParams f) {
+    return f.world_to_cam0.xyz / f.focal.x;
+}
+
+vec3 pixel_ray_down(FrameParams f) {
+    return f.world_to_cam1.xyz / f.focal.y;
+}
+
 // Indirect dispatch arguments with a 16-byte stride (x, y, z, unused).
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer DispatchArgs { uvec4 v[]; };
 

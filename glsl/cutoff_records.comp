@@ -45,15 +45,14 @@ void main() {
         if (!cutoff_record_is_flat(rec)) {
             ProjectedSplat p = load_splat(pc.splats, gaussian);
             vec3 dir_c = pixel_ray(f, p.uv);
-            vec3 across = f.world_to_cam0.xyz / f.focal.x;
-            vec3 down = f.world_to_cam1.xyz / f.focal.y;
             float q_max = footprint_q_max(p.opacity);
             uint planes = pc.clip.p.config.w;
             for (uint k = 0u; k < planes; ++k) {
                 tile_mass_bounds_add(bounds,
                                      ellipse_plane_u_range(rec, pc.clip.p.planes[k],
-                                                           f.cam_pos.xyz, dir_c, across, down,
-                                                           p.conic, q_max));
+                                                           f.cam_pos.xyz, dir_c,
+                                                           pixel_ray_across(f),
+                                                           pixel_ray_down(f), p.conic, q_max));
             }
         }
         pc.cutoff_bounds.v[index] =

@@ -676,8 +676,8 @@ void main() {
 
 #if CUTOFF_WEIGHT != 0
     ray0 = pixel_ray(f, vec2(first_pixel));
-    ray_across = f.world_to_cam0.xyz / f.focal.x;
-    ray_step = f.world_to_cam1.xyz / f.focal.y;
+    ray_across = pixel_ray_across(f);
+    ray_step = pixel_ray_down(f);
 #endif
     [[unroll]] for (uint i = 0u; i < NPX; ++i) {
         uvec2 pixel = first_pixel + uvec2(i / P, i % P);
