@@ -29,6 +29,7 @@ layout(push_constant) uniform Push {
     ClipParamsRef clip;
     U32s cutoff_gaussians;  // out: per cutoff record, its Gaussian (0 on other frames)
     U32s cutoff_regions;    // out, with several clipped objects: `region` per cutoff record
+    CutoffRecords cutoffs;  // out, with PROJECT_LISTS_WRITES: the records (else 0)
     uint first;             // the Gaussians [first, end) this dispatch projects
     uint end;
     uint region;            // the index of `clip` among the frame's regions
@@ -56,6 +57,12 @@ Gaussian fetch_gaussian(uint i) {
 // cutoff, so each frame's kernel holds only what it writes (lavapipe, 640x480 unclipped,
 // `render --repeat 8`, one thread, four rounds in turn: project playbot 55.9-58.0 -> 35.6-50.4
 // ms, plant 8.8-13.1 -> 8.2-11.5 ms without the listing).
+// PROJECT_LISTS_WRITES (the buffer-load kernels only, GPUs): the record itself instead of the
+// list, in rara frames that want nothing else of the records' pass (one region, no per-tile
+// classes, which take their bounds from it). A GPU stores a divergent branch's 48 bytes for
+// the lanes that take it; the pass and its dispatch arguments were two more dispatches and
+// barriers a frame, which on a GPU cost their latency whatever the work (the H200's depth sort:
+// about 0.06 ms a pass at 114k and at 500k keys).
 layout(constant_id = PROJECT_LISTS_CUTOFF_CONSTANT_ID) const uint LISTS_CUTOFF =
     PROJECT_LISTS_RECORDS;
 
@@ -181,7 +188,11 @@ bool project(FrameParams f, ClipParams clip, uint i) {
     // frames of several clipped objects now build; hard clipping's 29.2-29.6).
     if (LISTS_CUTOFF != PROJECT_LISTS_NONE && kind == CLASS_CUTOFF) {
         p.cutoff = atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u);
-        list_cutoff(i, p.cutoff);
+        if (LISTS_CUTOFF == PROJECT_LISTS_WRITES) {   // the host builds this for GPUs only
+            store_cutoff_record(pc.cutoffs, p.cutoff, gaussian_cutoff_record(g, f.cam_pos.xyz));
+        } else {
+            list_cutoff(i, p.cutoff);
+        }
     }
 #endif
     p.color = color;
@@ -229,7 +240,13 @@ void main() {
     if (cutoff) {
         uint index = wg_cutoff_base + slot;
         pc.splats.v[i].cutoff = index;
-        list_cutoff(i, index);
+        if (LISTS_CUTOFF == PROJECT_LISTS_WRITES) {
+            // The Gaussian again, from the cache: project() keeps it to itself.
+            store_cutoff_record(pc.cutoffs, index,
+                                gaussian_cutoff_record(fetch_gaussian(i), f.cam_pos.xyz));
+        } else {
+            list_cutoff(i, index);
+        }
     }
 #endif
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 37's GPU check, on a machine the `device` tool lends (scripts/gpu_bundle.sh packed
 # .gpu/ first): `bench` on plant and playbot at 1920x1080, 1280x960 and 640x480
-# (GPU_CHECK_SIZES), plant at 1920x1080 again with RARA_CUTOFF_TILES=splats, `bench --sort
+# (GPU_CHECK_SIZES), plant at 1920x1080 again with RARA_CUTOFF_TILES=splats and (with
+# playbot) with RARA_CUTOFF_TILES=off, plant at 640x480 with it too, `bench --sort
 # 2000000` (and with RARA_SORT=own, as playbot at 1920x1080) and a mixed scene's ray-traced
 # `bench --scene`, then every test binary until GPU_CHECK_DEADLINE seconds (480) have passed,
 # on the machine's Vulkan device. Everything goes to $OUT/gpu_check.log (OUT: the device
@@ -76,11 +77,25 @@ if [ "${GPU_CHECK_BENCH:-1}" = 1 ]; then
     done
     # The GPU layout's cutoff tiles, pairs shared over the workgroup (the default) against
     # whole splats per invocation, where the pass was longest (plant at 1920x1080).
+    # Then no per-tile classes at all (RARA_CUTOFF_TILES=off): the frame of the paper's
+    # CUDA renderer, hard clipping's passes only, project writing the cutoff records and the
+    # rasterizer weighting every pair of a cutoff splat; rara / hard <= 1.02 is issue 37's
+    # goal on a GPU.
     if [ "$quick" != 1 ]; then
         echo "=== bench plant 1920x1080, RARA_CUTOFF_TILES=splats"
         RARA_CUTOFF_TILES=splats "$rara" bench "$real/plant_capture_sh0.ply" \
             --cameras "$real/plant_capture_sh0.orbit_cameras.json" \
             --width 1920 --height 1080 --frames "$frames"
+        for size in 1920x1080 640x480; do
+            echo "=== bench plant $size, RARA_CUTOFF_TILES=off"
+            RARA_CUTOFF_TILES=off "$rara" bench "$real/plant_capture_sh0.ply" \
+                --cameras "$real/plant_capture_sh0.orbit_cameras.json" \
+                --width "${size%x*}" --height "${size#*x}" --frames "$frames" --modes hard,rara
+        done
+        echo "=== bench playbot (SOG) 1920x1080, RARA_CUTOFF_TILES=off"
+        RARA_CUTOFF_TILES=off "$rara" bench "$real/playbot_lod0_sog/meta.json" \
+            --cameras "$real/playbot_lod0_500k_sh2.orbit_cameras.json" \
+            --width 1920 --height 1080 --frames "$frames" --modes hard,rara
     fi
     echo "=== bench --sort 2000000"
     "$rara" bench --sort 2000000

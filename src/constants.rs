@@ -206,6 +206,11 @@ pub const PROJECT_LISTS_RECORDS: u32 = 1;
 /// `LISTS_CUTOFF` of rara frames of several objects clipped by regions of their own: also
 /// each record's region.
 pub const PROJECT_LISTS_REGIONS: u32 = 2;
+/// `LISTS_CUTOFF` of rara frames on the GPU layout (buffer-load kernels) that need nothing
+/// from the records' pass but the records (one region, no per-tile classes of cutoff pairs):
+/// each cutoff Gaussian's record index, in its splat, and the record itself, so the frame has
+/// no records' pass.
+pub const PROJECT_LISTS_WRITES: u32 = 3;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).
 pub const MAX_CLIP_PLANES: u32 = 16;
@@ -334,6 +339,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("PROJECT_LISTS_NONE", PROJECT_LISTS_NONE),
     ("PROJECT_LISTS_RECORDS", PROJECT_LISTS_RECORDS),
     ("PROJECT_LISTS_REGIONS", PROJECT_LISTS_REGIONS),
+    ("PROJECT_LISTS_WRITES", PROJECT_LISTS_WRITES),
     ("CLIP_MODE_NONE", CLIP_MODE_NONE),
     ("CLIP_MODE_HARD", CLIP_MODE_HARD),
     ("CLIP_MODE_RARA", CLIP_MODE_RARA),

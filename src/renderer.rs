@@ -24,7 +24,7 @@ use crate::stages::depth_order::{DepthOrder, DEPTH_ORDER_BUFFER};
 use crate::stages::emit::Emit;
 use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
-use crate::stages::project::{CutoffListing, ObjectClipRanges, Project};
+use crate::stages::project::{ObjectClipRanges, Project};
 use crate::stages::rasterize::{RasterLayout, Rasterize};
 use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
@@ -110,7 +110,8 @@ pub struct Renderer {
     depth_order: DepthOrder,
     emit: Emit,
     cutoff_tiles: CutoffTiles,
-    /// Whether frames that allow it classify cutoff pairs by tile (on unless switched off).
+    /// Whether frames that allow it classify cutoff pairs by tile (on unless switched off,
+    /// by [`Renderer::set_cutoff_tile_classes`] or `RARA_CUTOFF_TILES=off`).
     cutoff_tile_classes: bool,
     tile_lists: TileLists,
     /// Whether frames that allow it split the tiles by rasterize kernel (on unless switched
@@ -183,7 +184,8 @@ impl Renderer {
             depth_order: DepthOrder::new(ctx, texels)?,
             emit: Emit::new(ctx, texels)?,
             cutoff_tiles: CutoffTiles::new(ctx, texels)?,
-            cutoff_tile_classes: true,
+            // `RARA_CUTOFF_TILES=off`: for profiling the classes' worth on a device.
+            cutoff_tile_classes: std::env::var("RARA_CUTOFF_TILES").as_deref() != Ok("off"),
             tile_lists: TileLists::new(ctx)?,
             tile_lists_on: true,
             sort: RadixSort::new(ctx)?,
@@ -215,7 +217,9 @@ impl Renderer {
 
     /// Switches the per-tile classes of cutoff pairs ([`crate::stages::cutoff_tiles`]) on (the
     /// default) or off. They change no pixel by more than rounding and only save work; off is
-    /// for profiling what they save and for testing that they change nothing.
+    /// for profiling what they save and for testing that they change nothing. The environment
+    /// variable `RARA_CUTOFF_TILES=off` switches them off in every new renderer (the CLI's
+    /// too).
     pub fn set_cutoff_tile_classes(&mut self, on: bool) {
         self.cutoff_tile_classes = on;
     }
@@ -669,8 +673,10 @@ impl Renderer {
             ))
         .then_some(buffer_target);
         // The kernels this frame runs, each built when a frame first needs it.
-        self.project
-            .prepare(scene, CutoffListing::of(rara, object_clips.is_some()))?;
+        let listing = self
+            .project
+            .listing(rara, object_clips.is_some(), cutoff_pairs.is_some());
+        self.project.prepare(scene, listing)?;
         if !(rara && object_clips.is_some()) {
             self.rasterize.prepare(
                 rara.then_some(options.clip.weight),
@@ -732,12 +738,18 @@ impl Renderer {
         let scan = (&self.prefix_sum, &f.slots_scan);
         // Rara frames list their cutoff Gaussians in the cutoff-pairs buffer, and the pass
         // "cutoff records" after project writes their records (emit later overwrites the list
-        // with the pairs' starts).
-        let records_list = if rara { f.cutoff_pairs.as_ref() } else { None };
+        // with the pairs' starts); on the GPU layout, frames that want nothing else of that
+        // pass have project write the records itself (CutoffListing::Writes).
+        let records_list = if listing.has_records_pass() {
+            f.cutoff_pairs.as_ref()
+        } else {
+            None
+        };
         self.project.record(
             &mut rec,
             scene,
             object_clips.map(|o| &o.project),
+            listing,
             records_list,
         );
         self.depth_order

@@ -559,7 +559,8 @@ fn tile_class_cases() -> Vec<(&'static str, Scene, Camera)> {
 /// in the bench's). A sphere is not classified. Both rasterizer layouts, whose cutoff-tiles
 /// kernels share the pairs out differently (whole splats per invocation through texel views,
 /// a workgroup's pairs over its invocations through buffer loads), classify the same pairs
-/// the same way.
+/// the same way. Without the classes the GPU layout's project writes the cutoff records
+/// itself, so those frames also check its records against the records' pass's.
 #[test]
 fn cutoff_tile_classes_change_no_pixel() {
     let ctx = common::context();
@@ -603,6 +604,23 @@ fn tile_classes_change_no_pixel(
                 "  {layout:?} {name} {region_name}: {} cutoff pairs, {} weight 1, {} empty",
                 stats.cutoff_pairs, stats.cutoff_pairs_weight_one, stats.cutoff_pairs_empty
             );
+            // Without the classes (switched off, or a sphere's frame), which take their
+            // bounds from the records' pass, the GPU layout's project writes the records
+            // itself: the frame has no such pass, and its image is the one checked below. The
+            // strips layout (CPU drivers) keeps the pass.
+            let records_pass = |s: &FrameStats| s.passes.iter().any(|p| p.name == "cutoff records");
+            if !stats.passes.is_empty() {
+                assert_eq!(
+                    records_pass(&stats),
+                    layout == RasterLayout::Strips || stats.cutoff_pairs > 0,
+                    "{layout:?} {name} {region_name}: records' pass with the classes"
+                );
+                assert_eq!(
+                    records_pass(&plain_stats),
+                    layout == RasterLayout::Strips,
+                    "{layout:?} {name} {region_name}: records' pass without the classes"
+                );
+            }
             common::check_images(
                 &format!("cutoff_tile_classes_{layout:?}_{name}_{region_name}"),
                 &classified,

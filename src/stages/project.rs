@@ -9,7 +9,7 @@ use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
 use super::{FrameRecording, LinearArgsPush};
 use crate::constants::{
     COUNTER_CUTOFF, PROJECT_LISTS_CUTOFF_CONSTANT_ID, PROJECT_LISTS_NONE, PROJECT_LISTS_RECORDS,
-    PROJECT_LISTS_REGIONS,
+    PROJECT_LISTS_REGIONS, PROJECT_LISTS_WRITES,
 };
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
@@ -42,6 +42,8 @@ pub struct ProjectPush {
     /// Out, with several objects clipped by regions of their own: `region` per cutoff record
     /// (else 0).
     pub cutoff_regions: u64,
+    /// Out, with [`CutoffListing::Writes`]: the cutoff records (else 0).
+    pub cutoffs: u64,
     /// The Gaussians `[first, end)` the dispatch projects.
     pub first: u32,
     /// See `first`.
@@ -108,6 +110,10 @@ pub enum CutoffListing {
     /// Rara frames of several objects clipped by regions of their own: also each record's
     /// region.
     RecordsAndRegions = PROJECT_LISTS_REGIONS,
+    /// Rara frames on the GPU layout that need nothing of the records' pass but the records
+    /// (one region, no per-tile classes): each cutoff Gaussian's record index and the record
+    /// itself, and no records' pass.
+    Writes = PROJECT_LISTS_WRITES,
 }
 
 // `Project::new` builds the kernels in the order of the discriminants, which index them.
@@ -115,17 +121,17 @@ const _: () = assert!(
     CutoffListing::None as u32 == 0
         && CutoffListing::Records as u32 == 1
         && CutoffListing::RecordsAndRegions as u32 == 2
+        && CutoffListing::Writes as u32 == 3
 );
 
 impl CutoffListing {
-    /// The listing a frame needs: `rara` clipped or not, with `object_regions` (several objects
-    /// clipped by regions of their own) or not.
-    pub fn of(rara: bool, object_regions: bool) -> Self {
-        match (rara, object_regions) {
-            (false, _) => CutoffListing::None,
-            (true, false) => CutoffListing::Records,
-            (true, true) => CutoffListing::RecordsAndRegions,
-        }
+    /// Whether the frame has the pass "cutoff records", which writes the listed Gaussians'
+    /// records.
+    pub fn has_records_pass(self) -> bool {
+        matches!(
+            self,
+            CutoffListing::Records | CutoffListing::RecordsAndRegions
+        )
     }
 }
 
@@ -137,7 +143,10 @@ pub struct Project {
     /// Indexed by [`CutoffListing`] (its discriminant; `Project::new` builds them in that
     /// order), storage precision (32-bit, then half floats) and SH degree; each built when a
     /// frame first needs it ([`Project::prepare`]).
-    kernels: [[[LazyPipeline; 4]; 2]; 3],
+    kernels: [[[LazyPipeline; 4]; 2]; 4],
+    /// Whether the kernels read through the frame's texel views (CPU drivers), which never
+    /// write the records themselves ([`Project::listing`]).
+    texels: bool,
     /// The later rounds' count of tiles touched (`project_touched.comp`).
     touched: ComputePipeline,
     /// Rara frames: the dispatch arguments over the cutoff records (`linear_args.comp`).
@@ -220,8 +229,10 @@ impl Project {
                 CutoffListing::None,
                 CutoffListing::Records,
                 CutoffListing::RecordsAndRegions,
+                CutoffListing::Writes,
             ]
             .map(listed),
+            texels: texels.is_some(),
             touched: ComputePipeline::new::<TouchedPush>(
                 ctx,
                 c"project_touched",
@@ -242,6 +253,20 @@ impl Project {
         })
     }
 
+    /// The listing a frame needs: `rara` clipped or not; with `object_regions` (several
+    /// objects clipped by regions of their own) or not; `bounds`: whether a later pass wants
+    /// the records' pass's ellipse bounds (per-tile classes of cutoff pairs). The texel
+    /// kernels (CPU drivers) always leave the records to their own pass: a CPU driver runs a
+    /// branch's stores, masked, in every SIMD vector.
+    pub fn listing(&self, rara: bool, object_regions: bool, bounds: bool) -> CutoffListing {
+        match (rara, object_regions) {
+            (false, _) => CutoffListing::None,
+            (true, true) => CutoffListing::RecordsAndRegions,
+            (true, false) if bounds || self.texels => CutoffListing::Records,
+            (true, false) => CutoffListing::Writes,
+        }
+    }
+
     /// The kernel for `scene`'s SH degree and precision with `listing`.
     fn kernel(&self, scene: &GpuScene, listing: CutoffListing) -> &LazyPipeline {
         let precision = match scene.sh_precision {
@@ -255,7 +280,7 @@ impl Project {
     /// it before [`Project::record`] with the same listing.
     pub fn prepare(&self, scene: &GpuScene, listing: CutoffListing) -> Result<()> {
         self.kernel(scene, listing).get()?;
-        if listing != CutoffListing::None {
+        if listing.has_records_pass() {
             self.records_args.get()?;
             self.records.get()?;
         }
@@ -267,19 +292,26 @@ impl Project {
     /// [`TILE_RECT_CHUNK`](crate::constants::TILE_RECT_CHUNK) tiles, then the later rounds of
     /// the count of tiles touched ([`super::tile_rect_rounds`]). The texel kernels read the
     /// frame's texel views. With `object_clips` each object is projected by a dispatch of its
-    /// own, against its own region. With `cutoff_pairs` (the frame's cutoff-pairs buffer, on
-    /// rara frames), project lists the cutoff Gaussians there; then the pass "cutoff records":
-    /// one invocation writes the dispatch arguments over the cutoff records (at
-    /// [`CUTOFF_ARGS_OFFSET`], where the cutoff-tiles stage finds them too) and
-    /// `cutoff_records` writes the records at `f.at.cutoffs`, each followed by a barrier.
+    /// own, against its own region. `listing` is the frame's ([`Project::listing`]): with
+    /// [`CutoffListing::Writes`] project writes the cutoff records at `f.at.cutoffs` itself.
+    /// With a records' pass, `cutoff_pairs` is the frame's cutoff-pairs buffer, where project
+    /// lists the cutoff Gaussians; then the pass "cutoff records": one invocation writes the
+    /// dispatch arguments over the cutoff records (at [`CUTOFF_ARGS_OFFSET`], where the
+    /// cutoff-tiles stage finds them too) and `cutoff_records` writes the records at
+    /// `f.at.cutoffs`, each followed by a barrier.
     pub fn record(
         &self,
         f: &mut FrameRecording,
         scene: &GpuScene,
         object_clips: Option<&ObjectClipRanges>,
+        listing: CutoffListing,
         cutoff_pairs: Option<&Buffer>,
     ) {
-        let listing = CutoffListing::of(cutoff_pairs.is_some(), object_clips.is_some());
+        assert_eq!(
+            cutoff_pairs.is_some(),
+            listing.has_records_pass(),
+            "a records' pass needs the cutoff-pairs buffer"
+        );
         let kernel = self.kernel(scene, listing).built();
         let push = ProjectPush {
             frame: f.at.params,
@@ -292,6 +324,11 @@ impl Project {
             clip: f.at.clip,
             cutoff_gaussians: cutoff_pairs.map_or(0, |b| b.address + CUTOFF_PAIRS_OFFSET),
             cutoff_regions: 0,
+            cutoffs: if listing == CutoffListing::Writes {
+                f.at.cutoffs
+            } else {
+                0
+            },
             first: 0,
             end: scene.count,
             region: 0,
