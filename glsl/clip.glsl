@@ -555,6 +555,33 @@ void tile_mass_bounds_add(inout TileMassBounds b, vec2 u) {
     b.lost += normal_cdf(-u.x);
 }
 
+// The bounds of cutoff splat p (record rec) over its whole footprint ellipse, plane by plane
+// of the `planes` of `clip` (ellipse_plane_u_range). They depend on the splat only, so each
+// splat's are worked out once a frame: by cutoff_records.comp on CPU drivers, by the
+// cutoff-tiles kernels on GPUs (where project writes the records and the frame has no
+// records' pass). A flat splat's classes do not use them: none.
+// `planes` is clip's config.w, loaded by the caller before any branch: on lavapipe, that word
+// loaded here, after the balanced cutoff-tiles kernel's barriers and under its branch, gave
+// other bounds than the same word loaded at the top of its main() (its classes then drew
+// pairs plain that the box's other planes cut; the other kernels were not affected); not
+// understood.
+TileMassBounds footprint_mass_bounds(FrameParams f, ClipParamsRef clip, uint planes,
+                                     CutoffRecord rec, ProjectedSplat p) {
+    TileMassBounds bounds = tile_mass_bounds_none();
+    if (cutoff_record_is_flat(rec)) {
+        return bounds;
+    }
+    vec3 dir_c = pixel_ray(f, p.uv);
+    float q_max = footprint_q_max(p.opacity);
+    for (uint k = 0u; k < planes; ++k) {
+        tile_mass_bounds_add(bounds,
+                             ellipse_plane_u_range(rec, clip.p.planes[k], f.cam_pos.xyz, dir_c,
+                                                   pixel_ray_across(f), pixel_ray_down(f),
+                                                   p.conic, q_max));
+    }
+    return bounds;
+}
+
 // TILE_CLASS_* of a cutoff splat's pair with a tile, from the bounds over every plane of the
 // region (flags: ClipParams.config.z; an inverted region swaps inside and outside);
 // peak_alpha bounds o exp(power) over the tile's pixels.

@@ -1,12 +1,14 @@
 #version 460
-// Stage 1b, cutoff records (rara frames): one invocation per cutoff record, dispatched
-// indirectly over the frame's count (linear_args.comp). Writes the record of the Gaussian that
-// project listed under it (gaussian_cutoff_record in clip.glsl), the side record the later
-// stages weight the cutoff splat by. Project lists the Gaussians instead of writing the
-// records: a CPU driver runs a branch's stores, masked, in every SIMD vector, and a record is six
-// 64-bit stores; here every lane has one.
+// Stage 1b, cutoff records (rara frames on CPU drivers; on GPUs only those of several clipped
+// objects, the others' project writes the records itself, PROJECT_LISTS_WRITES): one
+// invocation per cutoff record, dispatched indirectly over the frame's count
+// (linear_args.comp). Writes the record of the Gaussian that project listed under it
+// (gaussian_cutoff_record in clip.glsl), the side record the later stages weight the cutoff
+// splat by. Project lists the Gaussians instead of writing the records: a CPU driver runs a
+// branch's stores, masked, in every SIMD vector, and a record is six 64-bit stores; here every
+// lane has one.
 // In frames that classify cutoff pairs by tile it also bounds the splat's weight over its whole
-// footprint ellipse (ellipse_plane_u_range in clip.glsl), for cutoff_tiles to take with each
+// footprint ellipse (footprint_mass_bounds in clip.glsl), for cutoff_tiles to take with each
 // pair's bound over its box: worked out there per pair, the same bound cost that pass 1.5-1.8
 // ms on plant at 1280x960 (one thread), here 0.5 ms.
 #include "common.glsl"
@@ -29,6 +31,7 @@ layout(push_constant) uniform Push {
 
 void main() {
     FrameParams f = load_frame_params(pc.frame);
+    uint planes = pc.clip.p.config.w;   // before any branch (footprint_mass_bounds)
     uint index = linear_index();
     if (index >= pc.counters.v[COUNTER_CUTOFF]) {
         return;
@@ -38,23 +41,10 @@ void main() {
     CutoffRecord rec = gaussian_cutoff_record(g, f.cam_pos.xyz);
     store_cutoff_record(pc.cutoffs, index, rec);
     if (uint64_t(pc.cutoff_bounds) != 0ul) {
-        // The bounds over the splat's footprint ellipse (ellipse_plane_u_range), for
-        // cutoff_tiles to take with each pair's bounds over its box: they do not depend on the
-        // tile. A flat splat's classes do not use them.
-        TileMassBounds bounds = tile_mass_bounds_none();
-        if (!cutoff_record_is_flat(rec)) {
-            ProjectedSplat p = load_splat(pc.splats, gaussian);
-            vec3 dir_c = pixel_ray(f, p.uv);
-            float q_max = footprint_q_max(p.opacity);
-            uint planes = pc.clip.p.config.w;
-            for (uint k = 0u; k < planes; ++k) {
-                tile_mass_bounds_add(bounds,
-                                     ellipse_plane_u_range(rec, pc.clip.p.planes[k],
-                                                           f.cam_pos.xyz, dir_c,
-                                                           pixel_ray_across(f),
-                                                           pixel_ray_down(f), p.conic, q_max));
-            }
-        }
+        // The bounds over the splat's footprint ellipse, for cutoff_tiles to take with each
+        // pair's bounds over its box: they do not depend on the tile.
+        TileMassBounds bounds =
+            footprint_mass_bounds(f, pc.clip, planes, rec, load_splat(pc.splats, gaussian));
         pc.cutoff_bounds.v[index] =
             packUint2x32(floatBitsToUint(vec2(bounds.u_keep, bounds.lost)));
     }

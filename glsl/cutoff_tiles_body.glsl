@@ -6,7 +6,13 @@
 // tile-ranges stage leaves out. Either way the pair keeps its slot, so the counts of the earlier
 // stages stay exact. Dispatched indirectly over the cutoff splats, so the rest pay nothing.
 // The weight's bounds are the tighter of each pair's over the footprint's box in its tile and
-// the splat's over its whole footprint ellipse (cutoff_records.comp, pc.cutoff_bounds).
+// the splat's over its whole footprint ellipse (footprint_mass_bounds in clip.glsl: stored by
+// cutoff_records.comp on CPU drivers, worked out here once per splat on GPUs).
+// Dispatch: indirect over the cutoff records on CPU drivers (the records' pass writes the
+// arguments); on GPUs, where project writes the records and there is no such pass, directly
+// over every Gaussian, the workgroups past the records leaving at once: a GPU starts and ends
+// an empty workgroup in a moment, where a pass to write the arguments costs a dispatch and a
+// barrier.
 //
 // Each workgroup takes LINEAR_WORKGROUP cutoff splats and shares their pairs out: every pass of
 // an invocation's loop classifies one pair, and an invocation whose splat has no pair left takes
@@ -218,9 +224,8 @@ void cutoff_pairs(FrameParams f, uint k, out uint slot, out uint end, out uint s
     end = max(first.x, min(first.x + touched, f.scene.w));
 }
 
-// Cutoff record k, its splat (index `splat`) and the splat's bounds over its ellipse.
-void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec,
-                  out TileMassBounds ellipse) {
+// Cutoff record k and its splat (index `splat`).
+void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec) {
 #ifdef SPLAT_TEXELS
     p = texel_splat(splat);
     rec = texel_cutoff_record(k);
@@ -228,11 +233,23 @@ void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec
     p = load_splat(pc.splats, splat);
     rec = load_cutoff_record(pc.cutoffs, k);
 #endif
-    ellipse = tile_mass_bounds_none();
+}
+
+// The bounds of cutoff record k's splat p over its footprint ellipse (footprint_mass_bounds in
+// clip.glsl): on CPU drivers the records' pass stored them (pc.cutoff_bounds); on GPUs, whose
+// project writes the records and whose frames have no records' pass, the kernel works them
+// out, once per splat.
+TileMassBounds cutoff_ellipse_bounds(FrameParams f, uint planes, uint k, ProjectedSplat p,
+                                     CutoffRecord rec) {
+#ifdef SPLAT_TEXELS
     if (uint64_t(pc.cutoff_bounds) != 0ul) {
         vec2 b = uintBitsToFloat(unpackUint2x32(pc.cutoff_bounds.v[k]));
-        ellipse = TileMassBounds(b.x, b.y);
+        return TileMassBounds(b.x, b.y);
     }
+    return tile_mass_bounds_none();
+#else
+    return footprint_mass_bounds(f, pc.clip, planes, rec, p);
+#endif
 }
 
 #ifdef BALANCED_PAIRS
@@ -245,18 +262,28 @@ void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec
 #error "CUTOFF_TILES_SEARCH_STEPS is log2(LINEAR_WORKGROUP)"
 #endif
 
-// Per cutoff record of the workgroup, by scan rank: its first pair, its splat, and the sum of
-// the pair counts of the records before it (the workgroup's total past the records it has).
+// Per cutoff record of the workgroup, by scan rank: its first pair, its splat, the sum of
+// the pair counts of the records before it (the workgroup's total past the records it has),
+// and its splat's bounds over the footprint ellipse (u_keep, lost).
 shared uint record_first_pair[LINEAR_WORKGROUP];
 shared uint record_splat[LINEAR_WORKGROUP];
 shared uint record_pairs_before[LINEAR_WORKGROUP];
+shared float record_u_keep[LINEAR_WORKGROUP];
+shared float record_lost[LINEAR_WORKGROUP];
 
 void main() {
+    uint group_first = linear_index() - gl_LocalInvocationIndex;
+    uint cutoff_count = pc.counters.v[COUNTER_CUTOFF];
+    // The dispatch covers every Gaussian (the frame has no records' pass to write indirect
+    // arguments over the cutoff records): the workgroups past them leave at once, all their
+    // invocations alike, before they load anything else.
+    if (group_first >= cutoff_count) {
+        return;
+    }
     FrameParams f = load_frame_params(pc.frame);
     uvec4 config = pc.clip.p.config;
-    uint group_first = linear_index() - gl_LocalInvocationIndex;
-    uint group_end = min(group_first + LINEAR_WORKGROUP, pc.counters.v[COUNTER_CUTOFF]);
-    uint records = group_end - min(group_first, group_end);
+    uint group_end = min(group_first + LINEAR_WORKGROUP, cutoff_count);
+    uint records = group_end - group_first;
     uint tile_count = f.size.z * f.size.w;
     bool tile_lists = uint64_t(pc.tile_flags) != 0ul;
     // Each invocation counts the pairs of one record, in scan order.
@@ -272,6 +299,16 @@ void main() {
     record_first_pair[rank] = slot;
     record_splat[rank] = splat;
     record_pairs_before[rank] = rank < records ? before : total;
+    // And works out its splat's bounds over the footprint ellipse, which every pair of the
+    // splat takes.
+    if (rank < records) {
+        ProjectedSplat p;
+        CutoffRecord rec;
+        cutoff_splat(group_first + rank, splat, p, rec);
+        TileMassBounds b = cutoff_ellipse_bounds(f, config.w, group_first + rank, p, rec);
+        record_u_keep[rank] = b.u_keep;
+        record_lost[rank] = b.lost;
+    }
     barrier();
     // Pair j of the workgroup's records belongs to the last record whose pairs start at or
     // before it: a binary search over the ranks, and the invocations take the pairs in turn.
@@ -293,8 +330,8 @@ void main() {
         }
         ProjectedSplat p;
         CutoffRecord rec;
-        TileMassBounds ellipse;
-        cutoff_splat(group_first + lo, record_splat[lo], p, rec, ellipse);
+        cutoff_splat(group_first + lo, record_splat[lo], p, rec);
+        TileMassBounds ellipse = TileMassBounds(record_u_keep[lo], record_lost[lo]);
         classify_pair(f, config, p, rec, ellipse,
                       record_first_pair[lo] + (j - record_pairs_before[lo]), tile_count,
                       tile_lists, tally);
@@ -320,7 +357,13 @@ void main() {
     FrameParams f = load_frame_params(pc.frame);
     uvec4 config = pc.clip.p.config;
     uint group_first = linear_index() - gl_LocalInvocationIndex;
-    uint group_end = min(group_first + LINEAR_WORKGROUP, pc.counters.v[COUNTER_CUTOFF]);
+    uint cutoff_count = pc.counters.v[COUNTER_CUTOFF];
+    // On GPUs the dispatch covers every Gaussian (as in the balanced kernel's main): the
+    // workgroups past the cutoff records leave at once.
+    if (group_first >= cutoff_count) {
+        return;
+    }
+    uint group_end = min(group_first + LINEAR_WORKGROUP, cutoff_count);
     if (gl_LocalInvocationIndex == 0u) {
         next_record = group_first;
     }
@@ -343,7 +386,8 @@ void main() {
             if (live) {
                 uint splat;
                 cutoff_pairs(f, k, slot, end, splat);
-                cutoff_splat(k, splat, p, rec, ellipse);
+                cutoff_splat(k, splat, p, rec);
+                ellipse = cutoff_ellipse_bounds(f, config.w, k, p, rec);
                 pairs += end - slot;
             }
         }

@@ -58,11 +58,11 @@ Gaussian fetch_gaussian(uint i) {
 // `render --repeat 8`, one thread, four rounds in turn: project playbot 55.9-58.0 -> 35.6-50.4
 // ms, plant 8.8-13.1 -> 8.2-11.5 ms without the listing).
 // PROJECT_LISTS_WRITES (the buffer-load kernels only, GPUs): the record itself instead of the
-// list, in rara frames that want nothing else of the records' pass (one region, no per-tile
-// classes, which take their bounds from it). A GPU stores a divergent branch's 48 bytes for
-// the lanes that take it; the pass and its dispatch arguments were two more dispatches and
-// barriers a frame, which on a GPU cost their latency whatever the work (the H200's depth sort:
-// about 0.06 ms a pass at 114k and at 500k keys).
+// list, in rara frames of one region (the cutoff-tiles kernels then bound the weights over the
+// footprints themselves). A GPU stores a divergent branch's 48 bytes for the lanes that take
+// it; the records' pass and its dispatch arguments were two more dispatches and barriers a
+// frame, which on a GPU cost their latency whatever the work (the H200's depth sort: about
+// 0.06 ms a pass at 114k and at 500k keys).
 layout(constant_id = PROJECT_LISTS_CUTOFF_CONSTANT_ID) const uint LISTS_CUTOFF =
     PROJECT_LISTS_RECORDS;
 

@@ -206,10 +206,9 @@ pub const PROJECT_LISTS_RECORDS: u32 = 1;
 /// `LISTS_CUTOFF` of rara frames of several objects clipped by regions of their own: also
 /// each record's region.
 pub const PROJECT_LISTS_REGIONS: u32 = 2;
-/// `LISTS_CUTOFF` of rara frames on the GPU layout (buffer-load kernels) that need nothing
-/// from the records' pass but the records (one region, no per-tile classes of cutoff pairs):
-/// each cutoff Gaussian's record index, in its splat, and the record itself, so the frame has
-/// no records' pass.
+/// `LISTS_CUTOFF` of rara frames of one region on the GPU layout (buffer-load kernels): each
+/// cutoff Gaussian's record index, in its splat, and the record itself, so the frame has no
+/// records' pass.
 pub const PROJECT_LISTS_WRITES: u32 = 3;
 
 /// Most half-spaces one clip region may have (an oriented box uses six).

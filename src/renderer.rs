@@ -673,9 +673,7 @@ impl Renderer {
             ))
         .then_some(buffer_target);
         // The kernels this frame runs, each built when a frame first needs it.
-        let listing = self
-            .project
-            .listing(rara, object_clips.is_some(), cutoff_pairs.is_some());
+        let listing = self.project.listing(rara, object_clips.is_some());
         self.project.prepare(scene, listing)?;
         if !(rara && object_clips.is_some()) {
             self.rasterize.prepare(
@@ -723,8 +721,9 @@ impl Renderer {
                 tiles_touched: f.tiles_touched.address,
                 slots: f.slots.address,
                 cutoffs: cutoffs_address,
-                // After the records (FrameSlot::prepare sizes the buffer for both).
-                cutoff_bounds: if cutoff_pairs.is_some() {
+                // After the records (FrameSlot::prepare sizes the buffer for both); the records'
+                // pass writes them (CPU drivers).
+                cutoff_bounds: if cutoff_pairs.is_some() && listing.has_records_pass() {
                     cutoffs_address + scene.count as u64 * CUTOFF_RECORD_BYTES
                 } else {
                     0
@@ -738,8 +737,8 @@ impl Renderer {
         let scan = (&self.prefix_sum, &f.slots_scan);
         // Rara frames list their cutoff Gaussians in the cutoff-pairs buffer, and the pass
         // "cutoff records" after project writes their records (emit later overwrites the list
-        // with the pairs' starts); on the GPU layout, frames that want nothing else of that
-        // pass have project write the records itself (CutoffListing::Writes).
+        // with the pairs' starts); on the GPU layout, frames of one region have project write
+        // the records itself (CutoffListing::Writes).
         let records_list = if listing.has_records_pass() {
             f.cutoff_pairs.as_ref()
         } else {
@@ -773,8 +772,13 @@ impl Renderer {
         )?;
         if let Some(pairs) = cutoff_pairs {
             let flags = tile_lists.map_or(0, |(b, _)| b.address + TileListsLayout::FLAGS);
-            self.cutoff_tiles
-                .record(&mut rec, pairs, &f.sort, flags, scene.may_be_flat)?;
+            self.cutoff_tiles.record(
+                &mut rec,
+                pairs,
+                &f.sort,
+                flags,
+                (scene.count, scene.may_be_flat),
+            )?;
         }
         if let Some((buffer, layout)) = &tile_lists {
             self.tile_lists.record(&mut rec, buffer, layout)?;

@@ -62,6 +62,9 @@ pub struct CutoffTiles {
     /// The same kernel for frames without flat Gaussians: their branch compiled out
     /// (`FLAT_SPLATS` in `glsl/clip.glsl`).
     volume: LazyPipeline,
+    /// Whether the kernel reads through the frame's texel views (CPU drivers): then the
+    /// records' pass wrote its dispatch arguments and the splats' ellipse bounds.
+    texels: bool,
 }
 
 impl CutoffTiles {
@@ -84,22 +87,26 @@ impl CutoffTiles {
         Ok(CutoffTiles {
             pipeline: build(),
             volume: build().specialized(&[(FLAT_SPLATS_CONSTANT_ID, 0)]),
+            texels: texels.is_some(),
         })
     }
 
     /// Records the pass "cutoff tiles": one workgroup per
     /// [`crate::constants::LINEAR_WORKGROUP`] cutoff splats, which share their pairs out
-    /// (`glsl/cutoff_tiles_body.glsl`), dispatched indirectly from the arguments project wrote in
-    /// `pairs` (the frame's cutoff-pairs buffer), over the pairs emit wrote into the first
-    /// buffers of `sort`; flags the tiles that keep a weighted pair at `tile_flags` (0: none),
-    /// then a barrier. `flat`: whether the frame may hold flat Gaussians.
+    /// (`glsl/cutoff_tiles_body.glsl`), over the pairs emit wrote into the first buffers of
+    /// `sort`; flags the tiles that keep a weighted pair at `tile_flags` (0: none), then a
+    /// barrier. `flat`: whether the frame may hold flat Gaussians. The texel kernel (CPU
+    /// drivers) is dispatched indirectly from the arguments the records' pass wrote in `pairs`
+    /// (the frame's cutoff-pairs buffer); the others, whose frames have no records' pass,
+    /// directly over the scene's `gaussians`, the workgroups past the cutoff records leaving
+    /// at once.
     pub fn record(
         &self,
         f: &mut FrameRecording,
         pairs: &Buffer,
         sort: &SortBuffers,
         tile_flags: u64,
-        flat: bool,
+        (gaussians, flat): (u32, bool),
     ) -> Result<()> {
         let kernel = if flat { &self.pipeline } else { &self.volume }.get()?;
         let push = CutoffTilesPush {
@@ -116,7 +123,11 @@ impl CutoffTiles {
             cutoff_bounds: f.at.cutoff_bounds,
         };
         f.pass(c"cutoff tiles", |f| {
-            kernel.dispatch_indirect_in(f.cmd, &push, f.texels, pairs.raw, CUTOFF_ARGS_OFFSET);
+            if self.texels {
+                kernel.dispatch_indirect_in(f.cmd, &push, f.texels, pairs.raw, CUTOFF_ARGS_OFFSET);
+            } else {
+                kernel.dispatch_in(f.cmd, &push, f.texels, super::linear_grid(gaussians));
+            }
             f.barrier();
         });
         Ok(())

@@ -110,9 +110,8 @@ pub enum CutoffListing {
     /// Rara frames of several objects clipped by regions of their own: also each record's
     /// region.
     RecordsAndRegions = PROJECT_LISTS_REGIONS,
-    /// Rara frames on the GPU layout that need nothing of the records' pass but the records
-    /// (one region, no per-tile classes): each cutoff Gaussian's record index and the record
-    /// itself, and no records' pass.
+    /// Rara frames of one region on the GPU layout: each cutoff Gaussian's record index and the
+    /// record itself, and no records' pass.
     Writes = PROJECT_LISTS_WRITES,
 }
 
@@ -254,15 +253,15 @@ impl Project {
     }
 
     /// The listing a frame needs: `rara` clipped or not; with `object_regions` (several
-    /// objects clipped by regions of their own) or not; `bounds`: whether a later pass wants
-    /// the records' pass's ellipse bounds (per-tile classes of cutoff pairs). The texel
-    /// kernels (CPU drivers) always leave the records to their own pass: a CPU driver runs a
-    /// branch's stores, masked, in every SIMD vector.
-    pub fn listing(&self, rara: bool, object_regions: bool, bounds: bool) -> CutoffListing {
+    /// objects clipped by regions of their own) or not. The texel kernels (CPU drivers) leave
+    /// the records to their own pass (a CPU driver runs a branch's stores, masked, in every
+    /// SIMD vector), which also bounds the splats' weights for the cutoff tiles; on GPUs
+    /// project writes them, and the cutoff-tiles kernels bound the weights themselves.
+    pub fn listing(&self, rara: bool, object_regions: bool) -> CutoffListing {
         match (rara, object_regions) {
             (false, _) => CutoffListing::None,
             (true, true) => CutoffListing::RecordsAndRegions,
-            (true, false) if bounds || self.texels => CutoffListing::Records,
+            (true, false) if self.texels => CutoffListing::Records,
             (true, false) => CutoffListing::Writes,
         }
     }
