@@ -560,11 +560,12 @@ void tile_mass_bounds_add(inout TileMassBounds b, vec2 u) {
 // splat's are worked out once a frame: by cutoff_records.comp on CPU drivers, by the
 // cutoff-tiles kernels on GPUs (where project writes the records and the frame has no
 // records' pass). A flat splat's classes do not use them: none.
-// `planes` is clip's config.w, loaded by the caller before any branch: on lavapipe, that word
-// loaded here, after the balanced cutoff-tiles kernel's barriers and under its branch, gave
-// other bounds than the same word loaded at the top of its main() (its classes then drew
-// pairs plain that the box's other planes cut; the other kernels were not affected); not
-// understood.
+// `planes` is clip's config.w, loaded by the caller at the top of its main(): on lavapipe,
+// that word loaded here gave wrong bounds in the balanced cutoff-tiles kernel, whose lanes
+// each bound another splat there (with or without a branch around the call, before or after
+// its barriers; its classes then drew plain pairs that a box's other planes cut), and right
+// ones in the same kernel's pair loop and in the records' pass. Not understood; loaded at the
+// top, every case of cutoff_tile_classes_change_no_pixel agrees across the layouts.
 TileMassBounds footprint_mass_bounds(FrameParams f, ClipParamsRef clip, uint planes,
                                      CutoffRecord rec, ProjectedSplat p) {
     TileMassBounds bounds = tile_mass_bounds_none();
