@@ -4,7 +4,7 @@
 // emit gave it, and the rasterizer draws it there as a plain splat; a pair that adds nothing
 // to any pixel of its tile gets the key `tile count`, which the sort puts after every tile and the
 // tile-ranges stage leaves out. Either way the pair keeps its slot, so the counts of the earlier
-// stages stay exact. Dispatched indirectly over the cutoff splats, so the rest pay nothing.
+// stages stay exact. Only the cutoff splats' workgroups do any work (Dispatch, below).
 // The weight's bounds are the tighter of each pair's over the footprint's box in its tile and
 // the splat's over its whole footprint ellipse (footprint_mass_bounds in clip.glsl: stored by
 // cutoff_records.comp on CPU drivers, worked out here once per splat on GPUs).
