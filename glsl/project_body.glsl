@@ -73,8 +73,13 @@ shared uint wg_cutoff_base;
 
 // Lists cutoff Gaussian i under record `index`: the Gaussian for the records' pass and, with
 // several clipped objects, which region the record is weighted by (the rasterizer's
-// OBJECT_CLIPS kernels read it). The splat names the record itself.
-void list_cutoff(uint i, uint index) {
+// OBJECT_CLIPS kernels read it); with PROJECT_LISTS_WRITES (GPUs), the record itself, of the
+// Gaussian seen from `eye` (fetched again, from the cache). The splat names the record itself.
+void list_cutoff(uint i, uint index, vec3 eye) {
+    if (LISTS_CUTOFF == PROJECT_LISTS_WRITES) {
+        store_cutoff_record(pc.cutoffs, index, gaussian_cutoff_record(fetch_gaussian(i), eye));
+        return;
+    }
     pc.cutoff_gaussians.v[index] = i;
     if (LISTS_CUTOFF == PROJECT_LISTS_REGIONS) {
         pc.cutoff_regions.v[index] = pc.region;
@@ -188,11 +193,7 @@ bool project(FrameParams f, ClipParams clip, uint i) {
     // frames of several clipped objects now build; hard clipping's 29.2-29.6).
     if (LISTS_CUTOFF != PROJECT_LISTS_NONE && kind == CLASS_CUTOFF) {
         p.cutoff = atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u);
-        if (LISTS_CUTOFF == PROJECT_LISTS_WRITES) {   // the host builds this for GPUs only
-            store_cutoff_record(pc.cutoffs, p.cutoff, gaussian_cutoff_record(g, f.cam_pos.xyz));
-        } else {
-            list_cutoff(i, p.cutoff);
-        }
+        list_cutoff(i, p.cutoff, f.cam_pos.xyz);
     }
 #endif
     p.color = color;
@@ -240,13 +241,7 @@ void main() {
     if (cutoff) {
         uint index = wg_cutoff_base + slot;
         pc.splats.v[i].cutoff = index;
-        if (LISTS_CUTOFF == PROJECT_LISTS_WRITES) {
-            // The Gaussian again, from the cache: project() keeps it to itself.
-            store_cutoff_record(pc.cutoffs, index,
-                                gaussian_cutoff_record(fetch_gaussian(i), f.cam_pos.xyz));
-        } else {
-            list_cutoff(i, index);
-        }
+        list_cutoff(i, index, f.cam_pos.xyz);
     }
 #endif
 }

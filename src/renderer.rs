@@ -777,7 +777,11 @@ impl Renderer {
                 pairs,
                 &f.sort,
                 flags,
-                (scene.count, scene.may_be_flat),
+                // Without a records' pass, no dispatch arguments over the records.
+                (
+                    (!listing.has_records_pass()).then_some(scene.count),
+                    scene.may_be_flat,
+                ),
             )?;
         }
         if let Some((buffer, layout)) = &tile_lists {

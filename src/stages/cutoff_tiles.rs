@@ -62,9 +62,6 @@ pub struct CutoffTiles {
     /// The same kernel for frames without flat Gaussians: their branch compiled out
     /// (`FLAT_SPLATS` in `glsl/clip.glsl`).
     volume: LazyPipeline,
-    /// Whether the kernel reads through the frame's texel views (CPU drivers): then the
-    /// records' pass wrote its dispatch arguments and the splats' ellipse bounds.
-    texels: bool,
 }
 
 impl CutoffTiles {
@@ -87,7 +84,6 @@ impl CutoffTiles {
         Ok(CutoffTiles {
             pipeline: build(),
             volume: build().specialized(&[(FLAT_SPLATS_CONSTANT_ID, 0)]),
-            texels: texels.is_some(),
         })
     }
 
@@ -95,18 +91,18 @@ impl CutoffTiles {
     /// [`crate::constants::LINEAR_WORKGROUP`] cutoff splats, which share their pairs out
     /// (`glsl/cutoff_tiles_body.glsl`), over the pairs emit wrote into the first buffers of
     /// `sort`; flags the tiles that keep a weighted pair at `tile_flags` (0: none), then a
-    /// barrier. `flat`: whether the frame may hold flat Gaussians. The texel kernel (CPU
-    /// drivers) is dispatched indirectly from the arguments the records' pass wrote in `pairs`
-    /// (the frame's cutoff-pairs buffer); the others, whose frames have no records' pass,
-    /// directly over the scene's `gaussians`, the workgroups past the cutoff records leaving
-    /// at once.
+    /// barrier. `flat`: whether the frame may hold flat Gaussians. In frames with a records'
+    /// pass (CPU drivers) the kernel is dispatched indirectly from the arguments that pass
+    /// wrote in `pairs` (the frame's cutoff-pairs buffer); in the others (GPUs) directly over
+    /// `over_gaussians`, the scene's count, the workgroups past the cutoff records leaving at
+    /// once.
     pub fn record(
         &self,
         f: &mut FrameRecording,
         pairs: &Buffer,
         sort: &SortBuffers,
         tile_flags: u64,
-        (gaussians, flat): (u32, bool),
+        (over_gaussians, flat): (Option<u32>, bool),
     ) -> Result<()> {
         let kernel = if flat { &self.pipeline } else { &self.volume }.get()?;
         let push = CutoffTilesPush {
@@ -123,10 +119,15 @@ impl CutoffTiles {
             cutoff_bounds: f.at.cutoff_bounds,
         };
         f.pass(c"cutoff tiles", |f| {
-            if self.texels {
-                kernel.dispatch_indirect_in(f.cmd, &push, f.texels, pairs.raw, CUTOFF_ARGS_OFFSET);
-            } else {
-                kernel.dispatch_in(f.cmd, &push, f.texels, super::linear_grid(gaussians));
+            match over_gaussians {
+                None => kernel.dispatch_indirect_in(
+                    f.cmd,
+                    &push,
+                    f.texels,
+                    pairs.raw,
+                    CUTOFF_ARGS_OFFSET,
+                ),
+                Some(n) => kernel.dispatch_in(f.cmd, &push, f.texels, super::linear_grid(n)),
             }
             f.barrier();
         });
