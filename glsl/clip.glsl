@@ -602,4 +602,23 @@ uint cutoff_tile_class(uint flags, TileMassBounds b, float peak_alpha) {
     return TILE_CLASS_PARTIAL;
 }
 
+// The class of every pair of cutoff splat p (record rec) at once, from its bounds over the
+// whole footprint ellipse (footprint_mass_bounds) and its opacity, which bounds its alpha
+// everywhere; TILE_CLASS_PARTIAL leaves each pair to its tile. A pair's own bounds are the
+// tighter of the ellipse's and its tile's, and its peak alpha at most the opacity, so a pair of
+// a splat decided whole would take the same class in its tile, or else empty there (alpha
+// below 1/255, or no pixel centre in its box), which a plain pair draws as nothing too. A flat
+// splat's ellipse bounds are none: left to the tiles (flat_tile_class).
+uint cutoff_splat_class(uint flags, CutoffRecord rec, TileMassBounds ellipse, float opacity) {
+    if (cutoff_record_is_flat(rec)) {
+        return TILE_CLASS_PARTIAL;
+    }
+    return cutoff_tile_class(flags, ellipse, opacity);
+}
+
+// The `lost` of a cutoff record's stored ellipse bounds (cutoff_records.comp) whose splat was
+// decided whole (CUTOFF_WHOLE_*): emit wrote no pair range for it, and cutoff_tiles passes it
+// by. A mass lost is never negative.
+#define CUTOFF_BOUNDS_DECIDED -1.0
+
 #endif

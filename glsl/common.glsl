@@ -35,13 +35,23 @@ struct ProjectedSplat {
     float depth;        // view-space z, > 0.2
     float opacity;
     vec3 conic;         // inverse 2D covariance (A, B, C)
-    uint cutoff;        // index of the cutoff side record, or NO_CUTOFF (w = 1 everywhere)
+    uint cutoff;        // index of the cutoff side record (and CUTOFF_WHOLE_*), or NO_CUTOFF
+                        // (w = 1 everywhere)
     vec3 color;
     float radius;       // 3-sigma radius in pixels (an integer); SKIPPED_RADIUS if not drawn
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer ProjectedSplats { ProjectedSplat v[]; };
 
 #define NO_CUTOFF 0xffffffffu
+// A cutoff splat whose weight the records' pass found the same at every pixel its footprint
+// reaches (cutoff_records.comp, in frames that classify cutoff pairs by tile) keeps its record
+// index with one of these bits: weight 1 throughout (emit writes plain pairs) or 0 throughout
+// (emit keys its pairs past every tile, as cutoff_tiles does an empty pair's). Either way its
+// pairs skip the cutoff-tiles pass. Record indices stay below 2^30: a ProjectedSplat is 48
+// bytes, and no buffer holds 2^30 of them.
+#define CUTOFF_WHOLE_FULL 0x80000000u
+#define CUTOFF_WHOLE_EMPTY 0x40000000u
+#define CUTOFF_WHOLE_BITS (CUTOFF_WHOLE_FULL | CUTOFF_WHOLE_EMPTY)
 // The radius of a Gaussian that project skipped: its tile rectangle is empty.
 #define SKIPPED_RADIUS -1.0
 

@@ -10,7 +10,11 @@
 // In frames that classify cutoff pairs by tile it also bounds the splat's weight over its whole
 // footprint ellipse (footprint_mass_bounds in clip.glsl), for cutoff_tiles to take with each
 // pair's bound over its box: worked out there per pair, the same bound cost that pass 1.5-1.8
-// ms on plant at 1280x960 (one thread), here 0.5 ms.
+// ms on plant at 1280x960 (one thread), here 0.5 ms. Where those bounds decide every pair of
+// the splat at once (cutoff_splat_class: weight 1 or nothing wherever it reaches), the splat
+// is marked (CUTOFF_WHOLE_*) and its pairs never reach cutoff_tiles: emit writes them plain,
+// or keyed past every tile. On plant and biker under a plane that is about two pairs in five
+// of those cutoff_tiles classified; each used to pay the per-tile bounds there.
 #include "common.glsl"
 #include "clip.glsl"
 
@@ -25,13 +29,16 @@ layout(push_constant) uniform Push {
     ProjectedSplats splats;
     ClipParamsRef clip;
     // Out, in frames whose cutoff pairs are classified by tile (else 0): per record, the
-    // TileMassBounds (u_keep, lost) of its splat over the footprint ellipse.
+    // TileMassBounds (u_keep, lost) of its splat over the footprint ellipse, lost =
+    // CUTOFF_BOUNDS_DECIDED for a splat decided whole.
     U64s cutoff_bounds;
+    U32s tiles_touched;     // the pairs of a splat decided whole, for the frame's counts
 } pc;
 
 void main() {
     FrameParams f = load_frame_params(pc.frame);
-    uint planes = pc.clip.p.config.w;   // before any branch (footprint_mass_bounds)
+    // Before any branch (footprint_mass_bounds).
+    uvec4 config = pc.clip.p.config;
     uint index = linear_index();
     if (index >= pc.counters.v[COUNTER_CUTOFF]) {
         return;
@@ -43,8 +50,22 @@ void main() {
     if (uint64_t(pc.cutoff_bounds) != 0ul) {
         // The bounds over the splat's footprint ellipse, for cutoff_tiles to take with each
         // pair's bounds over its box: they do not depend on the tile.
-        TileMassBounds bounds =
-            footprint_mass_bounds(f, pc.clip, planes, rec, load_splat(pc.splats, gaussian));
+        ProjectedSplat p = load_splat(pc.splats, gaussian);
+        TileMassBounds bounds = footprint_mass_bounds(f, pc.clip, config.w, rec, p);
+        uint whole = cutoff_splat_class(config.z, rec, bounds, p.opacity);
+        if (whole != TILE_CLASS_PARTIAL) {
+            // Every pair decided: the splat says so to emit, and its pairs count as the ones
+            // cutoff_tiles classifies would.
+            bool full = whole == TILE_CLASS_FULL;
+            pc.splats.v[gaussian].cutoff =
+                index | (full ? CUTOFF_WHOLE_FULL : CUTOFF_WHOLE_EMPTY);
+            bounds.lost = CUTOFF_BOUNDS_DECIDED;
+            uint pairs = pc.tiles_touched.v[gaussian];
+            atomicAdd(pc.counters.v[COUNTER_CUTOFF_WHOLE], 1u);
+            atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS], pairs);
+            atomicAdd(pc.counters.v[full ? COUNTER_CUTOFF_PAIRS_WEIGHT_ONE
+                                         : COUNTER_CUTOFF_PAIRS_EMPTY], pairs);
+        }
         pc.cutoff_bounds.v[index] =
             packUint2x32(floatBitsToUint(vec2(bounds.u_keep, bounds.lost)));
     }

@@ -7,7 +7,10 @@
 // stages stay exact. Only the cutoff splats' workgroups do any work (Dispatch, below).
 // The weight's bounds are the tighter of each pair's over the footprint's box in its tile and
 // the splat's over its whole footprint ellipse (footprint_mass_bounds in clip.glsl: stored by
-// cutoff_records.comp on CPU drivers, worked out here once per splat on GPUs).
+// cutoff_records.comp on CPU drivers, worked out here once per splat on GPUs). Where the
+// ellipse's bounds decide every pair of a splat (cutoff_splat_class), the records' pass marked
+// the splat and emit wrote its pairs as decided (CPU drivers): such a record has no pairs here.
+// On GPUs the kernel decides them itself and sets each pair's class without its tile's bounds.
 // Dispatch: indirect over the cutoff records on CPU drivers (the records' pass writes the
 // arguments); on GPUs, where project writes the records and there is no such pass, directly
 // over every Gaussian, the workgroups past the records leaving at once: a GPU starts and ends
@@ -156,10 +159,21 @@ struct PairTally {
 };
 
 // Classifies the pair at `slot` of cutoff splat `p` (record `rec`): rewrites its key (empty) or
-// its value (weight 1) and flags its tile where it stays weighted.
+// its value (weight 1) and flags its tile where it stays weighted. `whole`, the splat's class
+// over its whole footprint (cutoff_splat_class), is the pair's unless TILE_CLASS_PARTIAL.
 void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord rec,
-                   TileMassBounds ellipse, uint slot, uint tile_count, bool tile_lists,
-                   inout PairTally tally) {
+                   TileMassBounds ellipse, uint whole, uint slot, uint tile_count,
+                   bool tile_lists, inout PairTally tally) {
+    if (whole == TILE_CLASS_EMPTY) {
+        pc.keys.v[slot] = tile_count;
+        ++tally.empty;
+        return;
+    }
+    if (whole == TILE_CLASS_FULL) {
+        pc.values.v[slot] &= ~PAIR_WEIGHTED;
+        ++tally.weight_one;
+        return;
+    }
 #ifdef SPLAT_TEXELS
     uint tile = texelFetch(emitted_keys, int(slot)).x;
 #else
@@ -211,8 +225,18 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
     }
 }
 
-// The range of cutoff record k's pairs, [slot, end), and its splat's index.
+// The range of cutoff record k's pairs, [slot, end), and its splat's index; no pairs for a
+// splat the records' pass decided whole (CUTOFF_BOUNDS_DECIDED), for which emit wrote no range
+// (the entry still holds project's list there).
 void cutoff_pairs(FrameParams f, uint k, out uint slot, out uint end, out uint splat) {
+    if (uint64_t(pc.cutoff_bounds) != 0ul
+            && uintBitsToFloat(unpackUint2x32(pc.cutoff_bounds.v[k]).y)
+                   == CUTOFF_BOUNDS_DECIDED) {
+        slot = 0u;
+        end = 0u;
+        splat = 0u;
+        return;
+    }
     uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
     splat = first.y;
 #ifdef SPLAT_TEXELS
@@ -270,6 +294,7 @@ shared uint record_splat[LINEAR_WORKGROUP];
 shared uint record_pairs_before[LINEAR_WORKGROUP];
 shared float record_u_keep[LINEAR_WORKGROUP];
 shared float record_lost[LINEAR_WORKGROUP];
+shared uint record_class[LINEAR_WORKGROUP];   // cutoff_splat_class
 
 void main() {
     uint group_first = linear_index() - gl_LocalInvocationIndex;
@@ -308,6 +333,11 @@ void main() {
         TileMassBounds b = cutoff_ellipse_bounds(f, config.w, group_first + rank, p, rec);
         record_u_keep[rank] = b.u_keep;
         record_lost[rank] = b.lost;
+        uint whole = cutoff_splat_class(config.z, rec, b, p.opacity);
+        record_class[rank] = whole;
+        if (whole != TILE_CLASS_PARTIAL) {
+            atomicAdd(pc.counters.v[COUNTER_CUTOFF_WHOLE], 1u);
+        }
     }
     barrier();
     // Pair j of the workgroup's records belongs to the last record whose pairs start at or
@@ -332,7 +362,7 @@ void main() {
         CutoffRecord rec;
         cutoff_splat(group_first + lo, record_splat[lo], p, rec);
         TileMassBounds ellipse = TileMassBounds(record_u_keep[lo], record_lost[lo]);
-        classify_pair(f, config, p, rec, ellipse,
+        classify_pair(f, config, p, rec, ellipse, record_class[lo],
                       record_first_pair[lo] + (j - record_pairs_before[lo]), tile_count,
                       tile_lists, tally);
     }
@@ -374,6 +404,7 @@ void main() {
     ProjectedSplat p;
     CutoffRecord rec;
     TileMassBounds ellipse;
+    uint whole = TILE_CLASS_PARTIAL;
     uint pairs = 0u;
     PairTally tally = PairTally(0u, 0u);
     bool live = true;
@@ -388,11 +419,21 @@ void main() {
                 cutoff_pairs(f, k, slot, end, splat);
                 cutoff_splat(k, splat, p, rec);
                 ellipse = cutoff_ellipse_bounds(f, config.w, k, p, rec);
+#ifndef SPLAT_TEXELS
+                // The records' pass decides splats whole where there is one (CPU drivers),
+                // and then leaves this kernel none: worked out again per record, the step
+                // that takes one, masked in every pass there, would pay for it.
+                whole = cutoff_splat_class(config.z, rec, ellipse, p.opacity);
+                if (whole != TILE_CLASS_PARTIAL) {
+                    atomicAdd(pc.counters.v[COUNTER_CUTOFF_WHOLE], 1u);
+                }
+#endif
                 pairs += end - slot;
             }
         }
         if (live && slot < end) {
-            classify_pair(f, config, p, rec, ellipse, slot, tile_count, tile_lists, tally);
+            classify_pair(f, config, p, rec, ellipse, whole, slot, tile_count, tile_lists,
+                          tally);
             ++slot;
         }
         --passes_left;

@@ -61,9 +61,18 @@ void main() {
     float q_max = footprint_q_max(p.opacity);
     uint capacity = f.scene.w;
 #ifdef RECORD_CUTOFF_PAIRS
-    if (p.cutoff != NO_CUTOFF && pc.round_index == 0u) {
+    // A cutoff splat that the records' pass decided whole (CUTOFF_WHOLE_* in common.glsl) has
+    // no pairs for cutoff_tiles: weight 1 throughout, they go out plain; weight 0, keyed past
+    // every tile, which the sort puts last and the tile-ranges stage leaves out.
+    uint whole = p.cutoff == NO_CUTOFF ? CUTOFF_WHOLE_FULL : p.cutoff & CUTOFF_WHOLE_BITS;
+    if (whole == 0u && pc.round_index == 0u) {
         pc.cutoff_pairs.v[p.cutoff] = packUint2x32(uvec2(slot, i)); // one 64-bit store
     }
+    bool weighted = whole == 0u;
+    uint key_past_tiles = whole == CUTOFF_WHOLE_EMPTY ? f.size.z * f.size.w : 0u;
+#else
+    bool weighted = p.cutoff != NO_CUTOFF;
+    uint key_past_tiles = 0u;
 #endif
     // One walk over the rect's candidate cells, row by row, as count_touched_cells
     // (common.glsl) in project. lavapipe, render --repeat 10, runs in turn, the same images:
@@ -80,14 +89,15 @@ void main() {
     }
     // A cutoff splat's pairs take the clip weight in the rasterizer (until cutoff_tiles
     // finds a tile where it is 1 throughout).
-    uint value = p.cutoff != NO_CUTOFF ? i | PAIR_WEIGHTED : i;
+    uint value = weighted ? i | PAIR_WEIGHTED : i;
     FootprintRows rows = footprint_rows(p.uv, p.conic, q_max);
     FootprintWalk w = footprint_walk_start(rows, rect, first_cell);
     while (footprint_walk_cell(rect, w) < end_cell) {
         if (footprint_walk_on_candidate(w)
                 && footprint_touches_tile(p.uv, p.conic, q_max, w.xy.x, w.xy.y)) {
             if (slot < capacity) {
-                pc.keys.v[slot] = w.xy.y * f.size.z + w.xy.x;
+                pc.keys.v[slot] =
+                    key_past_tiles != 0u ? key_past_tiles : w.xy.y * f.size.z + w.xy.x;
                 pc.values.v[slot] =
                     value | footprint_blocks(p.uv, p.conic, q_max, w.xy.x, w.xy.y);
             }

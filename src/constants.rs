@@ -142,8 +142,9 @@ pub const COUNTER_VISIBLE: u32 = 2;
 pub const COUNTER_CUTOFF: u32 = 3;
 /// Counter slot: entries the sort actually processes (`min(intersections, capacity)`).
 pub const COUNTER_SORT_COUNT: u32 = 4;
-/// Counter slot: cutoff splats' pairs that the cutoff-tiles stage classified (0 when it did not
-/// run).
+/// Counter slot: cutoff splats' pairs classified (0 when the frame did not classify them): by
+/// the cutoff-tiles stage, or all of a splat's at once where its bounds over the whole
+/// footprint decide them ([`COUNTER_CUTOFF_WHOLE`]).
 pub const COUNTER_CUTOFF_PAIRS: u32 = 5;
 /// Counter slot: of those, pairs drawn as plain splats (weight 1 across the tile).
 pub const COUNTER_CUTOFF_PAIRS_WEIGHT_ONE: u32 = 6;
@@ -155,8 +156,12 @@ pub const COUNTER_WEIGHTED_TILES: u32 = 8;
 /// Counter slot: Gaussians not drawn because their footprint exceeds
 /// [`MAX_FOOTPRINT_SIGMA_PX`].
 pub const COUNTER_OVERSIZED: u32 = 9;
+/// Counter slot: cutoff splats whose bounds over the whole footprint decided every pair of
+/// theirs at once, weight 1 or nothing wherever they reach (`cutoff_splat_class` in
+/// `glsl/clip.glsl`; 0 when the frame did not classify cutoff pairs).
+pub const COUNTER_CUTOFF_WHOLE: u32 = 10;
 /// Number of counter slots.
-pub const COUNTER_SLOTS: u32 = 10;
+pub const COUNTER_SLOTS: u32 = 11;
 
 /// The footprint bound (docs/ARCHITECTURE.md, "Extreme scales"): a Gaussian is not drawn when
 /// one of its three scaled axes, projected by the Jacobian onto the image's x or y axis, spans
@@ -319,6 +324,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("COUNTER_CUTOFF_PAIRS_EMPTY", COUNTER_CUTOFF_PAIRS_EMPTY),
     ("COUNTER_WEIGHTED_TILES", COUNTER_WEIGHTED_TILES),
     ("COUNTER_OVERSIZED", COUNTER_OVERSIZED),
+    ("COUNTER_CUTOFF_WHOLE", COUNTER_CUTOFF_WHOLE),
     ("MAX_FOOTPRINT_SIGMA_PX", MAX_FOOTPRINT_SIGMA_PX),
     ("PAIR_WEIGHTED", PAIR_WEIGHTED),
     ("PAIR_BLOCKS_SHIFT", PAIR_BLOCKS_SHIFT),

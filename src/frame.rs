@@ -5,9 +5,9 @@ use ash::vk;
 use crate::camera::tile_grid;
 use crate::constants::{
     COUNTER_CUTOFF, COUNTER_CUTOFF_PAIRS, COUNTER_CUTOFF_PAIRS_EMPTY,
-    COUNTER_CUTOFF_PAIRS_WEIGHT_ONE, COUNTER_INTERSECTIONS, COUNTER_MAX_TILE_LEN,
-    COUNTER_OVERSIZED, COUNTER_SLOTS, COUNTER_VISIBLE, COUNTER_WEIGHTED_TILES, MAX_INTERSECTIONS,
-    RASTER_CHUNK,
+    COUNTER_CUTOFF_PAIRS_WEIGHT_ONE, COUNTER_CUTOFF_WHOLE, COUNTER_INTERSECTIONS,
+    COUNTER_MAX_TILE_LEN, COUNTER_OVERSIZED, COUNTER_SLOTS, COUNTER_VISIBLE,
+    COUNTER_WEIGHTED_TILES, MAX_INTERSECTIONS, RASTER_CHUNK,
 };
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
@@ -343,6 +343,7 @@ impl FrameSlot {
             cutoff_pairs: counters[COUNTER_CUTOFF_PAIRS as usize],
             cutoff_pairs_weight_one: counters[COUNTER_CUTOFF_PAIRS_WEIGHT_ONE as usize],
             cutoff_pairs_empty: counters[COUNTER_CUTOFF_PAIRS_EMPTY as usize],
+            cutoff_whole: counters[COUNTER_CUTOFF_WHOLE as usize],
             weighted_tiles: counters[COUNTER_WEIGHTED_TILES as usize],
             oversized: counters[COUNTER_OVERSIZED as usize],
             max_tile_len,
@@ -777,6 +778,9 @@ pub struct FrameStats {
     /// ... and those left out of the tile lists, adding nothing to the tile. The rest pay the
     /// per-pixel weight.
     pub cutoff_pairs_empty: u32,
+    /// Cutoff splats whose every pair was decided at once, weight 1 or empty, from the splat's
+    /// bounds over its whole footprint (their pairs are in the three counts above).
+    pub cutoff_whole: u32,
     /// Tiles the weighted rasterize kernel walked, when the frame split the tiles by kernel
     /// (the strips rasterizer under rara clipping by planes with the mass weight; else 0).
     pub weighted_tiles: u32,

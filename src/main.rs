@@ -676,11 +676,13 @@ fn print_raster_counts(
     );
     if stats.cutoff_pairs > 0 {
         println!(
-            "cutoff pairs by tile: {} in all, {} weight 1 (drawn plain), {} empty (left out), {} partial",
+            "cutoff pairs by tile: {} in all, {} weight 1 (drawn plain), {} empty (left out), {} partial; {} of {} cutoff splats decided whole",
             stats.cutoff_pairs,
             stats.cutoff_pairs_weight_one,
             stats.cutoff_pairs_empty,
-            stats.cutoff_pairs_partial()
+            stats.cutoff_pairs_partial(),
+            stats.cutoff_whole,
+            stats.cutoff
         );
     }
     if stats.weighted_tiles > 0 {

@@ -577,13 +577,13 @@ fn cutoff_tile_classes_change_no_pixel() {
 }
 
 /// `cutoff_tile_classes_change_no_pixel` in one layout: each case's (cutoff pairs, weight 1,
-/// empty).
+/// empty, splats decided whole).
 fn tile_classes_change_no_pixel(
     renderer: &mut Renderer,
     layout: RasterLayout,
-) -> Vec<(u32, u32, u32)> {
+) -> Vec<(u32, u32, u32, u32)> {
     let mut counts = Vec::new();
-    let (mut all, mut weight_one, mut empty) = (0u64, 0u64, 0u64);
+    let (mut all, mut weight_one, mut empty, mut whole) = (0u64, 0u64, 0u64, 0u64);
     for (name, scene, camera) in tile_class_cases() {
         let gpu_scene = renderer.upload(&scene).unwrap();
         for (region_name, region) in regions(&scene) {
@@ -601,9 +601,14 @@ fn tile_classes_change_no_pixel(
                 stats.cutoff_pairs
             );
             eprintln!(
-                "  {layout:?} {name} {region_name}: {} cutoff pairs, {} weight 1, {} empty",
-                stats.cutoff_pairs, stats.cutoff_pairs_weight_one, stats.cutoff_pairs_empty
+                "  {layout:?} {name} {region_name}: {} cutoff pairs, {} weight 1, {} empty; {} of {} cutoff splats decided whole",
+                stats.cutoff_pairs,
+                stats.cutoff_pairs_weight_one,
+                stats.cutoff_pairs_empty,
+                stats.cutoff_whole,
+                stats.cutoff
             );
+            assert!(stats.cutoff_whole <= stats.cutoff);
             // The GPU layout's project writes the records itself, and its cutoff-tiles kernel
             // bounds the weights over the footprints: those frames have no records' pass, and
             // their classes and images are the ones checked here. The strips layout (CPU
@@ -629,12 +634,17 @@ fn tile_classes_change_no_pixel(
                 stats.cutoff_pairs,
                 stats.cutoff_pairs_weight_one,
                 stats.cutoff_pairs_empty,
+                stats.cutoff_whole,
             ));
             all += stats.cutoff_pairs as u64;
             weight_one += stats.cutoff_pairs_weight_one as u64;
             empty += stats.cutoff_pairs_empty as u64;
+            whole += stats.cutoff_whole as u64;
         }
     }
+    // Some splats are decided whole (the records' pass on CPU drivers, the kernel itself on
+    // GPUs), and the images above match those without any class.
+    assert!(whole > 0, "no cutoff splat decided whole");
     // Both classes occur, and together spare at least a tenth of the cutoff pairs the weight.
     assert!(
         weight_one > 0 && empty > 0,

@@ -547,6 +547,12 @@ fn print_table(
                 100.0 * empty / all,
                 100.0 * partial / all
             );
+            let (whole, cutoff) = (sum(|f| f.cutoff_whole), sum(|f| f.cutoff));
+            println!(
+                "rara cutoff splats decided whole (every pair weight 1 or empty, past the cutoff-tiles pass): {:.0} % of {:.0} per frame",
+                100.0 * whole / cutoff.max(1.0),
+                cutoff / r.frames.len() as f64
+            );
         }
         let weighted = sum(|f| f.weighted_tiles);
         if weighted > 0.0 {
@@ -764,6 +770,7 @@ fn json_report(
                 "cutoff_pairs_per_frame": r.frames.iter()
                     .map(|f| [f.cutoff_pairs, f.cutoff_pairs_weight_one, f.cutoff_pairs_empty])
                     .collect::<Vec<_>>(),
+                "cutoff_whole_per_frame": r.frames.iter().map(|f| f.cutoff_whole).collect::<Vec<_>>(),
                 "weighted_tiles_per_frame": r.frames.iter().map(|f| f.weighted_tiles).collect::<Vec<_>>(),
                 "trace": trace,
             }),

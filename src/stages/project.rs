@@ -92,8 +92,11 @@ struct RecordsPush {
     /// The frame's `ClipParams`.
     clip: u64,
     /// Out, in frames that classify cutoff pairs by tile (else 0): per record, its splat's
-    /// bounds over the footprint ellipse (`ellipse_plane_u_range` in `glsl/clip.glsl`).
+    /// bounds over the footprint ellipse (`ellipse_plane_u_range` in `glsl/clip.glsl`), and
+    /// which splats those bounds decide whole (`CUTOFF_WHOLE_*` in `glsl/common.glsl`).
     cutoff_bounds: u64,
+    /// Tiles touched per Gaussian: the pairs of a splat decided whole, for the frame's counts.
+    tiles_touched: u64,
 }
 
 /// What a frame's project kernel writes for the cutoff Gaussians (`LISTS_CUTOFF` in
@@ -385,6 +388,7 @@ impl Project {
                     splats: f.at.splats,
                     clip: f.at.clip,
                     cutoff_bounds: f.at.cutoff_bounds,
+                    tiles_touched: f.at.tiles_touched,
                 };
                 self.records.built().dispatch_indirect(
                     f.cmd,
