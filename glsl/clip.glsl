@@ -557,7 +557,7 @@ void tile_mass_bounds_add(inout TileMassBounds b, vec2 u) {
 
 // The bounds of cutoff splat p (record rec) over its whole footprint ellipse, plane by plane
 // of the `planes` of `clip` (ellipse_plane_u_range). They depend on the splat only, so each
-// splat's are worked out once a frame: by cutoff_records.comp on CPU drivers, by the
+// splat's are worked out once a frame: by cutoff_records_body.glsl on CPU drivers, by the
 // cutoff-tiles kernels on GPUs (where project writes the records and the frame has no
 // records' pass). A flat splat's classes do not use them: none.
 // `planes` is clip's config.w, loaded by the caller at the top of its main(): on lavapipe,
@@ -616,7 +616,7 @@ uint cutoff_splat_class(uint flags, CutoffRecord rec, TileMassBounds ellipse, fl
     return cutoff_tile_class(flags, ellipse, opacity);
 }
 
-// The `lost` of a cutoff record's stored ellipse bounds (cutoff_records.comp) whose splat was
+// The `lost` of a cutoff record's stored ellipse bounds (cutoff_records_body.glsl) whose splat was
 // decided whole (CUTOFF_WHOLE_*): emit wrote no pair range for it, and cutoff_tiles passes it
 // by. A mass lost is never negative.
 #define CUTOFF_BOUNDS_DECIDED -1.0

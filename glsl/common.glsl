@@ -44,7 +44,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer ProjectedSp
 
 #define NO_CUTOFF 0xffffffffu
 // A cutoff splat whose weight the records' pass found the same at every pixel its footprint
-// reaches (cutoff_records.comp, in frames that classify cutoff pairs by tile) keeps its record
+// reaches (cutoff_records_body.glsl, in frames that classify cutoff pairs by tile) keeps its record
 // index with one of these bits: weight 1 throughout (emit writes plain pairs) or 0 throughout
 // (emit keys its pairs past every tile, as cutoff_tiles does an empty pair's). Either way its
 // pairs skip the cutoff-tiles pass. Record indices stay below 2^30: a ProjectedSplat is 48

@@ -7,7 +7,7 @@
 // stages stay exact. Only the cutoff splats' workgroups do any work (Dispatch, below).
 // The weight's bounds are the tighter of each pair's over the footprint's box in its tile and
 // the splat's over its whole footprint ellipse (footprint_mass_bounds in clip.glsl: stored by
-// cutoff_records.comp on CPU drivers, worked out here once per splat on GPUs). Where the
+// cutoff_records_body.glsl on CPU drivers, worked out here once per splat on GPUs). Where the
 // ellipse's bounds decide every pair of a splat (cutoff_splat_class), the records' pass marked
 // the splat and emit wrote its pairs as decided (CPU drivers): such a record has no pairs here.
 // On GPUs the kernel decides them itself and sets each pair's class without its tile's bounds.
@@ -81,7 +81,7 @@ layout(push_constant) uniform Push {
     // weighted, and at [tile count] when pairs were left unclassified (tile_lists.comp).
     U32s tile_flags;
     // Per cutoff record, the splat's TileMassBounds over its footprint ellipse (u_keep, lost;
-    // cutoff_records.comp), or 0: none.
+    // cutoff_records_body.glsl), or 0: none.
     U64s cutoff_bounds;
 } pc;
 
@@ -201,7 +201,7 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
                                                         f.cam_pos.xyz, dirs));
     }
     // The same bounds over the footprint ellipse, which the records' pass worked out for the
-    // splat (cutoff_records.comp): each is an upper bound, so the smaller holds.
+    // splat (cutoff_records_body.glsl): each is an upper bound, so the smaller holds.
     bounds.u_keep = min(bounds.u_keep, ellipse.u_keep);
     bounds.lost = min(bounds.lost, ellipse.lost);
     uint tile_class;

@@ -2,7 +2,7 @@
 // The indirect dispatch arguments of a linear kernel (linear_grid) over a count only the GPU
 // knows, in one invocation: the ray tracer's round r (trace_body.glsl) over the rays round
 // r - 1 left live (zero workgroups once every ray is done), and, after project, the
-// cutoff-records and cutoff-tiles stages over the frame's cutoff splats (cutoff_records.comp,
+// cutoff-records and cutoff-tiles stages over the frame's cutoff splats (cutoff_records_body.glsl,
 // cutoff_tiles_body.glsl). A kernel of its own, not a branch of a kernel over many items: a
 // CPU driver would run that branch's loads and stores, masked, in every SIMD vector (emit,
 // which wrote the cutoff-tiles arguments from its first invocation: lavapipe, playbot at

@@ -4,7 +4,7 @@
 // ProjectedSplat record, the number of tiles touched (0 = not drawn) that sizes the tile lists,
 // and a drawn flag that the depth-order stage scans into each drawn Gaussian's sort slot. A
 // drawn cutoff Gaussian also takes the next cutoff record index, stored in its splat, and is
-// listed under it; cutoff_records.comp then writes the records (CutoffRecord, for the
+// listed under it; cutoff_records_body.glsl then writes the records (CutoffRecord, for the
 // rasterizer's per-pixel weight) in a dispatch over the list. Written here, a record's six
 // 64-bit stores ran on a CPU driver, masked, in every SIMD vector of every frame (lavapipe,
 // playbot at 640x480 under a plane, one thread, builds in turn: project under hard clipping

@@ -8,6 +8,24 @@
 /// `glsl/NAME.comp`, so the words, debug strings included, are those a wrapper file gave.
 const VARIANTS: &[Variant] = &[
     Variant {
+        name: "cutoff_records",
+        body: "cutoff_records_body.glsl",
+        defines: &[],
+        about: &[
+            "Stage 1b, cutoff records, through buffer loads (GPUs, frames of several clipped objects;",
+            "see cutoff_records_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "cutoff_records_texels",
+        body: "cutoff_records_body.glsl",
+        defines: &["SPLAT_TEXELS"],
+        about: &[
+            "Stage 1b, cutoff records, reading the Gaussians, the splats and the tiles touched through",
+            "the frame's texel views (CPU drivers; see cutoff_records_body.glsl).",
+        ],
+    },
+    Variant {
         name: "cutoff_tiles",
         body: "cutoff_tiles_body.glsl",
         defines: &[],

@@ -76,7 +76,7 @@ struct TouchedPush {
     pad: u32,
 }
 
-/// What `glsl/cutoff_records.comp` reads and writes.
+/// What `glsl/cutoff_records_body.glsl` reads and writes.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct RecordsPush {
@@ -153,7 +153,7 @@ pub struct Project {
     touched: ComputePipeline,
     /// Rara frames: the dispatch arguments over the cutoff records (`linear_args.comp`).
     records_args: LazyPipeline,
-    /// Rara frames: the records of the listed cutoff Gaussians (`cutoff_records.comp`).
+    /// Rara frames: the records of the listed cutoff Gaussians (`cutoff_records_body.glsl`).
     records: LazyPipeline,
 }
 
@@ -246,12 +246,21 @@ impl Project {
                 shaders::LINEAR_ARGS,
                 None,
             ),
-            records: LazyPipeline::new::<RecordsPush>(
-                ctx,
-                c"cutoff_records",
-                shaders::CUTOFF_RECORDS,
-                None,
-            ),
+            // On CPU drivers through the frame's texel views, as project.
+            records: match texels {
+                Some(_) => LazyPipeline::new::<RecordsPush>(
+                    ctx,
+                    c"cutoff_records_texels",
+                    shaders::CUTOFF_RECORDS_TEXELS,
+                    texels,
+                ),
+                None => LazyPipeline::new::<RecordsPush>(
+                    ctx,
+                    c"cutoff_records",
+                    shaders::CUTOFF_RECORDS,
+                    None,
+                ),
+            },
         })
     }
 
@@ -390,9 +399,10 @@ impl Project {
                     cutoff_bounds: f.at.cutoff_bounds,
                     tiles_touched: f.at.tiles_touched,
                 };
-                self.records.built().dispatch_indirect(
+                self.records.built().dispatch_indirect_in(
                     f.cmd,
                     &records,
+                    f.texels,
                     pairs.raw,
                     CUTOFF_ARGS_OFFSET,
                 );

@@ -1,4 +1,3 @@
-#version 460
 // Stage 1b, cutoff records (rara frames on CPU drivers; on GPUs only those of several clipped
 // objects, the others' project writes the records itself, PROJECT_LISTS_WRITES): one
 // invocation per cutoff record, dispatched indirectly over the frame's count
@@ -15,8 +14,16 @@
 // is marked (CUTOFF_WHOLE_*) and its pairs never reach cutoff_tiles: emit writes them plain,
 // or keyed past every tile. On plant and biker under a plane that is about two pairs in five
 // of those cutoff_tiles classified; each used to pay the per-tile bounds there.
+//
+// Included by cutoff_records (buffer loads: GPUs, in frames of several clipped objects) and
+// cutoff_records_texels (SPLAT_TEXELS: the Gaussians, the splats and the tiles touched read
+// through the frame's texel views, which a CPU driver loads as gathers, where a buffer load is
+// a scalar loop over the lanes per 64-bit word).
 #include "common.glsl"
 #include "clip.glsl"
+#ifdef SPLAT_TEXELS
+#include "frame_texels.glsl"
+#endif
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
 
@@ -35,6 +42,32 @@ layout(push_constant) uniform Push {
     U32s tiles_touched;     // the pairs of a splat decided whole, for the frame's counts
 } pc;
 
+#ifdef SPLAT_TEXELS
+Gaussian fetch_gaussian(uint i) {
+    return texel_gaussian(i);
+}
+
+ProjectedSplat fetch_splat(uint i) {
+    return texel_splat(i);
+}
+
+uint fetch_tiles_touched(uint i) {
+    return texelFetch(tiles_touched, int(i)).x;
+}
+#else
+Gaussian fetch_gaussian(uint i) {
+    return load_gaussian(pc.gaussians, i);
+}
+
+ProjectedSplat fetch_splat(uint i) {
+    return load_splat(pc.splats, i);
+}
+
+uint fetch_tiles_touched(uint i) {
+    return pc.tiles_touched.v[i];
+}
+#endif
+
 void main() {
     FrameParams f = load_frame_params(pc.frame);
     // Before any branch (footprint_mass_bounds).
@@ -44,13 +77,13 @@ void main() {
         return;
     }
     uint gaussian = pc.cutoff_gaussians.v[index];
-    Gaussian g = load_gaussian(pc.gaussians, gaussian);
+    Gaussian g = fetch_gaussian(gaussian);
     CutoffRecord rec = gaussian_cutoff_record(g, f.cam_pos.xyz);
     store_cutoff_record(pc.cutoffs, index, rec);
     if (uint64_t(pc.cutoff_bounds) != 0ul) {
         // The bounds over the splat's footprint ellipse, for cutoff_tiles to take with each
         // pair's bounds over its box: they do not depend on the tile.
-        ProjectedSplat p = load_splat(pc.splats, gaussian);
+        ProjectedSplat p = fetch_splat(gaussian);
         TileMassBounds bounds = footprint_mass_bounds(f, pc.clip, config.w, rec, p);
         uint whole = cutoff_splat_class(config.z, rec, bounds, p.opacity);
         if (whole != TILE_CLASS_PARTIAL) {
@@ -60,7 +93,7 @@ void main() {
             pc.splats.v[gaussian].cutoff =
                 index | (full ? CUTOFF_WHOLE_FULL : CUTOFF_WHOLE_EMPTY);
             bounds.lost = CUTOFF_BOUNDS_DECIDED;
-            uint pairs = pc.tiles_touched.v[gaussian];
+            uint pairs = fetch_tiles_touched(gaussian);
             atomicAdd(pc.counters.v[COUNTER_CUTOFF_WHOLE], 1u);
             atomicAdd(pc.counters.v[COUNTER_CUTOFF_PAIRS], pairs);
             atomicAdd(pc.counters.v[full ? COUNTER_CUTOFF_PAIRS_WEIGHT_ONE
