@@ -86,29 +86,20 @@ void list_cutoff(uint i, uint index, vec3 eye) {
     }
 }
 
-// Writes the record of a Gaussian that draws nothing.
-void skip(uint i) {
-    pc.tiles_touched.v[i] = 0u;
-    pc.drawn.v[i] = 0u;
-    store_vec4(splat_block(pc.splats, i, 2u), vec4(0.0, 0.0, 0.0, SKIPPED_RADIUS));
-}
-
-// Projects Gaussian i; returns true when it is drawn as cutoff.
+// Projects Gaussian i and writes its splat, tiles touched and drawn flag; returns true when it
+// is drawn as cutoff. One exit for every Gaussian, drawn or not: each store in a branch is, on
+// a CPU driver, a scalar loop over the lanes that runs, masked, in every SIMD vector whether or
+// not a lane takes the branch, and the five early exits that each wrote a Gaussian that draws
+// nothing (tiles touched, drawn flag, the splat's radius) ran twenty such loops a vector.
+// Lanes past an exit go on computing under the others' mask, on values that nothing stores.
 bool project(FrameParams f, ClipParams clip, uint i) {
     Gaussian g = fetch_gaussian(i);
     vec3 mu = g.pos_opacity.xyz;
     uint kind = clip_classify(clip, mu, g.scale.xyz);
-    if (kind == CLASS_DROPPED) {
-        skip(i);
-        return false;
-    }
     vec3 rel = mu - f.cam_pos.xyz;
     vec3 t = vec3(dot(f.world_to_cam0.xyz, rel), dot(f.world_to_cam1.xyz, rel),
                   dot(f.world_to_cam2.xyz, rel));
-    if (t.z <= 0.2) {
-        skip(i);
-        return false;
-    }
+    bool in_front = kind != CLASS_DROPPED && t.z > 0.2;
     float fx = f.focal.x, fy = f.focal.y;
     float W = float(f.size.x), H = float(f.size.y);
     float lim_x = 1.3 * (W / (2.0 * fx));
@@ -130,10 +121,9 @@ bool project(FrameParams f, ClipParams clip, uint i) {
     // past it a, c and det would overflow or lose every digit. Written so that NaN fails it.
     vec3 m_abs = max(abs(m0), abs(m1));
     float m_max = max(m_abs.x, max(m_abs.y, m_abs.z));
-    if (!(m_max <= float(MAX_FOOTPRINT_SIGMA_PX))) {
+    bool bounded = m_max <= float(MAX_FOOTPRINT_SIGMA_PX);
+    if (in_front && !bounded) {
         atomicAdd(pc.counters.v[COUNTER_OVERSIZED], 1u);
-        skip(i);
-        return false;
     }
     float aa = dot(m0, m0), cc = dot(m1, m1);
     float a = aa + 0.3;
@@ -144,10 +134,7 @@ bool project(FrameParams f, ClipParams clip, uint i) {
     // correct digit for a long needle (a c ~ 1e16 against det ~ 1e8), and never <= 0.
     vec3 m_cross = cross(m0, m1);
     float det = dot(m_cross, m_cross) + 0.3 * (aa + cc) + 0.09;
-    if (det <= 0.0) {
-        skip(i);
-        return false;
-    }
+    bool projected = in_front && bounded && det > 0.0;
     vec3 conic = vec3(c, -b, a) / det;
     float mid = 0.5 * (a + c);
     float lambda = mid + sqrt(max(0.1, mid * mid - det));
@@ -158,28 +145,30 @@ bool project(FrameParams f, ClipParams clip, uint i) {
     // counted here (lavapipe's loop cap): project_touched.comp counts the rest of a larger
     // rectangle in later rounds, so such a splat is drawn even if none of those first cells
     // is reached (and then may end with no tile at all, which draws nothing).
+    radius = projected ? radius : SKIPPED_RADIUS;   // an empty rectangle past an exit
     uvec4 rect = splat_tile_rect(uv, radius, f.size.zw);
     uint cells = tile_rect_cells(rect);
     float opacity = g.pos_opacity.w;
-    bool visible = opacity >= 1.0 / 255.0;
+    bool visible = projected && opacity >= 1.0 / 255.0;
     uint touched = 0u;
     if (visible) {
         touched = count_touched_cells(uv, conic, footprint_q_max(opacity), rect, 0u,
                                       min(cells, TILE_RECT_CHUNK));
     }
-    if (touched == 0u && !(visible && cells > TILE_RECT_CHUNK)) {
-        skip(i);
-        return false;
+    bool drawn = touched > 0u || (visible && cells > TILE_RECT_CHUNK);
+    vec3 color = vec3(0.0);
+    if (drawn) {
+        vec3 dir = normalize(rel);
+        uint sh_stride = f.scene.z;
+        color = eval_sh(pc.sh, i * sh_stride, dir);
     }
-    vec3 dir = normalize(rel);
-    uint sh_stride = f.scene.z;
-    vec3 color = eval_sh(pc.sh, i * sh_stride, dir);
 
+    // A Gaussian that draws nothing: zeros and SKIPPED_RADIUS, which empties its rectangle.
     ProjectedSplat p;
-    p.uv = uv;
-    p.depth = t.z;
-    p.opacity = g.pos_opacity.w;
-    p.conic = conic;
+    p.uv = drawn ? uv : vec2(0.0);
+    p.depth = drawn ? t.z : 0.0;
+    p.opacity = drawn ? opacity : 0.0;
+    p.conic = drawn ? conic : vec3(0.0);
     p.cutoff = NO_CUTOFF;
 #ifdef SCENE_TEXELS
     // The texel kernels (CPU drivers) pack record indices by one global atomic per cutoff
@@ -191,17 +180,17 @@ bool project(FrameParams f, ClipParams clip, uint i) {
     // playbot at 640x480 under a plane, `render --repeat 3`, one thread, eight rounds in turn:
     // project 32.2-32.7 -> 31.5 ms at best, 30.8-31.2 without the region's store, which only
     // frames of several clipped objects now build; hard clipping's 29.2-29.6).
-    if (LISTS_CUTOFF != PROJECT_LISTS_NONE && kind == CLASS_CUTOFF) {
+    if (LISTS_CUTOFF != PROJECT_LISTS_NONE && drawn && kind == CLASS_CUTOFF) {
         p.cutoff = atomicAdd(pc.counters.v[COUNTER_CUTOFF], 1u);
         list_cutoff(i, p.cutoff, f.cam_pos.xyz);
     }
 #endif
     p.color = color;
-    p.radius = radius;
+    p.radius = drawn ? radius : SKIPPED_RADIUS;
     store_splat(pc.splats, i, p);
     pc.tiles_touched.v[i] = touched;
-    pc.drawn.v[i] = 1u;
-    return kind == CLASS_CUTOFF;
+    pc.drawn.v[i] = drawn ? 1u : 0u;
+    return drawn && kind == CLASS_CUTOFF;
 }
 
 void main() {
