@@ -114,6 +114,12 @@ ClipParams load_clip_params(ClipParamsRef ref) {
     return c;
 }
 
+// How many plane slots clip_signed_distance visits: all of them unless the includer bounds
+// them (project's CLIP_PLANE_SLOTS, a specialization constant).
+#ifndef CLIP_DISTANCE_PLANE_SLOTS
+#define CLIP_DISTANCE_PLANE_SLOTS MAX_CLIP_PLANES
+#endif
+
 // Signed distance of a centre to the visible set, positive inside. The planes are all
 // visited, the unused ones ignored: a dynamic index would cost a CPU driver a scalar loop
 // over the lanes per plane.
@@ -125,7 +131,7 @@ float clip_signed_distance(ClipParams clip, vec3 p) {
         s = sphere.w - length(p - sphere.xyz);
     } else {
         s = UNBOUNDED;
-        [[unroll]] for (uint k = 0u; k < MAX_CLIP_PLANES; ++k) {
+        [[unroll]] for (uint k = 0u; k < CLIP_DISTANCE_PLANE_SLOTS; ++k) {
             vec4 pl = clip.planes[k];
             s = k < config.w ? min(s, dot(pl.xyz, p) + pl.w) : s;
         }

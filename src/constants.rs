@@ -203,6 +203,14 @@ pub const RASTER_WRITES_TARGET_CONSTANT_ID: u32 = 2;
 /// Specialization constant id of `LISTS_CUTOFF` (`glsl/project_body.glsl`): what the project
 /// kernels write for the cutoff Gaussians, one of the `PROJECT_LISTS_*` values.
 pub const PROJECT_LISTS_CUTOFF_CONSTANT_ID: u32 = 3;
+/// Specialization constant id of `CLIP_PLANE_SLOTS` (`glsl/project_body.glsl`): how many of the
+/// clip region's plane slots the project kernel classifies a Gaussian against, one of the
+/// `PROJECT_CLIP_*` values ([`crate::stages::project::PlaneSlots`]).
+pub const PROJECT_CLIP_SLOTS_CONSTANT_ID: u32 = 4;
+/// `CLIP_PLANE_SLOTS` of frames without a clip region: no classification at all.
+pub const PROJECT_CLIP_NONE: u32 = 0;
+/// `CLIP_PLANE_SLOTS` of regions of at most one plane (a plane, a sphere): the first slot.
+pub const PROJECT_CLIP_ONE_PLANE: u32 = 1;
 /// `LISTS_CUTOFF` of frames without rara clipping, which have no cutoff Gaussian: nothing.
 pub const PROJECT_LISTS_NONE: u32 = 0;
 /// `LISTS_CUTOFF` of rara frames: each cutoff Gaussian's record index, in its splat, and the
@@ -341,6 +349,12 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
         "PROJECT_LISTS_CUTOFF_CONSTANT_ID",
         PROJECT_LISTS_CUTOFF_CONSTANT_ID,
     ),
+    (
+        "PROJECT_CLIP_SLOTS_CONSTANT_ID",
+        PROJECT_CLIP_SLOTS_CONSTANT_ID,
+    ),
+    ("PROJECT_CLIP_NONE", PROJECT_CLIP_NONE),
+    ("PROJECT_CLIP_ONE_PLANE", PROJECT_CLIP_ONE_PLANE),
     ("PROJECT_LISTS_NONE", PROJECT_LISTS_NONE),
     ("PROJECT_LISTS_RECORDS", PROJECT_LISTS_RECORDS),
     ("PROJECT_LISTS_REGIONS", PROJECT_LISTS_REGIONS),

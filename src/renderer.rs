@@ -24,7 +24,7 @@ use crate::stages::depth_order::{DepthOrder, DEPTH_ORDER_BUFFER};
 use crate::stages::emit::Emit;
 use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
-use crate::stages::project::{ObjectClipRanges, Project};
+use crate::stages::project::{ObjectClipRanges, PlaneSlots, Project};
 use crate::stages::rasterize::{RasterLayout, Rasterize};
 use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
@@ -674,7 +674,8 @@ impl Renderer {
         .then_some(buffer_target);
         // The kernels this frame runs, each built when a frame first needs it.
         let listing = self.project.listing(rara, object_clips.is_some());
-        self.project.prepare(scene, listing)?;
+        let plane_slots = PlaneSlots::for_frame(&clip_params, object_clips.is_some());
+        self.project.prepare(scene, listing, plane_slots)?;
         if !(rara && object_clips.is_some()) {
             self.rasterize.prepare(
                 rara.then_some(options.clip.weight),
@@ -749,6 +750,7 @@ impl Renderer {
             scene,
             object_clips.map(|o| &o.project),
             listing,
+            plane_slots,
             records_list,
         );
         self.depth_order

@@ -8,11 +8,13 @@ use std::ffi::CStr;
 use super::cutoff_tiles::{CUTOFF_ARGS_OFFSET, CUTOFF_PAIRS_OFFSET};
 use super::{FrameRecording, LinearArgsPush};
 use crate::constants::{
-    COUNTER_CUTOFF, PROJECT_LISTS_CUTOFF_CONSTANT_ID, PROJECT_LISTS_NONE, PROJECT_LISTS_RECORDS,
-    PROJECT_LISTS_REGIONS, PROJECT_LISTS_WRITES,
+    CLIP_MODE_NONE, COUNTER_CUTOFF, MAX_CLIP_PLANES, PROJECT_CLIP_NONE, PROJECT_CLIP_ONE_PLANE,
+    PROJECT_CLIP_SLOTS_CONSTANT_ID, PROJECT_LISTS_CUTOFF_CONSTANT_ID, PROJECT_LISTS_NONE,
+    PROJECT_LISTS_RECORDS, PROJECT_LISTS_REGIONS, PROJECT_LISTS_WRITES,
 };
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
+use crate::gpu_types::GpuClipParams;
 use crate::precision::ShPrecision;
 use crate::shaders;
 use crate::vk::{Buffer, ComputePipeline, Context, LazyPipeline};
@@ -137,15 +139,54 @@ impl CutoffListing {
     }
 }
 
+/// How many of the clip region's plane slots a frame's project kernel classifies the Gaussians
+/// against (`CLIP_PLANE_SLOTS` in `glsl/project_body.glsl`): a CPU driver runs the test of
+/// every slot, masked, for every Gaussian, so frames without a region or with one plane get
+/// kernels that test no slot or one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlaneSlots {
+    /// Frames without a clip region: no classification.
+    None,
+    /// A region of at most one plane (one plane, or a sphere).
+    One,
+    /// Every slot (regions of several planes, and the objects' regions).
+    All,
+}
+
+impl PlaneSlots {
+    /// The slots for a frame clipped by `clip` (its GPU form), or by several objects' regions
+    /// (`object_regions`), which each project dispatch takes from its own object.
+    pub fn for_frame(clip: &GpuClipParams, object_regions: bool) -> PlaneSlots {
+        if object_regions {
+            PlaneSlots::All
+        } else if clip.config[0] == CLIP_MODE_NONE {
+            PlaneSlots::None
+        } else if clip.config[3] <= 1 {
+            PlaneSlots::One
+        } else {
+            PlaneSlots::All
+        }
+    }
+
+    /// The value of `CLIP_PLANE_SLOTS`.
+    fn constant(self) -> u32 {
+        match self {
+            PlaneSlots::None => PROJECT_CLIP_NONE,
+            PlaneSlots::One => PROJECT_CLIP_ONE_PLANE,
+            PlaneSlots::All => MAX_CLIP_PLANES,
+        }
+    }
+}
+
 /// The project kernel, in one variant per SH degree (0 to 3), storage precision and cutoff
 /// listing ([`CutoffListing`]): a CPU driver runs every band's code under a mask whatever the
 /// scene's degree, so each scene gets the kernel that holds only its own bands. Under rara
 /// clipping the kernels that write the listed cutoff Gaussians' records follow it.
 pub struct Project {
-    /// Indexed by [`CutoffListing`] (its discriminant; `Project::new` builds them in that
-    /// order), storage precision (32-bit, then half floats) and SH degree; each built when a
-    /// frame first needs it ([`Project::prepare`]).
-    kernels: [[[LazyPipeline; 4]; 2]; 4],
+    /// Indexed by [`PlaneSlots`] (in declaration order), [`CutoffListing`] (its discriminant;
+    /// `Project::new` builds them in that order), storage precision (32-bit, then half floats)
+    /// and SH degree; each built when a frame first needs it ([`Project::prepare`]).
+    kernels: [[[[LazyPipeline; 4]; 2]; 4]; 3],
     /// Whether the kernels read through the frame's texel views (CPU drivers), which never
     /// write the records themselves ([`Project::listing`]).
     texels: bool,
@@ -219,21 +260,26 @@ impl Project {
             let spirv = if texels.is_some() { fetches } else { loads };
             LazyPipeline::new::<ProjectPush>(ctx, name, spirv, texels)
         };
-        let listed = |listing: CutoffListing| {
+        let listed = |slots: PlaneSlots, listing: CutoffListing| {
             [&SH32_KERNELS, &SH16_KERNELS].map(|table| {
                 table.each_ref().map(|v| {
-                    build(v).specialized(&[(PROJECT_LISTS_CUTOFF_CONSTANT_ID, listing as u32)])
+                    build(v).specialized(&[
+                        (PROJECT_LISTS_CUTOFF_CONSTANT_ID, listing as u32),
+                        (PROJECT_CLIP_SLOTS_CONSTANT_ID, slots.constant()),
+                    ])
                 })
             })
         };
         Ok(Project {
-            kernels: [
-                CutoffListing::None,
-                CutoffListing::Records,
-                CutoffListing::RecordsAndRegions,
-                CutoffListing::Writes,
-            ]
-            .map(listed),
+            kernels: [PlaneSlots::None, PlaneSlots::One, PlaneSlots::All].map(|slots| {
+                [
+                    CutoffListing::None,
+                    CutoffListing::Records,
+                    CutoffListing::RecordsAndRegions,
+                    CutoffListing::Writes,
+                ]
+                .map(|listing| listed(slots, listing))
+            }),
             texels: texels.is_some(),
             touched: ComputePipeline::new::<TouchedPush>(
                 ctx,
@@ -278,19 +324,24 @@ impl Project {
         }
     }
 
-    /// The kernel for `scene`'s SH degree and precision with `listing`.
-    fn kernel(&self, scene: &GpuScene, listing: CutoffListing) -> &LazyPipeline {
+    /// The kernel for `scene`'s SH degree and precision with `listing` and `slots`.
+    fn kernel(&self, scene: &GpuScene, listing: CutoffListing, slots: PlaneSlots) -> &LazyPipeline {
         let precision = match scene.sh_precision {
             ShPrecision::F32 => 0,
             ShPrecision::F16 => 1,
         };
-        &self.kernels[listing as usize][precision][scene.sh_degree.min(3) as usize]
+        &self.kernels[slots as usize][listing as usize][precision][scene.sh_degree.min(3) as usize]
     }
 
-    /// Builds the kernels a frame of `scene` with `listing` needs, if they were not yet: call
-    /// it before [`Project::record`] with the same listing.
-    pub fn prepare(&self, scene: &GpuScene, listing: CutoffListing) -> Result<()> {
-        self.kernel(scene, listing).get()?;
+    /// Builds the kernels a frame of `scene` with `listing` and `slots` needs, if they were
+    /// not yet: call it before [`Project::record`] with the same listing and slots.
+    pub fn prepare(
+        &self,
+        scene: &GpuScene,
+        listing: CutoffListing,
+        slots: PlaneSlots,
+    ) -> Result<()> {
+        self.kernel(scene, listing, slots).get()?;
         if listing.has_records_pass() {
             self.records_args.get()?;
             self.records.get()?;
@@ -309,13 +360,16 @@ impl Project {
     /// lists the cutoff Gaussians; then the pass "cutoff records": one invocation writes the
     /// dispatch arguments over the cutoff records (at [`CUTOFF_ARGS_OFFSET`], where the
     /// cutoff-tiles stage finds them too) and `cutoff_records` writes the records at
-    /// `f.at.cutoffs`, each followed by a barrier.
+    /// `f.at.cutoffs`, each followed by a barrier. `slots` is the frame's
+    /// ([`PlaneSlots::for_frame`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         f: &mut FrameRecording,
         scene: &GpuScene,
         object_clips: Option<&ObjectClipRanges>,
         listing: CutoffListing,
+        slots: PlaneSlots,
         cutoff_pairs: Option<&Buffer>,
     ) {
         assert_eq!(
@@ -323,7 +377,7 @@ impl Project {
             listing.has_records_pass(),
             "a records' pass needs the cutoff-pairs buffer"
         );
-        let kernel = self.kernel(scene, listing).built();
+        let kernel = self.kernel(scene, listing, slots).built();
         let push = ProjectPush {
             frame: f.at.params,
             gaussians: scene.gaussians.address,
