@@ -379,6 +379,21 @@ float cutoff_weight_length(WhitenedStrip s, float r, vec4 spans, float band2) {
 #define TILE_CLASS_FULL 1u
 #define TILE_CLASS_EMPTY 2u
 
+// Plane k of the region at `clip`. The texel kernels (SPLAT_TEXELS: CPU drivers) fetch it from
+// the frame's texel views, a gather, where a load through the region's address in a branch or
+// after an early return is a scalar loop over the lanes per word; the region is then the
+// frame's one (frame_texels.glsl), which every caller with SPLAT_TEXELS has.
+#ifdef SPLAT_TEXELS
+vec4 texel_clip_plane(uint k);  // frame_texels.glsl, which the texel kernels include
+#endif
+vec4 region_plane(ClipParamsRef clip, uint k) {
+#ifdef SPLAT_TEXELS
+    return texel_clip_plane(k);
+#else
+    return clip.p.planes[k];
+#endif
+}
+
 // A FULL pair's alpha differs from the weighted one by at most this at any pixel (128x below
 // the 8-bit output's half step, and far below the weight's own 1/255 skip threshold).
 #define TILE_FULL_TOLERANCE (1.0 / 65536.0)
@@ -572,13 +587,10 @@ void tile_mass_bounds_add(inout TileMassBounds b, vec2 u) {
 // its barriers; its classes then drew plain pairs that a box's other planes cut), and right
 // ones in the same kernel's pair loop and in the records' pass. Not understood; loaded at the
 // top, every case of cutoff_tile_classes_change_no_pixel agrees across the layouts.
-// The texel kernels (the records' pass on CPU drivers) fetch the planes from the frame's texel
-// views: a load through `clip` after the caller's early return is, on gallivm, a scalar loop
-// over the lanes per word (lavapipe, plant 640x480, `bench --modes rara`, seven rounds in
-// turn: the records' pass 0.9 -> 0.7 ms, medians).
-#ifdef SPLAT_TEXELS
-vec4 texel_clip_plane(uint k);  // frame_texels.glsl, which the texel kernels include
-#endif
+// The planes come through region_plane: in the records' pass on CPU drivers a load through
+// `clip` after the caller's early return was a scalar loop over the lanes per word (lavapipe,
+// plant 640x480, `bench --modes rara`, seven rounds in turn: the records' pass 0.9 -> 0.7 ms
+// with the texel fetch, medians).
 TileMassBounds footprint_mass_bounds(FrameParams f, ClipParamsRef clip, uint planes,
                                      CutoffRecord rec, ProjectedSplat p) {
     TileMassBounds bounds = tile_mass_bounds_none();
@@ -588,15 +600,10 @@ TileMassBounds footprint_mass_bounds(FrameParams f, ClipParamsRef clip, uint pla
     vec3 dir_c = pixel_ray(f, p.uv);
     float q_max = footprint_q_max(p.opacity);
     for (uint k = 0u; k < planes; ++k) {
-#ifdef SPLAT_TEXELS
-        vec4 plane = texel_clip_plane(k);
-#else
-        vec4 plane = clip.p.planes[k];
-#endif
         tile_mass_bounds_add(bounds,
-                             ellipse_plane_u_range(rec, plane, f.cam_pos.xyz, dir_c,
-                                                   pixel_ray_across(f), pixel_ray_down(f),
-                                                   p.conic, q_max));
+                             ellipse_plane_u_range(rec, region_plane(clip, k), f.cam_pos.xyz,
+                                                   dir_c, pixel_ray_across(f),
+                                                   pixel_ray_down(f), p.conic, q_max));
     }
     return bounds;
 }

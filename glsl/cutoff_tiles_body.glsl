@@ -85,19 +85,13 @@ layout(push_constant) uniform Push {
     U64s cutoff_bounds;
 } pc;
 
-// Plane k of the clip region. The texel kernel fetches it, a gather on a CPU driver. A load
-// through pc.clip in the loop over the pairs is a scalar loop over the lanes per word there;
-// copied into a local ClipParams before the loop (as project does, where every plane is
-// visited), the dynamic index made lavapipe's pass 1.8x slower (plant at 640x480 under rara:
-// 5.8 -> 10.6 ms). The texel fetch took a third off (plant at 1280x960, one thread: 14.2-14.7
-// -> 9.4-9.9 ms; 8.0 ms with the one plane loaded before any branch, as a lower bound).
-vec4 clip_plane(uint k) {
-#ifdef SPLAT_TEXELS
-    return texel_clip_plane(k);
-#else
-    return pc.clip.p.planes[k];
-#endif
-}
+// The region's planes come through region_plane (clip.glsl): the texel kernel fetches them,
+// a gather on a CPU driver. A load through pc.clip in the loop over the pairs is a scalar loop
+// over the lanes per word there; copied into a local ClipParams before the loop (as project
+// does, where every plane is visited), the dynamic index made lavapipe's pass 1.8x slower
+// (plant at 640x480 under rara: 5.8 -> 10.6 ms). The texel fetch took a third off (plant at
+// 1280x960, one thread: 14.2-14.7 -> 9.4-9.9 ms; 8.0 ms with the one plane loaded before any
+// branch, as a lower bound).
 
 // Below this |n.d| / |d| at a corner ray, a flat splat's plane is too close to edge-on across
 // the tile for flat_tile_class (well above FLAT_PARALLEL_EPSILON: see there).
@@ -133,7 +127,7 @@ uint flat_tile_class(CutoffRecord rec, vec3 eye, vec3 dirs[4], uint planes, uint
     bool inside_all = true;
     bool outside_some = false;
     for (uint plane = 0u; plane < planes; ++plane) {
-        vec4 pl = clip_plane(plane);
+        vec4 pl = region_plane(pc.clip, plane);
         float slack = 1e-4 * (abs(dot(pl.xyz, eye) + pl.w) + reach);
         bool all_in = true;
         bool all_out = true;
@@ -197,7 +191,7 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
     TileMassBounds bounds = tile_mass_bounds_none();
     uint bounded_planes = flat_splat ? 0u : config.w;
     for (uint plane = 0u; plane < bounded_planes; ++plane) {
-        tile_mass_bounds_add(bounds, tile_plane_u_range(rec, clip_plane(plane),
+        tile_mass_bounds_add(bounds, tile_plane_u_range(rec, region_plane(pc.clip, plane),
                                                         f.cam_pos.xyz, dirs));
     }
     // The same bounds over the footprint ellipse, which the records' pass worked out for the
