@@ -209,11 +209,13 @@ vec4 clip_visible_spans(uint flags, float lo, float hi) {
 // polynomial p of degree 6; absolute error under 1e-6 in float), reflected so that
 // Phi(x) + Phi(-x) = 1. No exp, which a CPU driver evaluates as a polynomial of its own; p^16
 // overflows to infinity, and the tail to 0, where Phi is 0 or 1 in float. Host twin:
-// normal_cdf in src/clip.rs.
+// normal_cdf in src/clip.rs. The polynomials here and in end_mass are written as fma: a CPU
+// driver keeps `a + b * c` a multiply and an add (gallivm, per pixel and weighted splat).
 float normal_cdf(float x) {
     float z = abs(x) * 0.70710678118654752;
-    float p = 1.0 + z * (0.0705230784 + z * (0.0422820123 + z * (0.0092705272
-              + z * (0.0001520143 + z * (0.0002765672 + z * 0.0000430638)))));
+    float p = fma(z, fma(z, fma(z, fma(z, fma(z, fma(z, 0.0000430638, 0.0002765672),
+                                                     0.0001520143), 0.0092705272),
+                                 0.0422820123), 0.0705230784), 1.0);
     p *= p;
     p *= p;
     p *= p;
@@ -271,12 +273,12 @@ float flat_hit_t(WhitenedStrip s, float r) {
 
 // a(r) = |d'(r)|^2 on ray r of the strip s.
 float strip_a(WhitenedStrip s, float r) {
-    return s.a.x + r * (s.a.y + r * s.a.z);
+    return fma(r, fma(r, s.a.z, s.a.y), s.a.x);
 }
 
 // o'.d'(r) on ray r of the strip s.
 float strip_od(WhitenedStrip s, float r) {
-    return s.od.x + r * s.od.y;
+    return fma(r, s.od.y, s.od.x);
 }
 
 // Weight `mass`: the probability mass of the Gaussian along the ray that lies in the visible
@@ -337,7 +339,7 @@ float end_mass(WhitenedStrip s, float r, vec2 end) {
     }
     float a = strip_a(s, r);
     float od = strip_od(s, r);
-    return normal_cdf(end.y * (end.x * a + od) * inversesqrt(a));
+    return normal_cdf(end.y * fma(end.x, a, od) / sqrt(a));
 }
 
 // Weight `length` on ray r of the strip s: the visible fraction of the chord through the band

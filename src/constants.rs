@@ -207,6 +207,10 @@ pub const PROJECT_LISTS_CUTOFF_CONSTANT_ID: u32 = 3;
 /// clip region's plane slots the project kernel classifies a Gaussian against, one of the
 /// `PROJECT_CLIP_*` values ([`crate::stages::project::PlaneSlots`]).
 pub const PROJECT_CLIP_SLOTS_CONSTANT_ID: u32 = 4;
+/// Specialization constant id of `MASS_ONE_END` (`glsl/rasterize_body.glsl`): the mass-weight
+/// rasterize kernels built with it true take one bounded end per ray, which every region of
+/// one plane gives ([`crate::stages::rasterize::MassEnds`]).
+pub const RASTER_MASS_ONE_END_CONSTANT_ID: u32 = 5;
 /// `CLIP_PLANE_SLOTS` of frames without a clip region: no classification at all.
 pub const PROJECT_CLIP_NONE: u32 = 0;
 /// `CLIP_PLANE_SLOTS` of regions of at most one plane (a plane, a sphere): the first slot.
@@ -352,6 +356,10 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     (
         "PROJECT_CLIP_SLOTS_CONSTANT_ID",
         PROJECT_CLIP_SLOTS_CONSTANT_ID,
+    ),
+    (
+        "RASTER_MASS_ONE_END_CONSTANT_ID",
+        RASTER_MASS_ONE_END_CONSTANT_ID,
     ),
     ("PROJECT_CLIP_NONE", PROJECT_CLIP_NONE),
     ("PROJECT_CLIP_ONE_PLANE", PROJECT_CLIP_ONE_PLANE),

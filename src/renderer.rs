@@ -25,7 +25,7 @@ use crate::stages::emit::Emit;
 use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
 use crate::stages::project::{ObjectClipRanges, PlaneSlots, Project};
-use crate::stages::rasterize::{RasterLayout, Rasterize};
+use crate::stages::rasterize::{MassEnds, RasterLayout, Rasterize};
 use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
 use crate::stages::tile_ranges::TileRanges;
@@ -675,13 +675,14 @@ impl Renderer {
         // The kernels this frame runs, each built when a frame first needs it.
         let listing = self.project.listing(rara, object_clips.is_some());
         let plane_slots = PlaneSlots::for_frame(&clip_params, object_clips.is_some());
+        let mass_ends = MassEnds::for_region(&clip_params);
         self.project.prepare(scene, listing, plane_slots)?;
         if !(rara && object_clips.is_some()) {
             self.rasterize.prepare(
                 rara.then_some(options.clip.weight),
                 depth.is_some(),
                 tile_lists.is_some(),
-                scene.may_be_flat,
+                (scene.may_be_flat, mass_ends),
                 rasterizer_writes_target.is_some(),
             )?;
         }
@@ -817,7 +818,7 @@ impl Renderer {
             &mut rec,
             (&f.sort, sorted),
             rounds,
-            (cutoff_weight, scene.may_be_flat),
+            (cutoff_weight, scene.may_be_flat, mass_ends),
             tile_lists,
             depth_buffers.map(|(sums, _)| (sums, depth_limit)),
             object_clips

@@ -13,10 +13,12 @@ use super::tile_lists::TileListsLayout;
 use super::FrameRecording;
 use crate::clip::ClipWeight;
 use crate::constants::{
-    FLAT_SPLATS_CONSTANT_ID, MAX_INTERSECTIONS, RASTER_WRITES_TARGET_CONSTANT_ID,
+    CLIP_FLAG_SPHERE, CLIP_MODE_NONE, FLAT_SPLATS_CONSTANT_ID, MAX_INTERSECTIONS,
+    RASTER_MASS_ONE_END_CONSTANT_ID, RASTER_WRITES_TARGET_CONSTANT_ID,
 };
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
+use crate::gpu_types::GpuClipParams;
 use crate::shaders;
 use crate::vk::{Buffer, ComputePipeline, Context, LazyPipeline};
 
@@ -117,6 +119,30 @@ impl RasterLayout {
     }
 }
 
+/// How many bounded ends the visible set of a pixel's ray can have under a frame's clip region
+/// (`MassEnds` in `glsl/clip.glsl`), which picks the mass-weight kernel: a region of one plane
+/// gives each ray at most one, the others up to two.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MassEnds {
+    /// At most one: no region, or one plane, kept or inverted. The kernels built with
+    /// `MASS_ONE_END` weigh that end alone (`glsl/rasterize_body.glsl`).
+    One,
+    /// Up to two: several planes (a box), a sphere.
+    Two,
+}
+
+impl MassEnds {
+    /// The ends under the frame's region `clip` (its GPU form).
+    pub fn for_region(clip: &GpuClipParams) -> MassEnds {
+        let sphere = clip.config[2] & CLIP_FLAG_SPHERE != 0;
+        if clip.config[0] == CLIP_MODE_NONE || (!sphere && clip.config[3] <= 1) {
+            MassEnds::One
+        } else {
+            MassEnds::Two
+        }
+    }
+}
+
 /// The rasterize kernels of one layout: without rara clipping, and with each cutoff weight.
 /// CPU drivers execute both sides of every branch, so each frame runs the kernel that holds
 /// only the code it needs.
@@ -130,10 +156,15 @@ pub struct Rasterize {
     /// `glsl/clip.glsl`), which a CPU driver would otherwise run, masked, for every cutoff
     /// splat.
     volume: [[LazyPipeline; 2]; 2],
+    /// The mass kernels for frames whose rays have one bounded end ([`MassEnds::One`]), built
+    /// with `MASS_ONE_END` true: without and with the depth test, each for frames that may
+    /// hold flat Gaussians and for frames without.
+    one_end: [[LazyPipeline; 2]; 2],
     /// The strips layout's kernels without the depth test again, built with `WRITES_TARGET`
     /// (`glsl/rasterize_body.glsl`) true, for frames that [`Rasterize::record`] with a target:
-    /// without rara clipping; mass and length; mass and length without flat Gaussians.
-    to_target: Option<[LazyPipeline; 5]>,
+    /// without rara clipping; mass and length; mass and length without flat Gaussians; mass
+    /// with one bounded end, with and without flat Gaussians.
+    to_target: Option<[LazyPipeline; 7]>,
     /// The kernels for several objects each clipped by a region of its own (`OBJECT_CLIPS`):
     /// mass, length, and the two with the depth test. Built on first use
     /// ([`Rasterize::prepare_object_clips`]), as few frames need them.
@@ -234,27 +265,37 @@ impl Rasterize {
         }
         let table = &KERNELS[(layout == RasterLayout::Strips) as usize];
         let kernels = table.map(|row| row.map(|(name, spirv)| build(name, spirv)));
+        let no_flat = (FLAT_SPLATS_CONSTANT_ID, 0);
+        let one = (RASTER_MASS_ONE_END_CONSTANT_ID, 1);
         // The weighted kernels again with FLAT_SPLATS false, for frames without flat Gaussians.
         let volume = table.map(|row| {
-            [row[1], row[2]].map(|(name, spirv)| {
-                build(name, spirv).specialized(&[(FLAT_SPLATS_CONSTANT_ID, 0)])
-            })
+            [row[1], row[2]].map(|(name, spirv)| build(name, spirv).specialized(&[no_flat]))
+        });
+        // The mass kernels with MASS_ONE_END, for frames clipped by one plane.
+        let one_end = table.map(|row| {
+            let (name, spirv) = row[1];
+            [
+                build(name, spirv).specialized(&[one]),
+                build(name, spirv).specialized(&[no_flat, one]),
+            ]
         });
         let to_target = (layout == RasterLayout::Strips).then(|| {
             let row = &table[0];
             let writes = (RASTER_WRITES_TARGET_CONSTANT_ID, 1);
-            let volume = (FLAT_SPLATS_CONSTANT_ID, 0);
             [
                 build(row[0].0, row[0].1).specialized(&[writes]),
                 build(row[1].0, row[1].1).specialized(&[writes]),
                 build(row[2].0, row[2].1).specialized(&[writes]),
-                build(row[1].0, row[1].1).specialized(&[volume, writes]),
-                build(row[2].0, row[2].1).specialized(&[volume, writes]),
+                build(row[1].0, row[1].1).specialized(&[no_flat, writes]),
+                build(row[2].0, row[2].1).specialized(&[no_flat, writes]),
+                build(row[1].0, row[1].1).specialized(&[one, writes]),
+                build(row[1].0, row[1].1).specialized(&[no_flat, one, writes]),
             ]
         });
         Ok(Rasterize {
             kernels,
             volume,
+            one_end,
             to_target,
             object_clips: OnceLock::new(),
             texels,
@@ -269,15 +310,17 @@ impl Rasterize {
     }
 
     /// The kernel without object clips for `weight` (`None`: no rara clipping), with or without
-    /// the depth test; `flat`: for a frame that may hold flat Gaussians; `to_target`: one that
-    /// writes the target itself (no depth test; [`Rasterize::writes_targets`]).
+    /// the depth test; `flat`: for a frame that may hold flat Gaussians; `ends`: the ends of
+    /// the frame's rays (the mass weight); `to_target`: one that writes the target itself (no
+    /// depth test; [`Rasterize::writes_targets`]).
     fn lazy_kernel(
         &self,
         weight: Option<ClipWeight>,
         depth: bool,
-        flat: bool,
+        (flat, ends): (bool, MassEnds),
         to_target: bool,
     ) -> &LazyPipeline {
+        let one_end = weight == Some(ClipWeight::Mass) && ends == MassEnds::One;
         if to_target {
             let kernels = self
                 .to_target
@@ -286,10 +329,14 @@ impl Rasterize {
             debug_assert!(!depth);
             return match weight {
                 None => &kernels[0],
+                Some(_) if one_end => &kernels[5 + !flat as usize],
                 Some(w) => &kernels[(w == ClipWeight::Length) as usize + if flat { 1 } else { 3 }],
             };
         }
         let depth = depth as usize;
+        if one_end {
+            return &self.one_end[depth][!flat as usize];
+        }
         match weight {
             None => &self.kernels[depth][0],
             Some(w) => {
@@ -304,20 +351,22 @@ impl Rasterize {
     }
 
     /// Builds what a frame of `weight` (with or without `depth`; `flat`: with flat Gaussians
-    /// in the frame; `to_target`: the kernels that write the target) records, if it was not
-    /// built yet: its kernel, and with `plain_too` (tile lists) the plain one beside it. Call it
-    /// before [`Rasterize::record`].
+    /// in the frame; `ends`: the ends of its rays under its region; `to_target`: the kernels
+    /// that write the target) records, if it was not built yet: its kernel, and with
+    /// `plain_too` (tile lists) the plain one beside it. Call it before [`Rasterize::record`].
     pub fn prepare(
         &self,
         weight: Option<ClipWeight>,
         depth: bool,
         plain_too: bool,
-        flat: bool,
+        (flat, ends): (bool, MassEnds),
         to_target: bool,
     ) -> Result<()> {
-        self.lazy_kernel(weight, depth, flat, to_target).get()?;
+        self.lazy_kernel(weight, depth, (flat, ends), to_target)
+            .get()?;
         if plain_too {
-            self.lazy_kernel(None, depth, flat, to_target).get()?;
+            self.lazy_kernel(None, depth, (flat, ends), to_target)
+                .get()?;
         }
         Ok(())
     }
@@ -392,8 +441,9 @@ impl Rasterize {
     /// Records the pass "rasterize": `rounds` rounds over the grid, each walking the next
     /// RASTER_CHUNK entries of every tile list (the pairs sorted into buffer `sorted` of
     /// `sort`), then a barrier. `cutoff_weight` is the weight of the frame's rara clipping,
-    /// `None` when no splat is cutoff; `flat`, whether the frame may hold flat Gaussians (the
-    /// kernels [`Rasterize::prepare`] built for the same pair). With `lists` (the frame's tile-lists buffer and its
+    /// `None` when no splat is cutoff; `flat`, whether the frame may hold flat Gaussians, and
+    /// `ends`, the ends of its rays (the kernels [`Rasterize::prepare`] built for the same).
+    /// With `lists` (the frame's tile-lists buffer and its
     /// layout, [`super::tile_lists`]; mass weight only) each round runs the plain kernel over
     /// the plain list and the weighted kernel over the weighted list, as indirect dispatches;
     /// else one kernel over the whole grid. The strips kernels read the frame's texel views.
@@ -411,7 +461,7 @@ impl Rasterize {
         f: &mut FrameRecording,
         (sort, sorted): (&SortBuffers, usize),
         rounds: u32,
-        (cutoff_weight, flat): (Option<ClipWeight>, bool),
+        (cutoff_weight, flat, ends): (Option<ClipWeight>, bool, MassEnds),
         lists: Option<(&Buffer, TileListsLayout)>,
         depth: Option<(u64, u64)>,
         object_clips: Option<u64>,
@@ -452,14 +502,14 @@ impl Rasterize {
             let with_depth = depth.is_some() as usize;
             match (weight, object_clips) {
                 (None, _) => self
-                    .lazy_kernel(None, depth.is_some(), flat, to_target)
+                    .lazy_kernel(None, depth.is_some(), (flat, ends), to_target)
                     .built(),
                 (Some(w), Some(_)) => {
                     let k = (w == ClipWeight::Length) as usize;
                     &object_kernels()[2 * with_depth + k]
                 }
                 (Some(w), None) => self
-                    .lazy_kernel(Some(w), depth.is_some(), flat, to_target)
+                    .lazy_kernel(Some(w), depth.is_some(), (flat, ends), to_target)
                     .built(),
             }
         };
@@ -499,6 +549,33 @@ impl Rasterize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::clip::{Clip, ClipMode, ClipRegion, Plane};
+    use glam::{Quat, Vec3};
+
+    #[test]
+    fn one_bounded_end_only_under_one_plane() {
+        let ends = |region: Option<ClipRegion>| {
+            let clip = Clip {
+                region,
+                mode: ClipMode::Rara,
+                ..Clip::default()
+            };
+            MassEnds::for_region(&clip.to_gpu())
+        };
+        let plane = || Plane::new(Vec3::new(0.0, 0.26, -0.97), 0.1).unwrap();
+        let one_plane = ClipRegion::planes(vec![plane()]).unwrap();
+        let mut inverted = one_plane.clone();
+        inverted.invert = true;
+        assert_eq!(ends(None), MassEnds::One);
+        assert_eq!(ends(Some(one_plane)), MassEnds::One);
+        assert_eq!(ends(Some(inverted)), MassEnds::One);
+        let two_planes = ClipRegion::planes(vec![plane(), plane()]).unwrap();
+        assert_eq!(ends(Some(two_planes)), MassEnds::Two);
+        let cube = ClipRegion::oriented_box(Vec3::ZERO, Vec3::ONE, Quat::IDENTITY).unwrap();
+        assert_eq!(ends(Some(cube)), MassEnds::Two);
+        let ball = ClipRegion::sphere(Vec3::ZERO, 1.0).unwrap();
+        assert_eq!(ends(Some(ball)), MassEnds::Two);
+    }
 
     #[test]
     fn strips_scene_limit_is_a_third_of_the_texels() {
