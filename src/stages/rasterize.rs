@@ -443,10 +443,10 @@ impl Rasterize {
     /// `sort`), then a barrier. `cutoff_weight` is the weight of the frame's rara clipping,
     /// `None` when no splat is cutoff; `flat`, whether the frame may hold flat Gaussians, and
     /// `ends`, the ends of its rays (the kernels [`Rasterize::prepare`] built for the same).
-    /// With `lists` (the frame's tile-lists buffer and its
-    /// layout, [`super::tile_lists`]; mass weight only) each round runs the plain kernel over
-    /// the plain list and the weighted kernel over the weighted list, as indirect dispatches;
-    /// else one kernel over the whole grid. The strips kernels read the frame's texel views.
+    /// With `lists` (the frame's tile-lists buffer and its layout, [`super::tile_lists`]; mass
+    /// weight only) each round runs the plain kernel over the plain list and the weighted
+    /// kernel over the weighted list, as indirect dispatches; else one kernel over the whole
+    /// grid. The strips kernels read the frame's texel views.
     /// With `depth` (the addresses of the per-pixel depth sums and of the engine's view depth,
     /// 0 without a depth test) the depth kernels run (SPEC section 9). With `object_clips` (the
     /// address of each cutoff record's region; the frame's clip address is then the array of
