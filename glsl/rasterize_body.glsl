@@ -439,19 +439,28 @@ bool composite(Staged s, bool cutoff, float weight_floor) {
             // Behind the engine's surface: this splat and every later one are hidden.
             T = s.depth >= px_limit[i] ? -abs(T) : T;
 #endif
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
+            // The mass weights are worked out above whatever the pixel, so the weight scales
+            // alpha before the threshold's test, which then needs no second test under a mask:
+            // alpha < 1/255 stays under it for w <= 1, as the reference's test first, weight
+            // after, gives. `cutoff` is a constant in each of the loops that call this. Under
+            // one plane a ray's weight is one normal CDF, already in [0, 1] (MassEnds).
+            if (cutoff) {
+                alpha *= MASS_ONE_END ? max(weight[i], weight_floor)
+                                      : clamp(weight[i], weight_floor, 1.0);
+            }
             bool use = alpha >= 1.0 / 255.0;
-#if CUTOFF_WEIGHT != 0
+#elif CUTOFF_WEIGHT != 0
+            bool use = alpha >= 1.0 / 255.0;
             // Only the weight can take alpha back under the threshold (min(0.99, .) cannot);
             // a GPU skips the weight where w <= 1 cannot lift alpha over it.
             if (cutoff && use) {
-#if CUTOFF_WEIGHT == CLIP_WEIGHT_MASS + 1
-                alpha *= clamp(weight[i], weight_floor, 1.0);
-#else
                 alpha *= max(cutoff_weight_length(strip, float(r), px_spans[i], band2),
                              weight_floor);
-#endif
                 use = alpha >= 1.0 / 255.0;
             }
+#else
+            bool use = alpha >= 1.0 / 255.0;
 #endif
             // a = 0 for a splat the pixel skips: then next_T = T, which is >= 1e-4 for an
             // open pixel (T only ever takes a next_T that is), so `finish` holds only for a
