@@ -449,9 +449,9 @@ bool composite(Staged s, bool cutoff, float weight_floor) {
                 alpha *= MASS_ONE_END ? max(weight[i], weight_floor)
                                       : clamp(weight[i], weight_floor, 1.0);
             }
+#endif
             bool use = alpha >= 1.0 / 255.0;
-#elif CUTOFF_WEIGHT != 0
-            bool use = alpha >= 1.0 / 255.0;
+#if CUTOFF_WEIGHT == CLIP_WEIGHT_LENGTH + 1
             // Only the weight can take alpha back under the threshold (min(0.99, .) cannot);
             // a GPU skips the weight where w <= 1 cannot lift alpha over it.
             if (cutoff && use) {
@@ -459,8 +459,6 @@ bool composite(Staged s, bool cutoff, float weight_floor) {
                              weight_floor);
                 use = alpha >= 1.0 / 255.0;
             }
-#else
-            bool use = alpha >= 1.0 / 255.0;
 #endif
             // a = 0 for a splat the pixel skips: then next_T = T, which is >= 1e-4 for an
             // open pixel (T only ever takes a next_T that is), so `finish` holds only for a
