@@ -29,7 +29,9 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Gaussians {
 
 // What the project stage leaves for the later stages, 48 bytes per Gaussian. The tile
 // rectangle is not stored: splat_tile_rect derives it from uv and radius, bit for bit as
-// project did (16 bytes less per Gaussian than keeping it).
+// project did (16 bytes less per Gaussian than keeping it). In memory the colour is packed
+// into two words (pack_splat_color) so that what compositing reads, uv, opacity, conic and
+// colour, fits the first two of the three 16-byte blocks (splat_block).
 struct ProjectedSplat {
     vec2 uv;            // image coordinates of the centre (SPEC section 2)
     float depth;        // view-space z, > 0.2
@@ -40,7 +42,20 @@ struct ProjectedSplat {
     vec3 color;
     float radius;       // 3-sigma radius in pixels (an integer); SKIPPED_RADIUS if not drawn
 };
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer ProjectedSplats { ProjectedSplat v[]; };
+// The same in memory (the host's GpuProjectedSplat), colour packed (pack_splat_color). Kernels
+// read and write whole splats with load_splat and store_splat, single fields through this.
+struct ProjectedSplatWords {
+    vec2 uv;
+    float opacity;
+    uint color0;
+    vec3 conic;
+    uint color1;
+    float depth;
+    uint cutoff;
+    float radius;
+    uint pad;
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer ProjectedSplats { ProjectedSplatWords v[]; };
 
 #define NO_CUTOFF 0xffffffffu
 // A cutoff splat whose weight the records' pass found the same at every pixel its footprint
@@ -131,31 +146,69 @@ Gaussian load_gaussian(Gaussians gaussians, uint i) {
     return g;
 }
 
-// Byte offset of ProjectedSplat i's word block k (16 bytes each: uv, depth, opacity | conic,
-// cutoff | color, radius).
+// The splat colour's packing: each channel (>= 0, as SH evaluation leaves it) as 21 bits, a
+// float of 5 exponent bits (2^-15 up to 2^16, below that 0) and 16 mantissa bits rounded to
+// nearest, relative error at most 2^-17 (a hundredth of an 8-bit step at 1.0). Red in bits
+// 0-20 and green's low 11 bits in bits 21-31 of the first word; blue in bits 0-20 and
+// green's high 10 bits in 21-30 of the second. Why: the strips rasterizer fetches each splat as
+// texels, a gather per texel on a CPU driver, and the nine words it composites with (uv,
+// opacity, conic, colour) in full floats need three texels; packed they take two, and the
+// depth, cutoff record and radius, which the unclipped and hard-clipped kernels never read,
+// the third. Host twin: GpuProjectedSplat::color (src/gpu_types.rs).
+#define SPLAT_COLOR_BIAS (111u << 16)   // float exponent 112 (2^-15) -> 5-bit exponent 1
+#define SPLAT_COLOR_MAX ((142u << 16) | 0xffffu)  // largest: exponent 142 (2^15), all ones
+
+uint pack_color_channel(float c) {
+    uint v = (floatBitsToUint(max(c, 0.0)) + 0x40u) >> 7u;  // 8 + 16 bits, rounded
+    return v < (112u << 16) ? 0u : min(v, SPLAT_COLOR_MAX) - SPLAT_COLOR_BIAS;
+}
+
+float unpack_color_channel(uint v) {
+    return v == 0u ? 0.0 : uintBitsToFloat((v + SPLAT_COLOR_BIAS) << 7u);
+}
+
+uvec2 pack_splat_color(vec3 c) {
+    uint r = pack_color_channel(c.r), g = pack_color_channel(c.g), b = pack_color_channel(c.b);
+    return uvec2(r | (g << 21u), b | ((g >> 11u) << 21u));
+}
+
+vec3 unpack_splat_color(uvec2 w) {
+    uint g = (w.x >> 21u) | ((w.y >> 21u) << 11u);
+    return vec3(unpack_color_channel(w.x & 0x1fffffu), unpack_color_channel(g),
+                unpack_color_channel(w.y & 0x1fffffu));
+}
+
+// Byte offset of ProjectedSplat i's word block k (16 bytes each: uv, opacity, colour word 0 |
+// conic, colour word 1 | depth, cutoff, radius, 0).
 uint64_t splat_block(ProjectedSplats splats, uint i, uint k) {
     return uint64_t(splats) + uint64_t(i) * 48ul + uint64_t(k) * 16ul;
 }
 
-ProjectedSplat load_splat(ProjectedSplats splats, uint i) {
-    vec4 b0 = load_vec4(splat_block(splats, i, 0u));
-    uvec4 b1 = load_uvec4(splat_block(splats, i, 1u));
-    vec4 b2 = load_vec4(splat_block(splats, i, 2u));
+// ProjectedSplat from its three blocks (splat_block).
+ProjectedSplat splat_from_blocks(uvec4 b0, uvec4 b1, uvec4 b2) {
     ProjectedSplat p;
-    p.uv = b0.xy;
-    p.depth = b0.z;
-    p.opacity = b0.w;
+    p.uv = uintBitsToFloat(b0.xy);
+    p.opacity = uintBitsToFloat(b0.z);
     p.conic = uintBitsToFloat(b1.xyz);
-    p.cutoff = b1.w;
-    p.color = b2.xyz;
-    p.radius = b2.w;
+    p.color = unpack_splat_color(uvec2(b0.w, b1.w));
+    p.depth = uintBitsToFloat(b2.x);
+    p.cutoff = b2.y;
+    p.radius = uintBitsToFloat(b2.z);
     return p;
 }
 
+ProjectedSplat load_splat(ProjectedSplats splats, uint i) {
+    return splat_from_blocks(load_uvec4(splat_block(splats, i, 0u)),
+                             load_uvec4(splat_block(splats, i, 1u)),
+                             load_uvec4(splat_block(splats, i, 2u)));
+}
+
 void store_splat(ProjectedSplats splats, uint i, ProjectedSplat p) {
-    store_vec4(splat_block(splats, i, 0u), vec4(p.uv, p.depth, p.opacity));
-    store_uvec4(splat_block(splats, i, 1u), uvec4(floatBitsToUint(p.conic), p.cutoff));
-    store_vec4(splat_block(splats, i, 2u), vec4(p.color, p.radius));
+    uvec2 color = pack_splat_color(p.color);
+    store_uvec4(splat_block(splats, i, 0u), uvec4(floatBitsToUint(p.uv), floatBitsToUint(p.opacity), color.x));
+    store_uvec4(splat_block(splats, i, 1u), uvec4(floatBitsToUint(p.conic), color.y));
+    store_uvec4(splat_block(splats, i, 2u), uvec4(floatBitsToUint(p.depth), p.cutoff,
+                                                  floatBitsToUint(p.radius), 0u));
 }
 
 // World-space direction of the ray through pixel centre `pixel` (SPEC section 2): camera-space

@@ -46,21 +46,11 @@ layout(set = FRAME_TEXELS_SET, binding = 10) uniform utextureBuffer gaussian_tex
 layout(set = FRAME_TEXELS_SET, binding = 11) uniform utextureBuffer sh_texels;
 
 // Projected splat i (load_splat in common.glsl, from its three texels; a kernel that does not
-// use a texel's fields does not fetch it).
+// use a texel's fields does not fetch it: compositing without depth or clip weight reads two).
 ProjectedSplat texel_splat(uint i) {
     int t = int(i) * 3;
-    uvec4 b0 = texelFetch(splat_texels, t);
-    uvec4 b1 = texelFetch(splat_texels, t + 1);
-    uvec4 b2 = texelFetch(splat_texels, t + 2);
-    ProjectedSplat p;
-    p.uv = uintBitsToFloat(b0.xy);
-    p.depth = uintBitsToFloat(b0.z);
-    p.opacity = uintBitsToFloat(b0.w);
-    p.conic = uintBitsToFloat(b1.xyz);
-    p.cutoff = b1.w;
-    p.color = uintBitsToFloat(b2.xyz);
-    p.radius = uintBitsToFloat(b2.w);
-    return p;
+    return splat_from_blocks(texelFetch(splat_texels, t), texelFetch(splat_texels, t + 1),
+                             texelFetch(splat_texels, t + 2));
 }
 
 // The scene's Gaussian i (load_gaussian in common.glsl, from its three texels).

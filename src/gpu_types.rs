@@ -19,28 +19,54 @@ pub struct GpuGaussian {
     pub scale: [f32; 4],
 }
 
-/// `ProjectedSplat` in common.glsl: the project stage's output per Gaussian.
+/// `ProjectedSplatWords` in common.glsl: the project stage's output per Gaussian, as it lies in
+/// memory (`ProjectedSplat` is the same unpacked).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuProjectedSplat {
     /// Image coordinates of the centre.
     pub uv: [f32; 2],
-    /// View-space depth.
-    pub depth: f32,
     /// Opacity.
     pub opacity: f32,
+    /// The SH colour's first word, packed ([`GpuProjectedSplat::color`]).
+    pub color0: u32,
     /// Conic (A, B, C).
     pub conic: [f32; 3],
+    /// The SH colour's second word.
+    pub color1: u32,
+    /// View-space depth.
+    pub depth: f32,
     /// Cutoff side-record index, or `u32::MAX`.
     pub cutoff: u32,
-    /// SH colour.
-    pub color: [f32; 3],
     /// 3-sigma radius in pixels (a whole number), or -1 for a Gaussian project skipped. The
     /// tile rectangle is not stored: [`GpuProjectedSplat::tile_rect`] derives it.
     pub radius: f32,
+    /// Unused.
+    pub pad: u32,
 }
 
+/// `SPLAT_COLOR_BIAS` in common.glsl.
+const SPLAT_COLOR_BIAS: u32 = 111 << 16;
+
 impl GpuProjectedSplat {
+    /// The SH colour (`unpack_splat_color` in common.glsl): each channel kept as 21 bits, 5 of
+    /// exponent and 16 of mantissa, relative error at most 2^-17 (0 below 2^-15).
+    pub fn color(&self) -> [f32; 3] {
+        let channel = |v: u32| {
+            if v == 0 {
+                0.0
+            } else {
+                f32::from_bits((v + SPLAT_COLOR_BIAS) << 7)
+            }
+        };
+        let g = (self.color0 >> 21) | ((self.color1 >> 21) << 11);
+        [
+            channel(self.color0 & 0x1f_ffff),
+            channel(g),
+            channel(self.color1 & 0x1f_ffff),
+        ]
+    }
+
     /// Whether project drew this Gaussian (else it skipped it and nothing else is written).
     pub fn drawn(&self) -> bool {
         self.radius >= 0.0

@@ -56,14 +56,16 @@ fn assert_layout(kernel: &[u32], name: &str, offsets: &[usize]) {
 fn gpu_struct_layouts_match_spirv() {
     let projected = [
         offset_of!(GpuProjectedSplat, uv),
-        offset_of!(GpuProjectedSplat, depth),
         offset_of!(GpuProjectedSplat, opacity),
+        offset_of!(GpuProjectedSplat, color0),
         offset_of!(GpuProjectedSplat, conic),
+        offset_of!(GpuProjectedSplat, color1),
+        offset_of!(GpuProjectedSplat, depth),
         offset_of!(GpuProjectedSplat, cutoff),
-        offset_of!(GpuProjectedSplat, color),
         offset_of!(GpuProjectedSplat, radius),
+        offset_of!(GpuProjectedSplat, pad),
     ];
-    assert_layout(shaders::PROJECT_DEG3, "ProjectedSplat", &projected);
+    assert_layout(shaders::PROJECT_DEG3, "ProjectedSplatWords", &projected);
     let gaussian = [
         offset_of!(GpuGaussian, pos_opacity),
         offset_of!(GpuGaussian, rot),

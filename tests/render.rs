@@ -202,7 +202,7 @@ fn stages_match_cpu_twins(scene: &Scene, cam: &Camera, raster: (f64, u8)) {
         close(g.opacity, c.opacity, "opacity");
         for k in 0..3 {
             close(g.conic[k], c.conic[k], "conic");
-            close(g.color[k], c.color[k], "colour");
+            close(g.color()[k], c.color[k], "colour");
         }
         let grid = rara::camera::tile_grid(cam.width, cam.height);
         assert_eq!(g.tile_rect(grid), c.rect, "Gaussian {i}: tile rect");
@@ -291,7 +291,7 @@ fn stages_match_cpu_twins(scene: &Scene, cam: &Camera, raster: (f64, u8)) {
                 depth: g.depth,
                 opacity: g.opacity,
                 conic: g.conic.into(),
-                color: g.color.into(),
+                color: g.color().into(),
                 ..*c
             }
         })

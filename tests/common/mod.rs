@@ -455,7 +455,7 @@ pub fn with_gpu_values(
                 depth: g.depth,
                 opacity: g.opacity,
                 conic: g.conic.into(),
-                color: g.color.into(),
+                color: g.color().into(),
                 ..c
             }
         })
