@@ -44,6 +44,9 @@
 // tiles touched, the emitted keys and the clip planes are read through the frame's texel views,
 // which a CPU driver loads as gathers, where a buffer load is a scalar loop over the lanes per
 // 64-bit word.
+//
+// PACKED_PAIRS (cutoff_tiles_packed_texels): emit wrote each pair as one 64-bit word in `keys`
+// (emit_body.glsl), the key in word 2 slot and the value in word 2 slot + 1.
 #include "common.glsl"
 #include "clip.glsl"
 
@@ -75,8 +78,8 @@ layout(push_constant) uniform Push {
     U64s cutoff_pairs;      // per cutoff record: (first pair, splat index), packed
     ClipParamsRef clip;
     CutoffRecords cutoffs;
-    U32s keys;              // in and out: tile ids, in emit's order
-    U32s values;            // in and out: splat indices
+    U32s keys;              // in and out: tile ids, in emit's order (PACKED_PAIRS: the pairs)
+    U32s values;            // in and out: splat indices (PACKED_PAIRS: unused)
     // Out, with the tile lists (CPU drivers; else 0): per tile, set where a pair stays
     // weighted, and at [tile count] when pairs were left unclassified (tile_lists.comp).
     U32s tile_flags;
@@ -146,6 +149,17 @@ uint flat_tile_class(CutoffRecord rec, vec3 eye, vec3 dirs[4], uint planes, uint
     return (invert ? outside_some : inside_all) ? TILE_CLASS_FULL : TILE_CLASS_PARTIAL;
 }
 
+// The words of the key and the value of the pair at `slot`.
+#ifdef PACKED_PAIRS
+#define PAIR_KEY(slot) pc.keys.v[2u * (slot)]
+#define PAIR_VALUE(slot) pc.keys.v[2u * (slot) + 1u]
+#define EMITTED_KEY_TEXEL(slot) int(2u * (slot))
+#else
+#define PAIR_KEY(slot) pc.keys.v[slot]
+#define PAIR_VALUE(slot) pc.values.v[slot]
+#define EMITTED_KEY_TEXEL(slot) int(slot)
+#endif
+
 // Pair counts of what one pair's classification did, summed per invocation.
 struct PairTally {
     uint weight_one;
@@ -159,19 +173,19 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
                    TileMassBounds ellipse, uint whole, uint slot, uint tile_count,
                    bool tile_lists, inout PairTally tally) {
     if (whole == TILE_CLASS_EMPTY) {
-        pc.keys.v[slot] = tile_count;
+        PAIR_KEY(slot) = tile_count;
         ++tally.empty;
         return;
     }
     if (whole == TILE_CLASS_FULL) {
-        pc.values.v[slot] &= ~PAIR_WEIGHTED;
+        PAIR_VALUE(slot) &= ~PAIR_WEIGHTED;
         ++tally.weight_one;
         return;
     }
 #ifdef SPLAT_TEXELS
-    uint tile = texelFetch(emitted_keys, int(slot)).x;
+    uint tile = texelFetch(emitted_keys, EMITTED_KEY_TEXEL(slot)).x;
 #else
-    uint tile = pc.keys.v[slot];
+    uint tile = PAIR_KEY(slot);
 #endif
     uvec2 xy = uvec2(tile % f.size.z, tile / f.size.z);
     // The rays through the corners of the tile's pixels that the splat can reach (alpha
@@ -209,10 +223,10 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
     // No pixel centre of the tile in the footprint's bounding box: nothing to draw.
     tile_class = box.x > box.z || box.y > box.w ? TILE_CLASS_EMPTY : tile_class;
     if (tile_class == TILE_CLASS_EMPTY) {
-        pc.keys.v[slot] = tile_count;
+        PAIR_KEY(slot) = tile_count;
         ++tally.empty;
     } else if (tile_class == TILE_CLASS_FULL) {
-        pc.values.v[slot] &= ~PAIR_WEIGHTED;   // keeps the block bits
+        PAIR_VALUE(slot) &= ~PAIR_WEIGHTED;   // keeps the block bits
         ++tally.weight_one;
     } else if (tile_lists) {
         pc.tile_flags.v[tile] = 1u;

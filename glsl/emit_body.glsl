@@ -15,6 +15,11 @@
 // TILE_RECT_CHUNK tiles the host dispatches more rounds, and a splat whose rectangle goes on
 // past the round leaves its next pair's slot in `progress` for the next.
 // (The cutoff-tiles pass has a cap of its own: see cutoff_tiles_body.glsl.)
+//
+// PACKED_PAIRS (CPU drivers, whose sort takes packed pairs, RadixSort::sorts_packed): each
+// pair goes out as one 64-bit word in `keys`, the tile id in its low half and the value in
+// its high half, where the sort's later passes hand them on (PairForm::Packed). On a CPU driver
+// every store to a buffer is a loop over the SIMD lanes: one store a pair instead of two.
 #include "common.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;
@@ -33,8 +38,8 @@ layout(push_constant) uniform Push {
     U32s drawn;         // drawn.v[0] = drawn Gaussians
     U32s order;         // Gaussian indices in depth order
     U32s offsets;       // exclusive prefix sum of tiles touched, in depth order
-    U32s keys;          // out: tile ids
-    U32s values;        // out: splat indices
+    U32s keys;          // out: tile ids (PACKED_PAIRS: the pairs, a 64-bit word each)
+    U32s values;        // out: splat indices (PACKED_PAIRS: unused)
     // RECORD_CUTOFF_PAIRS only, out: per cutoff record (first pair, splat index), packed.
     U64s cutoff_pairs;
     U32s progress;      // in (rounds after the first) and out: per drawn splat, its next slot
@@ -96,10 +101,14 @@ void main() {
         if (footprint_walk_on_candidate(w)
                 && footprint_touches_tile(p.uv, p.conic, q_max, w.xy.x, w.xy.y)) {
             if (slot < capacity) {
-                pc.keys.v[slot] =
-                    key_past_tiles != 0u ? key_past_tiles : w.xy.y * f.size.z + w.xy.x;
-                pc.values.v[slot] =
-                    value | footprint_blocks(p.uv, p.conic, q_max, w.xy.x, w.xy.y);
+                uint key = key_past_tiles != 0u ? key_past_tiles : w.xy.y * f.size.z + w.xy.x;
+                uint pair_value = value | footprint_blocks(p.uv, p.conic, q_max, w.xy.x, w.xy.y);
+#ifdef PACKED_PAIRS
+                U64s(uint64_t(pc.keys)).v[slot] = packUint2x32(uvec2(key, pair_value));
+#else
+                pc.keys.v[slot] = key;
+                pc.values.v[slot] = pair_value;
+#endif
             }
             ++slot;
         }

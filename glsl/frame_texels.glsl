@@ -33,7 +33,7 @@ layout(set = FRAME_TEXELS_SET, binding = 4) uniform utextureBuffer slot_texels;
 layout(set = FRAME_TEXELS_SET, binding = 5) uniform utextureBuffer tiles_touched;
 // R32_UINT.
 layout(set = FRAME_TEXELS_SET, binding = 6) uniform utextureBuffer sorted_keys;
-// R32_UINT, as emitted.
+// R32_UINT, as emitted (where emit writes packed pairs, the key of pair k is texel 2 k).
 layout(set = FRAME_TEXELS_SET, binding = 7) uniform utextureBuffer emitted_keys;
 // RGBA32_UINT, one per pixel: the rasterizer's per-pixel state (C, T), as floats' bits.
 layout(set = FRAME_TEXELS_SET, binding = 8) uniform utextureBuffer state_texels;

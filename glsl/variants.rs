@@ -44,6 +44,15 @@ const VARIANTS: &[Variant] = &[
         ],
     },
     Variant {
+        name: "cutoff_tiles_packed_texels",
+        body: "cutoff_tiles_body.glsl",
+        defines: &["SPLAT_TEXELS", "PACKED_PAIRS"],
+        about: &[
+            "Stage 4b, cutoff tiles through the frame's texel views over the packed pairs that",
+            "emit_rara_packed_texels writes (CPU drivers; see cutoff_tiles_body.glsl).",
+        ],
+    },
+    Variant {
         name: "cutoff_tiles_texels",
         body: "cutoff_tiles_body.glsl",
         defines: &["SPLAT_TEXELS"],
@@ -129,6 +138,24 @@ const VARIANTS: &[Variant] = &[
             "Stage 4, emit for rara clipping by planes with the mass weight, reading the depth order, the",
             "first pairs and the projected splats through the frame's texel views (CPU drivers; see",
             "emit_body.glsl, cutoff_tiles.comp).",
+        ],
+    },
+    Variant {
+        name: "emit_rara_packed_texels",
+        body: "emit_body.glsl",
+        defines: &["RECORD_CUTOFF_PAIRS", "SPLAT_TEXELS", "PACKED_PAIRS"],
+        about: &[
+            "Stage 4, emit_rara_texels writing each pair as one 64-bit word, for the CPU drivers'",
+            "sort of packed pairs (see emit_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "emit_packed_texels",
+        body: "emit_body.glsl",
+        defines: &["SPLAT_TEXELS", "PACKED_PAIRS"],
+        about: &[
+            "Stage 4, emit_texels writing each pair as one 64-bit word, for the CPU drivers' sort of",
+            "packed pairs (see emit_body.glsl).",
         ],
     },
     Variant {

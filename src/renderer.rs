@@ -26,7 +26,7 @@ use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
 use crate::stages::project::{ObjectClipRanges, PlaneSlots, Project};
 use crate::stages::rasterize::{MassEnds, RasterLayout, Rasterize};
-use crate::stages::sort::{RadixSort, TILE_SORT_LABELS};
+use crate::stages::sort::{PairForm, RadixSort, SortForms, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
 use crate::stages::tile_ranges::TileRanges;
 use crate::stages::trace::RayTracer;
@@ -177,18 +177,22 @@ impl Renderer {
             RasterLayout::PixelPerInvocation => None,
         };
         let texels = frame_texels_layout.as_ref().map(|l| l.raw);
+        let sort = RadixSort::new(ctx)?;
+        // Emit writes each pair as one 64-bit word where the sort takes packed pairs (CPU
+        // drivers): on those every store is a loop over the SIMD lanes.
+        let packed_pairs = texels.is_some() && sort.sorts_packed();
         Ok(Renderer {
             ctx: ctx.clone(),
             project: Project::new(ctx, texels)?,
             prefix_sum: PrefixSum::new(ctx)?,
             depth_order: DepthOrder::new(ctx, texels)?,
-            emit: Emit::new(ctx, texels)?,
-            cutoff_tiles: CutoffTiles::new(ctx, texels)?,
+            emit: Emit::new(ctx, texels, packed_pairs)?,
+            cutoff_tiles: CutoffTiles::new(ctx, texels, packed_pairs)?,
             // `RARA_CUTOFF_TILES=off`: for profiling the classes' worth on a device.
             cutoff_tile_classes: std::env::var("RARA_CUTOFF_TILES").as_deref() != Ok("off"),
             tile_lists: TileLists::new(ctx)?,
             tile_lists_on: true,
-            sort: RadixSort::new(ctx)?,
+            sort,
             tile_ranges: TileRanges::new(ctx, texels)?,
             rasterize: Rasterize::new(ctx, layout, texels)?,
             write_target: WriteTarget::new(ctx, texels)?,
@@ -790,12 +794,21 @@ impl Renderer {
         if let Some((buffer, layout)) = &tile_lists {
             self.tile_lists.record(&mut rec, buffer, layout)?;
         }
-        let sorted = self.sort.record(
+        let forms = SortForms {
+            input: if self.emit.packed() {
+                PairForm::Packed
+            } else {
+                PairForm::Split
+            },
+            output: PairForm::Split,
+        };
+        let sorted = self.sort.record_forms(
             ctx,
             cmd,
             &f.sort,
             rec.at.counter(COUNTER_INTERSECTIONS),
             key_bits(w, h),
+            forms,
             &TILE_SORT_LABELS,
             Some(&mut *rec.timer),
         );

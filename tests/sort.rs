@@ -56,7 +56,7 @@ fn check_packed_sort(
         .collect();
     let got = sorter.sort_packed_pairs(ctx, &pairs, key_bits).unwrap();
     let mask = (u64::MAX >> (64 - key_bits)) & u32::MAX as u64;
-    let mut expected = pairs;
+    let mut expected = pairs.clone();
     expected.sort_by_key(|&p| p & mask); // stable
     let n = keys.len();
     assert_eq!(got.len(), n, "{what}");
@@ -64,6 +64,21 @@ fn check_packed_sort(
         panic!(
             "{what}: {key_bits}-bit keys, n = {n}: position {i}: GPU {:#x}, expected {:#x}",
             got[i], expected[i]
+        );
+    }
+    // The same input with the result split into keys and values, as a frame's tile sort
+    // leaves the packed pairs that emit writes on CPU drivers.
+    let (got_keys, got_values) = sorter
+        .sort_packed_pairs_split(ctx, &pairs, key_bits)
+        .unwrap();
+    assert_eq!((got_keys.len(), got_values.len()), (n, n), "{what}, split");
+    if let Some(i) =
+        (0..n).find(|&i| got_keys[i] as u64 | (got_values[i] as u64) << 32 != expected[i])
+    {
+        panic!(
+            "{what}, split: {key_bits}-bit keys, n = {n}: position {i}: GPU ({:#x}, {:#x}), \
+             expected {:#x}",
+            got_keys[i], got_values[i], expected[i]
         );
     }
     common::assert_no_validation_messages(ctx);
@@ -228,14 +243,15 @@ fn key_patterns_in_layout(ctx: &rara::Context, layout: SortLayout) {
 }
 
 /// Sorts of packed pairs (key in the low 32 bits, value in the high), in the layout that
-/// takes them: every count of passes, sizes around a run and a block, against a stable CPU
-/// sort. The GPU layout refuses them.
+/// takes them, the result packed and split: every count of passes, sizes around a run and a
+/// block, against a stable CPU sort. The GPU layout refuses them.
 #[test]
 fn sort_packed_pairs() {
     let ctx = common::context();
     let refused = RadixSort::with_layout(&ctx, SortLayout::ShortRuns).unwrap();
     assert!(!refused.sorts_packed());
     assert!(refused.sort_packed_pairs(&ctx, &[1, 2], 32).is_err());
+    assert!(refused.sort_packed_pairs_split(&ctx, &[1, 2], 32).is_err());
     let sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
     assert!(sorter.sorts_packed());
     let block = SortLayout::OwnCounts.min_block() as usize;

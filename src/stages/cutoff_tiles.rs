@@ -67,15 +67,24 @@ pub struct CutoffTiles {
 impl CutoffTiles {
     /// The stage, whose kernel the first rara frame that classifies tiles builds; with
     /// `texels`, the layout of the frame's texel views (CPU drivers), the variant that reads
-    /// through them.
+    /// through them, and with `packed` too, the one over the packed pairs that emit then writes
+    /// ([`super::emit::Emit::packed`]).
     ///
     /// Without texel views the pairs of a workgroup's cutoff splats are shared out over its
     /// invocations (`cutoff_tiles_balanced`), so that a splat over many tiles does not hold the
     /// pass up; `RARA_CUTOFF_TILES=splats` gives each invocation whole splats instead
     /// (`cutoff_tiles`, as the texel variant does), for comparison.
-    pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
+    pub fn new(
+        ctx: &Context,
+        texels: Option<vk::DescriptorSetLayout>,
+        packed: bool,
+    ) -> Result<Self> {
         let whole_splats = std::env::var("RARA_CUTOFF_TILES").as_deref() == Ok("splats");
         let (name, spirv) = match texels {
+            Some(_) if packed => (
+                c"cutoff_tiles_packed_texels",
+                shaders::CUTOFF_TILES_PACKED_TEXELS,
+            ),
             Some(_) => (c"cutoff_tiles_texels", shaders::CUTOFF_TILES_TEXELS),
             None if whole_splats => (c"cutoff_tiles", shaders::CUTOFF_TILES),
             None => (c"cutoff_tiles_balanced", shaders::CUTOFF_TILES_BALANCED),

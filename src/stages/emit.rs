@@ -1,7 +1,8 @@
 //! Stage 4: emit one (tile id, splat index) pair per touched tile, in depth order
 //! (`glsl/emit_body.glsl`). Under rara clipping by planes with the mass weight, the variant
 //! `emit_rara` also records where each cutoff splat's pairs start, for the cutoff-tiles stage
-//! ([`super::cutoff_tiles`]).
+//! ([`super::cutoff_tiles`]). Where the frame's sort takes packed pairs (CPU drivers), emit
+//! writes each pair as one 64-bit word ([`super::sort::PairForm::Packed`]).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -30,9 +31,9 @@ pub struct EmitPush {
     pub order: u64,
     /// Exclusive prefix sum of tiles touched, in depth order.
     pub offsets: u64,
-    /// Out: keys (tile ids).
+    /// Out: keys (tile ids), or the packed pairs ([`Emit::packed`]).
     pub keys: u64,
-    /// Out: values (splat indices).
+    /// Out: values (splat indices); unused with packed pairs.
     pub values: u64,
     /// Out (`emit_rara` only): per cutoff record, its splat's (first pair, splat index).
     pub cutoff_pairs: u64,
@@ -50,6 +51,7 @@ pub struct EmitPush {
 pub struct Emit {
     plain: LazyPipeline,
     cutoff_pairs: LazyPipeline,
+    packed: bool,
 }
 
 impl Emit {
@@ -57,11 +59,22 @@ impl Emit {
     /// along with the strips rasterizer), the variants that read the depth order, the first
     /// pairs and the projected splats through them (`emit*_texels`): a CPU driver loads
     /// those as gathers, where a buffer load is a scalar loop over the lanes per 64-bit word.
-    pub fn new(ctx: &Context, texels: Option<vk::DescriptorSetLayout>) -> Result<Self> {
+    /// With `packed` too (the frame's sort takes packed pairs), those that write each pair as
+    /// one 64-bit word (`emit*_packed_texels`).
+    pub fn new(
+        ctx: &Context,
+        texels: Option<vk::DescriptorSetLayout>,
+        packed: bool,
+    ) -> Result<Self> {
         let build = |name: &'static CStr, spirv: &'static [u32]| {
             LazyPipeline::new::<EmitPush>(ctx, name, spirv, texels)
         };
+        let packed = packed && texels.is_some();
         let (plain, cutoff_pairs) = match texels {
+            Some(_) if packed => (
+                build(c"emit_packed_texels", shaders::EMIT_PACKED_TEXELS),
+                build(c"emit_rara_packed_texels", shaders::EMIT_RARA_PACKED_TEXELS),
+            ),
             Some(_) => (
                 build(c"emit_texels", shaders::EMIT_TEXELS),
                 build(c"emit_rara_texels", shaders::EMIT_RARA_TEXELS),
@@ -74,7 +87,14 @@ impl Emit {
         Ok(Emit {
             plain,
             cutoff_pairs,
+            packed,
         })
+    }
+
+    /// Whether the kernels write packed pairs ([`super::sort::PairForm::Packed`]), which the
+    /// pair sort must then take as its input form.
+    pub fn packed(&self) -> bool {
+        self.packed
     }
 
     /// Records the pass "emit" for a scene of `count` Gaussians (the drawn ones are read on

@@ -250,6 +250,15 @@ pub enum PairForm {
     Packed,
 }
 
+/// The forms of a sort's input and of its result.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SortForms {
+    /// How the pairs to sort are held.
+    pub input: PairForm,
+    /// How the sorted pairs are left.
+    pub output: PairForm,
+}
+
 /// The own-counts layout's kernels that read or write packed pairs ([`PairForm::Packed`]). A
 /// sort of several passes hands the pairs on packed between them, so that a pass's scatter
 /// writes a pair with one store (`sort_*_own_counts_*pairs`).
@@ -762,25 +771,25 @@ impl RadixSort {
     }
 
     /// The count and scatter kernels of radix pass `pass` of `passes`, for a sort whose input
-    /// and result are in `form`: the passes between hand the pairs on packed where the layout
+    /// and result are in `forms`: the passes between hand the pairs on packed where the layout
     /// can, through the sets' storage buffers where they are `bound` ([`SortTexels`]).
     fn pass_kernels(
         &self,
         pass: u32,
         passes: u32,
-        form: PairForm,
+        forms: SortForms,
         bound: bool,
     ) -> (&ComputePipeline, &ComputePipeline) {
         let Some(packed) = self.packed.as_ref() else {
             assert!(
-                form == PairForm::Split,
+                forms.input == PairForm::Split && forms.output == PairForm::Split,
                 "packed pairs in the {:?} sort layout",
                 self.layout
             );
             return (&self.count, &self.scatter);
         };
-        let packed_in = pass > 0 || form == PairForm::Packed;
-        let packed_out = pass + 1 < passes || form == PairForm::Packed;
+        let packed_in = pass > 0 || forms.input == PairForm::Packed;
+        let packed_out = pass + 1 < passes || forms.output == PairForm::Packed;
         let count = if packed_in {
             &packed.count
         } else {
@@ -841,7 +850,29 @@ impl RadixSort {
         labels: &SortLabels,
         timer: Option<&mut PassTimer>,
     ) -> usize {
-        self.record_passes(ctx, cmd, bufs, 0, count, key_bits, form, labels, timer)
+        let forms = SortForms {
+            input: form,
+            output: form,
+        };
+        self.record_passes(ctx, cmd, bufs, 0, count, key_bits, forms, labels, timer)
+    }
+
+    /// As [`RadixSort::record_form`], for a sort whose input is in `forms.input` and whose
+    /// result is in `forms.output`: the frame's tile pairs, which emit writes packed on CPU
+    /// drivers, and which the rasterizer reads split.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_forms(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        bufs: &SortBuffers,
+        count: u64,
+        key_bits: u32,
+        forms: SortForms,
+        labels: &SortLabels,
+        timer: Option<&mut PassTimer>,
+    ) -> usize {
+        self.record_passes(ctx, cmd, bufs, 0, count, key_bits, forms, labels, timer)
     }
 
     /// As [`RadixSort::record`], for pairs in `bufs.keys[first]` / `bufs.values[first]`: the
@@ -860,8 +891,11 @@ impl RadixSort {
         labels: &SortLabels,
         timer: Option<&mut PassTimer>,
     ) -> usize {
-        let form = PairForm::Split;
-        self.record_passes(ctx, cmd, bufs, first, count, key_bits, form, labels, timer)
+        let forms = SortForms {
+            input: PairForm::Split,
+            output: PairForm::Split,
+        };
+        self.record_passes(ctx, cmd, bufs, first, count, key_bits, forms, labels, timer)
     }
 
     /// The passes of a sort from buffer `first` (0 or 1); returns the buffer of the result.
@@ -874,7 +908,7 @@ impl RadixSort {
         first: usize,
         count: u64,
         key_bits: u32,
-        form: PairForm,
+        forms: SortForms,
         labels: &SortLabels,
         mut timer: Option<&mut PassTimer>,
     ) -> usize {
@@ -893,7 +927,7 @@ impl RadixSort {
             .segments
             .as_ref()
             .zip(self.segment_min_keys)
-            .filter(|_| bound && local_passes(passes, form) >= 2);
+            .filter(|_| bound && local_passes(passes, forms.output) >= 2);
         let table = bufs.table.as_ref().map_or(0, |t| t.address);
         let push = PreparePush {
             count,
@@ -923,7 +957,7 @@ impl RadixSort {
                 t.begin_pass(cmd, label);
             }
             if let (Some((kernels, _)), 1) = (segments, pass) {
-                self.record_buckets(ctx, cmd, bufs, src, kernels, passes, form);
+                self.record_buckets(ctx, cmd, bufs, src, kernels, passes, forms.output);
             }
             let (shift, digit_mask) = digit(pass);
             // A segmented sort takes the top digit first, then the others from the least
@@ -951,7 +985,7 @@ impl RadixSort {
                 segmented,
             };
             let texels = bufs.texels.as_ref().map(|t| t.sets[src]);
-            let (count, scatter) = self.pass_kernels(pass, passes, form, bound);
+            let (count, scatter) = self.pass_kernels(pass, passes, forms, bound);
             count.dispatch_indirect_in(cmd, &push, texels, bufs.info.raw, args);
             compute_barrier(ctx, cmd);
             self.scan
@@ -1034,7 +1068,11 @@ impl RadixSort {
         let bufs = self.buffers(ctx, keys.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(keys))?;
         bufs.values[0].upload(bytemuck::cast_slice(values))?;
-        let out = self.run_uploaded(ctx, &bufs, keys.len(), key_bits, PairForm::Split)?;
+        let forms = SortForms {
+            input: PairForm::Split,
+            output: PairForm::Split,
+        };
+        let out = self.run_uploaded(ctx, &bufs, keys.len(), key_bits, forms)?;
         Ok((
             bufs.keys[out].download_as(keys.len())?,
             bufs.values[out].download_as(values.len())?,
@@ -1058,29 +1096,61 @@ impl RadixSort {
         }
         let bufs = self.buffers(ctx, pairs.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(pairs))?;
-        let out = self.run_uploaded(ctx, &bufs, pairs.len(), key_bits, PairForm::Packed)?;
+        let forms = SortForms {
+            input: PairForm::Packed,
+            output: PairForm::Packed,
+        };
+        let out = self.run_uploaded(ctx, &bufs, pairs.len(), key_bits, forms)?;
         bufs.keys[out].download_as(pairs.len())
     }
 
-    /// Sorts the `n` pairs uploaded to `bufs` in `form` and waits for it (the count from a
-    /// buffer of its own, as in a frame); returns the index of the buffers holding the result.
+    /// As [`RadixSort::sort_packed_pairs`], the result split into keys and values: what a
+    /// frame's tile sort does with the packed pairs emit writes on CPU drivers.
+    pub fn sort_packed_pairs_split(
+        &self,
+        ctx: &Context,
+        pairs: &[u64],
+        key_bits: u32,
+    ) -> Result<(Vec<u32>, Vec<u32>)> {
+        if !self.sorts_packed() {
+            return Err(Error::InvalidInput(format!(
+                "the {:?} sort layout does not sort packed pairs",
+                self.layout
+            )));
+        }
+        let bufs = self.buffers(ctx, pairs.len() as u64)?;
+        bufs.keys[0].upload(bytemuck::cast_slice(pairs))?;
+        let forms = SortForms {
+            input: PairForm::Packed,
+            output: PairForm::Split,
+        };
+        let out = self.run_uploaded(ctx, &bufs, pairs.len(), key_bits, forms)?;
+        Ok((
+            bufs.keys[out].download_as(pairs.len())?,
+            bufs.values[out].download_as(pairs.len())?,
+        ))
+    }
+
+    /// Sorts the `n` pairs uploaded to `bufs` in `forms.input` and waits for it (the count
+    /// from a buffer of its own, as in a frame); returns the index of the buffers holding the
+    /// result, in `forms.output`.
     fn run_uploaded(
         &self,
         ctx: &Context,
         bufs: &SortBuffers,
         n: usize,
         key_bits: u32,
-        form: PairForm,
+        forms: SortForms,
     ) -> Result<usize> {
         let count = Buffer::from_slice(ctx, "sort count", &[n as u32])?;
         ctx.run_commands(|cmd| {
-            self.record_form(
+            self.record_forms(
                 ctx,
                 cmd,
                 bufs,
                 count.address,
                 key_bits,
-                form,
+                forms,
                 &TILE_SORT_LABELS,
                 None,
             )
