@@ -430,11 +430,13 @@ bool composite(Staged s, bool cutoff, float weight_floor) {
             // power <= 0 everywhere for the positive definite conic (SPEC section 3), so
             // SPEC section 4's "skip when power > 0" only ever catches rounding: the form
             // below, evaluated from the strip's first pixel, can come out a hair over 0 next to
-            // the centre, where the reference's direct formula gives a hair under. The min
-            // keeps alpha <= o there instead of skipping the splat (two operations fewer per
-            // pixel).
+            // the centre, where the reference's direct formula gives a hair under. There
+            // alpha comes out a few ulps over o instead of the splat being skipped. A
+            // min(power2, 0) kept alpha <= o, but gallivm's min (NaN-aware) cost 2-3 % of
+            // the frame (lavapipe, unclipped 1280x960, three rounds in turn: plant
+            // 83.5-86.7 -> 81.2-81.8 ms, playbot 167.8-184.2 -> 164.8-177.8; the same images).
             float power2 = fma(float(r), fma(float(r), q.z, q.y), q.x);
-            float alpha = co.w * exp2(min(power2, 0.0));
+            float alpha = co.w * exp2(power2);
 #ifdef DEPTH
             // Behind the engine's surface: this splat and every later one are hidden.
             T = s.depth >= px_limit[i] ? -abs(T) : T;
