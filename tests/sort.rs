@@ -6,7 +6,7 @@ use rara::constants::{
     SCAN_BLOCK, SCAN_RUN, SCAN_RUN_WORKGROUP, SORT_OWN_WORKGROUP, SORT_PARALLEL_BLOCKS,
 };
 use rara::stages::sort::{
-    local_max_keys, PairForm, RadixSort, Segmentation, SortLayout, TILE_SORT_LABELS,
+    local_max_keys, PairForm, RadixSort, Segmentation, SortForms, SortLayout, TILE_SORT_LABELS,
 };
 use rara::vk::Buffer;
 
@@ -115,13 +115,13 @@ fn check_segmented_sort(
     let count = Buffer::from_slice(ctx, "sort count", &[n as u32]).unwrap();
     let out = ctx
         .run_commands(|cmd| {
-            sorter.record_form(
+            sorter.record_forms(
                 ctx,
                 cmd,
                 &bufs,
                 count.address,
                 key_bits,
-                form,
+                SortForms::same(form),
                 &TILE_SORT_LABELS,
                 None,
             )

@@ -7,7 +7,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use rara::clip::{Clip, ClipMode, Plane};
-use rara::stages::sort::{PairForm, RadixSort, Segmentation, TILE_SORT_LABELS};
+use rara::stages::sort::{PairForm, RadixSort, Segmentation, SortForms, TILE_SORT_LABELS};
 use rara::timing::{PassTimer, PassTiming};
 use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
@@ -859,13 +859,13 @@ fn bench_sort(n: u64) -> Result<()> {
             } else {
                 PairForm::Split
             };
-            sort.record_form(
+            sort.record_forms(
                 &ctx,
                 cmd,
                 &bufs,
                 count.address,
                 KEY_BITS,
-                form,
+                SortForms::same(form),
                 &TILE_SORT_LABELS,
                 Some(&mut timer),
             )

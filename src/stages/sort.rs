@@ -259,6 +259,16 @@ pub struct SortForms {
     pub output: PairForm,
 }
 
+impl SortForms {
+    /// Input and result both in `form`.
+    pub const fn same(form: PairForm) -> SortForms {
+        SortForms {
+            input: form,
+            output: form,
+        }
+    }
+}
+
 /// The own-counts layout's kernels that read or write packed pairs ([`PairForm::Packed`]). A
 /// sort of several passes hands the pairs on packed between them, so that a pass's scatter
 /// writes a pair with one store (`sort_*_own_counts_*pairs`).
@@ -764,7 +774,7 @@ impl RadixSort {
         self.segments.is_some()
     }
 
-    /// Whether this sort takes and gives packed pairs ([`RadixSort::record_form`]): in the
+    /// Whether this sort takes and gives packed pairs ([`RadixSort::record_forms`]): in the
     /// own-counts layout.
     pub fn sorts_packed(&self) -> bool {
         self.packed.is_some()
@@ -822,44 +832,15 @@ impl RadixSort {
         labels: &SortLabels,
         timer: Option<&mut PassTimer>,
     ) -> usize {
-        self.record_form(
-            ctx,
-            cmd,
-            bufs,
-            count,
-            key_bits,
-            PairForm::Split,
-            labels,
-            timer,
-        )
+        let forms = SortForms::same(PairForm::Split);
+        self.record_forms(ctx, cmd, bufs, count, key_bits, forms, labels, timer)
     }
 
-    /// As [`RadixSort::record`], for a sort whose input and result are in `form`: with
-    /// [`PairForm::Packed`], packed pairs in `bufs.keys[0]` and the result packed in
-    /// `bufs.keys[result]`. Only the own-counts layout sorts packed pairs
-    /// ([`RadixSort::sorts_packed`]); in the other a packed `form` panics.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_form(
-        &self,
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        bufs: &SortBuffers,
-        count: u64,
-        key_bits: u32,
-        form: PairForm,
-        labels: &SortLabels,
-        timer: Option<&mut PassTimer>,
-    ) -> usize {
-        let forms = SortForms {
-            input: form,
-            output: form,
-        };
-        self.record_passes(ctx, cmd, bufs, 0, count, key_bits, forms, labels, timer)
-    }
-
-    /// As [`RadixSort::record_form`], for a sort whose input is in `forms.input` and whose
-    /// result is in `forms.output`: the frame's tile pairs, which emit writes packed on CPU
-    /// drivers, and which the rasterizer reads split.
+    /// As [`RadixSort::record`], for a sort whose input is in `forms.input` and whose result
+    /// is in `forms.output`: with [`PairForm::Packed`], packed pairs in `bufs.keys[0]`, or the
+    /// result packed in `bufs.keys[result]`. The frame's tile pairs go in packed on CPU drivers
+    /// (emit writes them so) and come out split for the rasterizer. Only the own-counts layout
+    /// sorts packed pairs ([`RadixSort::sorts_packed`]); in the other a packed form panics.
     #[allow(clippy::too_many_arguments)]
     pub fn record_forms(
         &self,
@@ -891,10 +872,7 @@ impl RadixSort {
         labels: &SortLabels,
         timer: Option<&mut PassTimer>,
     ) -> usize {
-        let forms = SortForms {
-            input: PairForm::Split,
-            output: PairForm::Split,
-        };
+        let forms = SortForms::same(PairForm::Split);
         self.record_passes(ctx, cmd, bufs, first, count, key_bits, forms, labels, timer)
     }
 
@@ -1068,15 +1046,7 @@ impl RadixSort {
         let bufs = self.buffers(ctx, keys.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(keys))?;
         bufs.values[0].upload(bytemuck::cast_slice(values))?;
-        let forms = SortForms {
-            input: PairForm::Split,
-            output: PairForm::Split,
-        };
-        let out = self.run_uploaded(ctx, &bufs, keys.len(), key_bits, forms)?;
-        Ok((
-            bufs.keys[out].download_as(keys.len())?,
-            bufs.values[out].download_as(values.len())?,
-        ))
+        self.run_to_split(ctx, &bufs, keys.len(), key_bits, PairForm::Split)
     }
 
     /// Sorts packed pairs (see [`PairForm::Packed`]) on the GPU (upload, sort, readback) by
@@ -1088,18 +1058,8 @@ impl RadixSort {
         pairs: &[u64],
         key_bits: u32,
     ) -> Result<Vec<u64>> {
-        if !self.sorts_packed() {
-            return Err(Error::InvalidInput(format!(
-                "the {:?} sort layout does not sort packed pairs",
-                self.layout
-            )));
-        }
-        let bufs = self.buffers(ctx, pairs.len() as u64)?;
-        bufs.keys[0].upload(bytemuck::cast_slice(pairs))?;
-        let forms = SortForms {
-            input: PairForm::Packed,
-            output: PairForm::Packed,
-        };
+        let bufs = self.upload_packed(ctx, pairs)?;
+        let forms = SortForms::same(PairForm::Packed);
         let out = self.run_uploaded(ctx, &bufs, pairs.len(), key_bits, forms)?;
         bufs.keys[out].download_as(pairs.len())
     }
@@ -1112,6 +1072,34 @@ impl RadixSort {
         pairs: &[u64],
         key_bits: u32,
     ) -> Result<(Vec<u32>, Vec<u32>)> {
+        let bufs = self.upload_packed(ctx, pairs)?;
+        self.run_to_split(ctx, &bufs, pairs.len(), key_bits, PairForm::Packed)
+    }
+
+    /// Sorts the `n` pairs uploaded to `bufs` in `input` (as [`RadixSort::run_uploaded`]) and
+    /// reads the result back as keys and values.
+    fn run_to_split(
+        &self,
+        ctx: &Context,
+        bufs: &SortBuffers,
+        n: usize,
+        key_bits: u32,
+        input: PairForm,
+    ) -> Result<(Vec<u32>, Vec<u32>)> {
+        let forms = SortForms {
+            input,
+            output: PairForm::Split,
+        };
+        let out = self.run_uploaded(ctx, bufs, n, key_bits, forms)?;
+        Ok((
+            bufs.keys[out].download_as(n)?,
+            bufs.values[out].download_as(n)?,
+        ))
+    }
+
+    /// Buffers for `pairs` with the pairs uploaded packed; an error in a layout that does not
+    /// sort packed pairs.
+    fn upload_packed(&self, ctx: &Context, pairs: &[u64]) -> Result<SortBuffers> {
         if !self.sorts_packed() {
             return Err(Error::InvalidInput(format!(
                 "the {:?} sort layout does not sort packed pairs",
@@ -1120,15 +1108,7 @@ impl RadixSort {
         }
         let bufs = self.buffers(ctx, pairs.len() as u64)?;
         bufs.keys[0].upload(bytemuck::cast_slice(pairs))?;
-        let forms = SortForms {
-            input: PairForm::Packed,
-            output: PairForm::Split,
-        };
-        let out = self.run_uploaded(ctx, &bufs, pairs.len(), key_bits, forms)?;
-        Ok((
-            bufs.keys[out].download_as(pairs.len())?,
-            bufs.values[out].download_as(pairs.len())?,
-        ))
+        Ok(bufs)
     }
 
     /// Sorts the `n` pairs uploaded to `bufs` in `forms.input` and waits for it (the count
