@@ -205,7 +205,8 @@ ProjectedSplat load_splat(ProjectedSplats splats, uint i) {
 
 void store_splat(ProjectedSplats splats, uint i, ProjectedSplat p) {
     uvec2 color = pack_splat_color(p.color);
-    store_uvec4(splat_block(splats, i, 0u), uvec4(floatBitsToUint(p.uv), floatBitsToUint(p.opacity), color.x));
+    store_uvec4(splat_block(splats, i, 0u),
+                uvec4(floatBitsToUint(p.uv), floatBitsToUint(p.opacity), color.x));
     store_uvec4(splat_block(splats, i, 1u), uvec4(floatBitsToUint(p.conic), color.y));
     store_uvec4(splat_block(splats, i, 2u), uvec4(floatBitsToUint(p.depth), p.cutoff,
                                                   floatBitsToUint(p.radius), 0u));

@@ -795,11 +795,7 @@ impl Renderer {
             self.tile_lists.record(&mut rec, buffer, layout)?;
         }
         let forms = SortForms {
-            input: if self.emit.packed() {
-                PairForm::Packed
-            } else {
-                PairForm::Split
-            },
+            input: self.emit.pair_form(),
             output: PairForm::Split,
         };
         let sorted = self.sort.record_forms(

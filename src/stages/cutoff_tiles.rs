@@ -68,7 +68,7 @@ impl CutoffTiles {
     /// The stage, whose kernel the first rara frame that classifies tiles builds; with
     /// `texels`, the layout of the frame's texel views (CPU drivers), the variant that reads
     /// through them, and with `packed` too, the one over the packed pairs that emit then writes
-    /// ([`super::emit::Emit::packed`]).
+    /// ([`super::emit::Emit::pair_form`]).
     ///
     /// Without texel views the pairs of a workgroup's cutoff splats are shared out over its
     /// invocations (`cutoff_tiles_balanced`), so that a splat over many tiles does not hold the

@@ -2,7 +2,7 @@
 //! (`glsl/emit_body.glsl`). Under rara clipping by planes with the mass weight, the variant
 //! `emit_rara` also records where each cutoff splat's pairs start, for the cutoff-tiles stage
 //! ([`super::cutoff_tiles`]). Where the frame's sort takes packed pairs (CPU drivers), emit
-//! writes each pair as one 64-bit word ([`super::sort::PairForm::Packed`]).
+//! writes each pair as one 64-bit word ([`PairForm::Packed`]).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use std::ffi::CStr;
 
 use super::cutoff_tiles::CUTOFF_PAIRS_OFFSET;
-use super::sort::SortBuffers;
+use super::sort::{PairForm, SortBuffers};
 use super::FrameRecording;
 use crate::constants::COUNTER_VISIBLE;
 use crate::error::Result;
@@ -31,7 +31,7 @@ pub struct EmitPush {
     pub order: u64,
     /// Exclusive prefix sum of tiles touched, in depth order.
     pub offsets: u64,
-    /// Out: keys (tile ids), or the packed pairs ([`Emit::packed`]).
+    /// Out: keys (tile ids), or the packed pairs ([`Emit::pair_form`]).
     pub keys: u64,
     /// Out: values (splat indices); unused with packed pairs.
     pub values: u64,
@@ -91,10 +91,14 @@ impl Emit {
         })
     }
 
-    /// Whether the kernels write packed pairs ([`super::sort::PairForm::Packed`]), which the
-    /// pair sort must then take as its input form.
-    pub fn packed(&self) -> bool {
-        self.packed
+    /// How the kernels write the pairs: packed ([`PairForm::Packed`]) or split, the form the
+    /// pair sort must then take them in.
+    pub fn pair_form(&self) -> PairForm {
+        if self.packed {
+            PairForm::Packed
+        } else {
+            PairForm::Split
+        }
     }
 
     /// Records the pass "emit" for a scene of `count` Gaussians (the drawn ones are read on
