@@ -268,20 +268,18 @@ pub fn load_ply(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     read_ply_from(reader, len, path)
 }
 
+/// [`load_ply`] from an input opened already (whose first bytes may have been peeked at to
+/// tell its format): a regular file is read with its size known, a stream as a stream.
+pub fn load_ply_input(input: crate::input::InputFile) -> Result<(Scene, LoadReport)> {
+    let path = input.path().to_path_buf();
+    let (reader, len) = input.into_stream()?;
+    read_ply_from(reader, len, &path)
+}
+
 /// The file at `path`, buffered, and its size when it is a regular file (`None` for a pipe or
 /// a device, which is then read as a stream).
-fn open_scene_file(path: &Path) -> Result<(BufReader<File>, Option<u64>)> {
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = File::open(path).map_err(io)?;
-    let meta = file.metadata().map_err(io)?;
-    if meta.is_dir() {
-        return Err(ply_err(path, "is a directory, not a PLY file"));
-    }
-    let len = meta.is_file().then_some(meta.len());
-    Ok((BufReader::with_capacity(1 << 20, file), len))
+fn open_scene_file(path: &Path) -> Result<(Box<dyn BufRead>, Option<u64>)> {
+    crate::input::InputFile::open(path, "PLY file")?.into_stream()
 }
 
 /// [`load_ply`] from any seekable reader holding `len` bytes (a file, a `Cursor` over bytes

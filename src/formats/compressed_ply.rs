@@ -21,7 +21,7 @@ use std::path::Path;
 use glam::Vec3;
 use ply_rs::ply::{Encoding, PropertyDef, PropertyType, ScalarType};
 
-use super::{from_smallest_three_wxyz, push_decoded, read_file_bounded};
+use super::{from_smallest_three_wxyz, push_decoded};
 use crate::error::{Error, Result};
 use crate::ply::LoadReport;
 use crate::scene::Scene;
@@ -58,7 +58,7 @@ const VERTEX_NAMES: [&str; 4] = [
 ];
 const SH_C0: f64 = 0.282_094_791_773_878_14;
 /// The largest compressed PLY rara reads.
-const MAX_FILE_BYTES: u64 = 4 << 30;
+pub const MAX_FILE_BYTES: u64 = 4 << 30;
 
 fn bad(path: &Path, message: impl std::fmt::Display) -> Error {
     Error::Ply {
@@ -108,7 +108,12 @@ fn lerp(a: f32, b: f32, t: f64) -> f64 {
 
 /// Reads a compressed PLY.
 pub fn read_compressed_ply(path: &Path) -> Result<(Scene, LoadReport)> {
-    let bytes = read_file_bounded(path, MAX_FILE_BYTES)?;
+    let bytes = crate::input::read_bounded(path, MAX_FILE_BYTES, "compressed PLY")?;
+    decode(&bytes, path)
+}
+
+/// Decodes a compressed PLY's bytes (`path` names it in errors).
+pub fn decode(bytes: &[u8], path: &Path) -> Result<(Scene, LoadReport)> {
     let mut cursor = Cursor::new(&bytes[..]);
     let (header_bytes, header) = crate::ply::read_header(path, &mut cursor)?;
     if header.encoding != Encoding::BinaryLittleEndian {

@@ -27,12 +27,12 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use glam::{Mat4, Quat, Vec3};
-use gltf::json;
+use glam::{DMat4, Quat, Vec3};
 use serde_json::{json, Value};
 
-use super::{flip_axes, push_decoded, read_file_bounded};
+use super::{flip_axes, push_decoded};
 use crate::error::{Error, Result};
+use crate::input::gltf::Document;
 use crate::ply::LoadReport;
 use crate::scene::{sh_coeffs, Scene};
 
@@ -43,227 +43,8 @@ const EXT_SPZ: &str = "KHR_gaussian_splatting_compression_spz_2";
 const SH_C0: f32 = 0.282_094_8;
 /// glTF's LUF against rara's RDF: x and y point the other way.
 const GLTF_FLIPS: [bool; 3] = [true, true, false];
-/// The largest glTF file (or buffer file) rara reads.
-const MAX_FILE_BYTES: u64 = 4 << 30;
-
 fn bad(path: &Path, message: impl std::fmt::Display) -> Error {
     Error::InvalidInput(format!("{}: glTF: {message}", path.display()))
-}
-
-/// The document and its buffers.
-struct Document {
-    root: json::Root,
-    /// The raw JSON, for what `gltf-json` cannot name: the extension's attribute semantics.
-    raw: Value,
-    buffers: Vec<Vec<u8>>,
-}
-
-fn load(path: &Path) -> Result<Document> {
-    let bytes = read_file_bounded(path, MAX_FILE_BYTES)?;
-    let (json_bytes, bin) = if bytes.starts_with(b"glTF") {
-        // The header's length first, so a cut file says so rather than what the chunk
-        // parser trips on.
-        if let Some(length) = bytes.get(8..12) {
-            let length = u32::from_le_bytes(length.try_into().unwrap()) as usize;
-            if length > bytes.len() {
-                return Err(bad(
-                    path,
-                    format!(
-                        "the glb header gives {length} bytes and the file has {} (truncated)",
-                        bytes.len()
-                    ),
-                ));
-            }
-        }
-        let glb = gltf::Glb::from_slice(&bytes).map_err(|e| bad(path, e))?;
-        (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
-    } else {
-        (bytes, None)
-    };
-    let raw: Value = serde_json::from_slice(&json_bytes).map_err(|e| bad(path, e))?;
-    let root: json::Root = serde_json::from_value(raw.clone()).map_err(|e| bad(path, e))?;
-    let mut bin = bin;
-    let mut buffers = Vec::new();
-    for (i, b) in root.buffers.iter().enumerate() {
-        let data = match &b.uri {
-            None => bin.take().ok_or_else(|| {
-                bad(
-                    path,
-                    format!("buffer {i} has no uri and the file no BIN chunk"),
-                )
-            })?,
-            Some(uri) if uri.starts_with("data:") => {
-                let (_, encoded) = uri.split_once(";base64,").ok_or_else(|| {
-                    bad(path, format!("buffer {i}: a data URI that is not base64"))
-                })?;
-                use base64::Engine;
-                base64::engine::general_purpose::STANDARD
-                    .decode(encoded)
-                    .map_err(|e| bad(path, format!("buffer {i}: {e}")))?
-            }
-            Some(uri) => {
-                if uri.contains("..") || uri.starts_with('/') || uri.contains(':') {
-                    return Err(bad(
-                        path,
-                        format!("buffer {i}'s uri '{uri}' leaves the file's folder"),
-                    ));
-                }
-                read_file_bounded(
-                    &path.parent().unwrap_or(Path::new(".")).join(uri),
-                    MAX_FILE_BYTES,
-                )?
-            }
-        };
-        if (data.len() as u64) < b.byte_length.0 {
-            return Err(bad(
-                path,
-                format!(
-                    "buffer {i} holds {} bytes where its byteLength says {}",
-                    data.len(),
-                    b.byte_length.0
-                ),
-            ));
-        }
-        buffers.push(data);
-    }
-    Ok(Document { root, raw, buffers })
-}
-
-impl Document {
-    /// The bytes of buffer view `view`.
-    fn view(&self, path: &Path, view: usize) -> Result<(&[u8], Option<usize>)> {
-        let v = self
-            .root
-            .buffer_views
-            .get(view)
-            .ok_or_else(|| bad(path, format!("no buffer view {view}")))?;
-        let buffer = self
-            .buffers
-            .get(v.buffer.value())
-            .ok_or_else(|| bad(path, format!("buffer view {view} names a missing buffer")))?;
-        let start = v.byte_offset.map_or(0, |o| o.0) as usize;
-        let end = start
-            .checked_add(v.byte_length.0 as usize)
-            .filter(|&e| e <= buffer.len())
-            .ok_or_else(|| bad(path, format!("buffer view {view} runs past its buffer")))?;
-        Ok((&buffer[start..end], v.byte_stride.map(|s| s.0)))
-    }
-
-    /// Accessor `index` as `components` floats per element (normalised integers mapped to
-    /// `[0, 1]` or `[-1, 1]`), and its count.
-    fn floats(&self, path: &Path, index: usize, components: usize) -> Result<Vec<f32>> {
-        use json::accessor::{ComponentType as C, Type};
-        let a = self
-            .root
-            .accessors
-            .get(index)
-            .ok_or_else(|| bad(path, format!("no accessor {index}")))?;
-        let want = match components {
-            1 => Type::Scalar,
-            3 => Type::Vec3,
-            _ => Type::Vec4,
-        };
-        let json::validation::Checked::Valid(ty) = a.type_ else {
-            return Err(bad(path, format!("accessor {index} has an unknown type")));
-        };
-        if ty != want {
-            return Err(bad(
-                path,
-                format!("accessor {index} is {ty:?}, where {want:?} is needed"),
-            ));
-        }
-        let json::validation::Checked::Valid(json::accessor::GenericComponentType(ct)) =
-            a.component_type
-        else {
-            return Err(bad(
-                path,
-                format!("accessor {index} has an unknown component type"),
-            ));
-        };
-        if a.sparse.is_some() {
-            return Err(bad(
-                path,
-                format!("accessor {index} is sparse, which rara does not read"),
-            ));
-        }
-        if ct != C::F32 && !a.normalized {
-            return Err(bad(
-                path,
-                format!("accessor {index} holds {ct:?} that are not normalized"),
-            ));
-        }
-        let size = match ct {
-            C::I8 | C::U8 => 1,
-            C::I16 | C::U16 => 2,
-            C::U32 | C::F32 => 4,
-        };
-        let count = a.count.0 as usize;
-        let view = a
-            .buffer_view
-            .ok_or_else(|| bad(path, format!("accessor {index} has no buffer view")))?;
-        let (data, stride) = self.view(path, view.value())?;
-        let element = size * components;
-        let stride = stride.unwrap_or(element);
-        let offset = a.byte_offset.map_or(0, |o| o.0) as usize;
-        let need = if count == 0 {
-            0
-        } else {
-            (count - 1)
-                .checked_mul(stride)
-                .and_then(|s| s.checked_add(offset + element))
-                .unwrap_or(usize::MAX)
-        };
-        if stride < element || need > data.len() {
-            return Err(bad(
-                path,
-                format!(
-                    "accessor {index}: {count} elements of {element} bytes do not fit in its \
-                     buffer view of {} bytes",
-                    data.len()
-                ),
-            ));
-        }
-        let mut out = Vec::with_capacity(count * components);
-        for i in 0..count {
-            for k in 0..components {
-                let at = offset + i * stride + k * size;
-                let b = &data[at..at + size];
-                out.push(match ct {
-                    C::F32 => f32::from_le_bytes(b.try_into().unwrap()),
-                    C::U8 => b[0] as f32 / 255.0,
-                    C::I8 => (b[0] as i8 as f32 / 127.0).max(-1.0),
-                    C::U16 => u16::from_le_bytes(b.try_into().unwrap()) as f32 / 65535.0,
-                    C::I16 => {
-                        (i16::from_le_bytes(b.try_into().unwrap()) as f32 / 32767.0).max(-1.0)
-                    }
-                    C::U32 => u32::from_le_bytes(b.try_into().unwrap()) as f32 / u32::MAX as f32,
-                });
-            }
-        }
-        Ok(out)
-    }
-
-    /// Accessor `index`'s element count.
-    fn count(&self, path: &Path, index: usize) -> Result<usize> {
-        self.root
-            .accessors
-            .get(index)
-            .map(|a| a.count.0 as usize)
-            .ok_or_else(|| bad(path, format!("no accessor {index}")))
-    }
-}
-
-/// A node's local matrix.
-fn local_matrix(node: &json::scene::Node) -> Mat4 {
-    if let Some(m) = node.matrix {
-        return Mat4::from_cols_array(&m);
-    }
-    let t = node.translation.map_or(Vec3::ZERO, Vec3::from_array);
-    let r = node
-        .rotation
-        .map_or(Quat::IDENTITY, |q| Quat::from_array(q.0).normalize());
-    let s = node.scale.map_or(Vec3::ONE, Vec3::from_array);
-    Mat4::from_scale_rotation_translation(s, r, t)
 }
 
 /// One decoded splat primitive, in glTF's axes and the mesh's own frame.
@@ -294,14 +75,14 @@ fn read_primitive(
             format!("mesh {mesh}: a splat primitive without POSITION"),
         )
     })?;
-    let n = doc.count(path, position)?;
+    let n = doc.count(position)?;
 
     if let Some(spz) = ext.pointer(&format!("/extensions/{EXT_SPZ}")) {
         let view = spz
             .get("bufferView")
             .and_then(Value::as_u64)
             .ok_or_else(|| bad(path, format!("mesh {mesh}: {EXT_SPZ} without a bufferView")))?;
-        let (bytes, _) = doc.view(path, view as usize)?;
+        let (bytes, _) = doc.view(usize::try_from(view).unwrap_or(usize::MAX))?;
         let (mut scene, report) = super::spz::decode(bytes, path, super::spz::SpzAxes::Rub)?;
         if scene.len() + report.dropped_non_finite != n {
             return Err(bad(
@@ -325,7 +106,7 @@ fn read_primitive(
         let Some(index) = attribute(name) else {
             return Ok(None);
         };
-        let data = doc.floats(path, index, components)?;
+        let data = doc.floats(index, components)?;
         if data.len() != n * components {
             return Err(bad(
                 path,
@@ -457,104 +238,110 @@ fn join(a: Scene, b: Scene) -> Scene {
 
 /// Reads the Gaussians of a `.glb` or `.gltf`.
 pub fn read_gltf(path: &Path) -> Result<(Scene, LoadReport)> {
-    let doc = load(path)?;
-    let meshes = doc
-        .raw
-        .get("meshes")
-        .and_then(Value::as_array)
-        .cloned()
-        .unwrap_or_default();
-    let mut notes = Vec::new();
-    let mut dropped = 0;
-    // The nodes to walk: the default scene's roots, else every scene's, else every node that
-    // is nobody's child.
-    let roots: Vec<usize> = match doc.root.scene.map(|s| s.value()) {
-        Some(s) => doc
-            .root
-            .scenes
-            .get(s)
-            .ok_or_else(|| bad(path, format!("no scene {s}")))?
-            .nodes
-            .iter()
-            .map(|n| n.value())
-            .collect(),
-        None if !doc.root.scenes.is_empty() => doc
-            .root
-            .scenes
-            .iter()
-            .flat_map(|s| s.nodes.iter().map(|n| n.value()))
-            .collect(),
-        None => {
-            let children: std::collections::HashSet<usize> = doc
-                .root
-                .nodes
-                .iter()
-                .flat_map(|n| n.children.iter().flatten().map(|c| c.value()))
-                .collect();
-            (0..doc.root.nodes.len())
-                .filter(|i| !children.contains(i))
-                .collect()
-        }
-    };
-    let mut scene = Scene::default();
-    let mut found = 0;
-    let mut stack: Vec<(usize, Mat4, usize)> = roots
-        .into_iter()
-        .rev()
-        .map(|r| (r, Mat4::IDENTITY, 0))
-        .collect();
-    while let Some((index, parent, depth)) = stack.pop() {
-        let node = doc
-            .root
-            .nodes
-            .get(index)
-            .ok_or_else(|| bad(path, format!("no node {index}")))?;
-        if depth > 64 {
-            return Err(bad(path, "nodes nest deeper than 64 (a cycle?)"));
-        }
-        let world = parent * local_matrix(node);
-        if let Some(mesh) = node.mesh.map(|m| m.value()) {
+    decode_gltf(&Document::open(path)?, path)
+}
+
+/// Reads the Gaussians of a `.glb` or `.gltf` whose bytes were read already (from `path`, whose
+/// folder holds the buffers a `.gltf` names).
+pub fn read_gltf_bytes(bytes: &[u8], path: &Path) -> Result<(Scene, LoadReport)> {
+    decode_gltf(&Document::from_bytes(bytes, path)?, path)
+}
+
+/// The splat primitives of `doc`: where each is placed (node, mesh, world matrix), checked
+/// against [`crate::constants::MAX_GAUSSIANS`] before any is decoded, so that a small file
+/// that places one primitive under many nodes is refused rather than decoded many times.
+fn placements(doc: &Document, path: &Path) -> Result<Vec<(usize, usize, DMat4)>> {
+    let meshes = doc.raw.get("meshes").and_then(Value::as_array);
+    let mut out = Vec::new();
+    let mut total: u64 = 0;
+    for roots in doc.scene_roots()? {
+        for (index, world) in doc.walk(&roots)? {
+            let Some(mesh) = doc.root.nodes[index].mesh.map(|m| m.value()) else {
+                continue;
+            };
             let primitives = meshes
-                .get(mesh)
+                .and_then(|m| m.get(mesh))
                 .and_then(|m| m.get("primitives"))
                 .and_then(Value::as_array)
                 .ok_or_else(|| bad(path, format!("node {index} names a missing mesh {mesh}")))?;
             for primitive in primitives {
-                let Some(part) =
-                    read_primitive(&doc, path, mesh, primitive, &mut notes, &mut dropped)?
-                else {
+                if primitive.pointer(&format!("/extensions/{EXT}")).is_none() {
                     continue;
-                };
-                found += 1;
-                let part = if world == Mat4::IDENTITY {
-                    part
-                } else {
-                    let (s, r, t) = world.to_scale_rotation_translation();
-                    let uniform =
-                        (s.max_element() - s.min_element()).abs() <= 1e-4 * s.max_element().abs();
-                    if !(uniform && s.min_element() > 0.0 && world.determinant() > 0.0) {
-                        return Err(bad(
-                            path,
-                            format!(
-                                "node {index} scales its splats by {s} (a Gaussian takes one \
-                                 positive scale, not a stretch or a mirror)"
-                            ),
-                        ));
-                    }
-                    crate::mixed::moved(
-                        &part,
-                        &crate::mixed::Transform {
-                            rotation: r,
-                            translation: t,
-                            scale: Vec3::splat(s.x),
-                        },
-                    )
-                };
-                scene = join(scene, part);
+                }
+                let count = primitive
+                    .pointer("/attributes/POSITION")
+                    .and_then(Value::as_u64)
+                    .map(|a| doc.count(usize::try_from(a).unwrap_or(usize::MAX)))
+                    .transpose()?
+                    .unwrap_or(0);
+                total = total.saturating_add(count as u64);
             }
+            out.push((index, mesh, world));
         }
-        for child in node.children.iter().flatten().rev() {
-            stack.push((child.value(), world, depth + 1));
+    }
+    check_placed(total, crate::constants::MAX_GAUSSIANS, path)?;
+    Ok(out)
+}
+
+/// The Gaussians placed by every node in all, against the most a scene may have.
+fn check_placed(total: u64, most: u64, path: &Path) -> Result<()> {
+    if total > most {
+        return Err(bad(
+            path,
+            format!(
+                "its nodes place {total} Gaussians in all (each primitive counted once per node \
+                 that places it), more than the {most} a scene may have"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn decode_gltf(doc: &Document, path: &Path) -> Result<(Scene, LoadReport)> {
+    let meshes = doc.raw.get("meshes").and_then(Value::as_array);
+    let mut notes = Vec::new();
+    let mut dropped = 0;
+    let mut scene = Scene::default();
+    let mut found = 0;
+    for (index, mesh, world) in placements(doc, path)? {
+        let primitives = meshes
+            .and_then(|m| m.get(mesh))
+            .and_then(|m| m.get("primitives"))
+            .and_then(Value::as_array)
+            .map(Vec::as_slice)
+            .unwrap_or_default();
+        for primitive in primitives {
+            let Some(part) = read_primitive(doc, path, mesh, primitive, &mut notes, &mut dropped)?
+            else {
+                continue;
+            };
+            found += 1;
+            let part = if world == DMat4::IDENTITY {
+                part
+            } else {
+                let world = world.as_mat4();
+                let (s, r, t) = world.to_scale_rotation_translation();
+                let uniform =
+                    (s.max_element() - s.min_element()).abs() <= 1e-4 * s.max_element().abs();
+                if !(uniform && s.min_element() > 0.0 && world.determinant() > 0.0) {
+                    return Err(bad(
+                        path,
+                        format!(
+                            "node {index} scales its splats by {s} (a Gaussian takes one \
+                             positive scale, not a stretch or a mirror)"
+                        ),
+                    ));
+                }
+                crate::mixed::moved(
+                    &part,
+                    &crate::mixed::Transform {
+                        rotation: r,
+                        translation: t,
+                        scale: Vec3::splat(s.x),
+                    },
+                )
+            };
+            scene = join(scene, part);
         }
     }
     if found == 0 {

@@ -1,10 +1,13 @@
 //! Scene file formats (issue 34), told apart by their content (magic bytes and header), not
 //! only by the file's extension, and read into [`Scene`].
 //!
-//! - INRIA PLY ([`crate::ply`]), read;
+//! - INRIA PLY ([`crate::ply`]), read and written;
 //! - antimatter15 `.splat` ([`splat`]), read and written;
-//! - SPZ, glTF `KHR_gaussian_splatting`, SOG and PlayCanvas compressed PLY are recognised and
-//!   named, and refused with a clear error until their readers land.
+//! - Niantic SPZ ([`spz`]) and glTF `KHR_gaussian_splatting` ([`gltf`]), read and written;
+//! - PlayCanvas SOG ([`sog`]) and compressed PLY ([`compressed_ply`]), read.
+//!
+//! Every file is read through [`crate::input`] (opened once, its bytes counted against the
+//! format's limit).
 
 pub mod compressed_ply;
 pub mod gltf;
@@ -12,12 +15,12 @@ pub mod sog;
 pub mod splat;
 pub mod spz;
 
-use std::io::Read;
 use std::path::Path;
 
 use glam::{Quat, Vec3};
 
 use crate::error::{Error, Result};
+use crate::input::InputFile;
 use crate::ply::LoadReport;
 use crate::scene::Scene;
 
@@ -140,23 +143,6 @@ pub(crate) fn from_smallest_three_wxyz(largest: usize, stored: [f64; 3]) -> Quat
 /// clamp before its logit, so an 8-bit 0 or 255 stays a finite logit when written back.
 pub const OPACITY_MIN: f32 = 1e-6;
 
-/// Reads all of `path` after checking that it is a plain file of at most `limit` bytes.
-pub(crate) fn read_file_bounded(path: &Path, limit: u64) -> Result<Vec<u8>> {
-    let file = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
-    let size = file.metadata().map_err(|e| io_error(path, e))?.len();
-    if size > limit {
-        return Err(Error::InvalidInput(format!(
-            "{}: {size} bytes, more than the {limit} this reader takes",
-            path.display()
-        )));
-    }
-    let mut bytes = Vec::with_capacity(size as usize);
-    file.take(limit)
-        .read_to_end(&mut bytes)
-        .map_err(|e| io_error(path, e))?;
-    Ok(bytes)
-}
-
 /// The most bytes a compressed stream may inflate to per byte it holds: generous (real SPZ
 /// streams inflate 2 to 5 times), and what bounds a decompression bomb's allocation before
 /// any of it is made. SPZ's reference reader uses the same ratio.
@@ -193,36 +179,41 @@ impl SceneFormat {
     }
 }
 
-fn io_error(path: &Path, source: std::io::Error) -> Error {
-    Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// The format of the scene at `path`, from its first bytes (and, for a compressed PLY, its
 /// header): `ply\n` is a PLY, with an `element chunk` a compressed one; `1f 8b` (gzip) or
 /// `NGSP` an SPZ; `glTF` a glb, or a JSON text with an `"asset"` a `.gltf`; `PK\x03\x04` a
 /// SOG bundle, and a folder holding `meta.json` a SOG folder. A file with none of these is a
-/// `.splat` when its name says so and its size is a multiple of 32; else an error that names
-/// what the file starts with. A pipe or a device, which cannot be read twice, is a PLY.
+/// `.splat` when its name says so; else an error that names what the file starts with.
+///
+/// This opens the file to read its first bytes: a FIFO, which can be read only once, is
+/// better given to [`load_scene`] alone, which tells its format through the one opening.
 pub fn detect(path: &Path) -> Result<SceneFormat> {
-    match sniff(path)? {
-        Sniffed::Format(f) => Ok(f),
-        Sniffed::Unknown(head) => Err(Error::InvalidInput(format!(
-            "{}: not a scene rara knows (PLY, .splat; SPZ, glTF, SOG and compressed PLY are \
-             recognised): {}",
+    if path.is_dir() {
+        return sog_folder(path);
+    }
+    let mut input = InputFile::open(path, "scene")?;
+    match sniff(&mut input)? {
+        Some(f) => Ok(f),
+        None => Err(Error::InvalidInput(format!(
+            "{}: not a scene rara knows (PLY, compressed PLY, .splat, SPZ, glTF or SOG): {}",
             path.display(),
-            starts_with(&head)
+            starts_with(input.peek(SNIFF_BYTES)?)
         ))),
     }
 }
 
-/// What [`sniff`] found.
-enum Sniffed {
-    Format(SceneFormat),
-    /// None of the formats: the file's first bytes.
-    Unknown(Vec<u8>),
+/// How many of a scene's first bytes tell its format.
+const SNIFF_BYTES: usize = 4096;
+
+/// A folder is a SOG when it holds `meta.json`.
+fn sog_folder(path: &Path) -> Result<SceneFormat> {
+    if path.join("meta.json").is_file() {
+        return Ok(SceneFormat::Sog);
+    }
+    Err(Error::InvalidInput(format!(
+        "{}: a folder without meta.json is no scene",
+        path.display()
+    )))
 }
 
 fn starts_with(head: &[u8]) -> String {
@@ -233,36 +224,16 @@ fn starts_with(head: &[u8]) -> String {
     format!("it starts with {}", shown.join(" "))
 }
 
-fn sniff(path: &Path) -> Result<Sniffed> {
-    if path.is_dir() {
-        if path.join("meta.json").is_file() {
-            return Ok(Sniffed::Format(SceneFormat::Sog));
-        }
-        return Err(Error::InvalidInput(format!(
-            "{}: a folder without meta.json is no scene",
-            path.display()
-        )));
-    }
-    let mut file = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
-    // A pipe or a device cannot be read twice: it is streamed as a PLY, the one format read
-    // from a stream (`rara render /dev/stdin`).
-    if !file.metadata().map_err(|e| io_error(path, e))?.is_file() {
-        return Ok(Sniffed::Format(SceneFormat::Ply));
-    }
-    let mut head = vec![0u8; 4096];
-    let mut n = 0;
-    while n < head.len() {
-        match file.read(&mut head[n..]) {
-            Ok(0) => break,
-            Ok(k) => n += k,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(io_error(path, e)),
-        }
-    }
-    head.truncate(n);
-    let found = |f| Ok(Sniffed::Format(f));
+/// The format of `input` from its first bytes (kept for whoever reads it next), or `None`.
+fn sniff(input: &mut InputFile) -> Result<Option<SceneFormat>> {
+    let has_splat_name = input
+        .path()
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("splat"));
+    let head = input.peek(SNIFF_BYTES)?;
+    let found = |f| Ok(Some(f));
     if head.starts_with(b"ply\n") || head.starts_with(b"ply\r\n") {
-        let text = String::from_utf8_lossy(&head);
+        let text = String::from_utf8_lossy(head);
         let header = text.split("end_header").next().unwrap_or("");
         let chunked = header
             .lines()
@@ -282,7 +253,7 @@ fn sniff(path: &Path) -> Result<Sniffed> {
     if head.starts_with(b"PK\x03\x04") {
         return found(SceneFormat::Sog);
     }
-    let text = String::from_utf8_lossy(&head);
+    let text = String::from_utf8_lossy(head);
     if text.trim_start().starts_with('{') {
         // A SOG's meta.json also has an "asset" (its generator); its "means" tell it apart.
         if text.contains("\"means\"") && text.contains("\"count\"") {
@@ -292,22 +263,11 @@ fn sniff(path: &Path) -> Result<Sniffed> {
             return found(SceneFormat::Gltf);
         }
     }
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if ext.as_deref() == Some("splat") {
-        let size = std::fs::metadata(path)
-            .map_err(|e| io_error(path, e))?
-            .len();
-        if size % splat::BYTES_PER_SPLAT as u64 == 0 && size > 0 {
-            return found(SceneFormat::Splat);
-        }
-        return Err(Error::InvalidInput(format!(
-            "{}: a .splat file holds 32 bytes per Gaussian, and this one has {size} bytes",
-            path.display()
-        )));
+    // `.splat` has no magic: its name says it (its size is checked by its reader).
+    if has_splat_name {
+        return found(SceneFormat::Splat);
     }
-    Ok(Sniffed::Unknown(head))
+    Ok(None)
 }
 
 /// How the readers take what a format leaves open.
@@ -323,31 +283,47 @@ pub fn load_scene(path: impl AsRef<Path>) -> Result<(Scene, LoadReport)> {
     load_scene_with(path, &ReadOptions::default())
 }
 
-/// Loads the scene at `path` in whichever format it is ([`detect`]).
+/// Loads the scene at `path` in whichever format it is ([`detect`]). The file is opened once:
+/// its format is told from the first bytes read through that opening, and the reader goes on
+/// from there, so a FIFO or a pipe (`/dev/stdin`) loads in any format. A PLY streams (memory
+/// grows with the vertices that arrive); any other format from a pipe is read whole, at most
+/// [`crate::input::MAX_STREAM_BYTES`].
 pub fn load_scene_with(
     path: impl AsRef<Path>,
     options: &ReadOptions,
 ) -> Result<(Scene, LoadReport)> {
     let path = path.as_ref();
-    let format = match sniff(path)? {
-        Sniffed::Format(f) => f,
+    if path.is_dir() {
+        sog_folder(path)?;
+        return sog::read_sog(path);
+    }
+    let mut input = InputFile::open(path, "scene")?;
+    let Some(format) = sniff(&mut input)? else {
         // Neither PLY nor any other format: the PLY reader says what is wrong (it knows a
         // PLY's layout best, and a scene without a magic is most likely a broken one).
-        Sniffed::Unknown(head) => {
-            return crate::ply::load_ply(path).map_err(|e| {
-                Error::InvalidInput(format!(
-                    "{e} (nor .splat, SPZ, glTF, SOG or compressed PLY: {})",
-                    starts_with(&head)
-                ))
-            })
-        }
+        let head = starts_with(input.peek(SNIFF_BYTES)?);
+        return crate::ply::load_ply_input(input).map_err(|e| {
+            Error::InvalidInput(format!(
+                "{e} (nor .splat, SPZ, glTF, SOG or compressed PLY: {head})"
+            ))
+        });
     };
+    let what = format.name();
     match format {
-        SceneFormat::Ply => crate::ply::load_ply(path),
-        SceneFormat::Splat => splat::read_splat(path),
-        SceneFormat::Spz => spz::read_spz(path, options.spz_axes),
-        SceneFormat::CompressedPly => compressed_ply::read_compressed_ply(path),
-        SceneFormat::Sog => sog::read_sog(path),
-        SceneFormat::Gltf => gltf::read_gltf(path),
+        SceneFormat::Ply => crate::ply::load_ply_input(input),
+        SceneFormat::Splat => splat::read_splat_input(input),
+        SceneFormat::Spz => {
+            let bytes = input.read_all(spz::MAX_FILE_BYTES, what)?;
+            spz::decode(&bytes, path, options.spz_axes)
+        }
+        SceneFormat::CompressedPly => {
+            let bytes = input.read_all(compressed_ply::MAX_FILE_BYTES, what)?;
+            compressed_ply::decode(&bytes, path)
+        }
+        SceneFormat::Sog => sog::read_sog_input(input),
+        SceneFormat::Gltf => {
+            let bytes = input.read_all(crate::input::gltf::MAX_GLTF_BYTES, what)?;
+            gltf::read_gltf_bytes(&bytes, path)
+        }
     }
 }

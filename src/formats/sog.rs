@@ -21,8 +21,9 @@ use std::path::{Path, PathBuf};
 use glam::{Quat, Vec3};
 use serde::Deserialize;
 
-use super::{from_smallest_three_wxyz, push_decoded, read_file_bounded, MAX_INFLATION};
+use super::{from_smallest_three_wxyz, push_decoded, MAX_INFLATION};
 use crate::error::{Error, Result};
+use crate::input::InputFile;
 use crate::ply::LoadReport;
 use crate::scene::Scene;
 
@@ -79,16 +80,8 @@ enum Source {
 }
 
 impl Source {
-    fn open(path: &Path) -> Result<Source> {
-        if path.is_dir() {
-            return Ok(Source::Folder(path.to_path_buf()));
-        }
-        if path.file_name().is_some_and(|n| n == "meta.json") {
-            return Ok(Source::Folder(
-                path.parent().unwrap_or(Path::new(".")).to_path_buf(),
-            ));
-        }
-        let bytes = read_file_bounded(path, MAX_FILE_BYTES)?;
+    /// A bundle from its bytes.
+    fn zip(path: &Path, bytes: Vec<u8>) -> Result<Source> {
         let size = bytes.len() as u64;
         let archive = zip::ZipArchive::new(Cursor::new(bytes))
             .map_err(|e| bad(path, format!("not a readable zip: {e}")))?;
@@ -101,7 +94,10 @@ impl Source {
             return Err(bad(path, format!("the file name '{name}' leaves the SOG")));
         }
         match self {
-            Source::Folder(dir) => read_file_bounded(&dir.join(name), limit.min(MAX_FILE_BYTES)),
+            Source::Folder(dir) => {
+                let file = crate::input::side_file(dir, true, name, "SOG member")?;
+                crate::input::read_side_file(&file, None, limit.min(MAX_FILE_BYTES), "SOG member")
+            }
             Source::Zip(archive, _) => {
                 let entry = archive
                     .by_name(name)
@@ -195,11 +191,44 @@ fn inverse_log(v: f64) -> f64 {
     }
 }
 
+/// The largest meta.json read: three codebooks of 256 numbers and a few file names take a few
+/// tens of kilobytes.
+const MAX_META_BYTES: u64 = 1 << 20;
+
 /// Reads a SOG: a folder holding `meta.json`, that `meta.json` itself, or a bundled `.sog`.
 pub fn read_sog(path: &Path) -> Result<(Scene, LoadReport)> {
-    let mut source = Source::open(path)?;
-    // Three codebooks of 256 numbers and a few file names: a few tens of kilobytes.
-    let meta_bytes = source.read(path, "meta.json", 1 << 20)?;
+    if path.is_dir() {
+        let mut source = Source::Folder(path.to_path_buf());
+        let meta = source.read(path, "meta.json", MAX_META_BYTES)?;
+        return decode(source, meta, path);
+    }
+    read_sog_input(InputFile::open(path, "SOG")?)
+}
+
+/// [`read_sog`] from an input opened already: a bundle (a zip), or a `meta.json` whose folder
+/// holds the images.
+pub fn read_sog_input(mut input: InputFile) -> Result<(Scene, LoadReport)> {
+    let path = input.path().to_path_buf();
+    if input.peek(4)? == b"PK\x03\x04" {
+        let source = Source::zip(&path, input.read_all(MAX_FILE_BYTES, "SOG bundle")?)?;
+        return decode_bundle(source, &path);
+    }
+    let meta = input.read_all(MAX_META_BYTES, "SOG meta.json")?;
+    let folder = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    decode(Source::Folder(folder.to_path_buf()), meta, &path)
+}
+
+/// Reads a bundle's meta.json, then the rest.
+fn decode_bundle(mut source: Source, path: &Path) -> Result<(Scene, LoadReport)> {
+    let meta = source.read(path, "meta.json", MAX_META_BYTES)?;
+    decode(source, meta, path)
+}
+
+/// Decodes a SOG from its `meta.json` and the images `source` holds.
+fn decode(mut source: Source, meta_bytes: Vec<u8>, path: &Path) -> Result<(Scene, LoadReport)> {
     let mut de = serde_json::Deserializer::from_slice(&meta_bytes);
     let meta: Meta = serde_path_to_error::deserialize(&mut de)
         .map_err(|e| bad(path, format!("meta.json: {}: {}", e.path(), e.inner())))?;

@@ -8,13 +8,14 @@
 //! 0.5) / C0`; opacity `u / 255`, kept inside `[1e-6, 1 - 1e-6]` (splat-transform's clamp
 //! before its logit). Encoding rounds to the nearest byte.
 
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufWriter, Read, Write};
 use std::path::Path;
 
 use glam::{Quat, Vec3};
 
 use super::push_decoded;
 use crate::error::{Error, Result};
+use crate::input::InputFile;
 use crate::ply::LoadReport;
 use crate::scene::Scene;
 
@@ -28,12 +29,21 @@ const SH_C0: f32 = 0.282_094_8;
 /// and a Gaussian far thinner along one axis is made flat, as every reader does
 /// ([`push_decoded`]).
 pub fn read_splat(path: &Path) -> Result<(Scene, LoadReport)> {
+    read_splat_input(InputFile::open(path, ".splat file")?)
+}
+
+/// The most bytes of a `.splat` rara reads: 2^26 records (a scene's most Gaussians).
+pub const MAX_FILE_BYTES: u64 = crate::constants::MAX_GAUSSIANS * BYTES_PER_SPLAT as u64;
+
+/// [`read_splat`] from an input opened already: a regular file is read record by record, a
+/// stream whole (through [`InputFile::into_sized_reader`]'s cap) so that its size is known.
+pub fn read_splat_input(input: InputFile) -> Result<(Scene, LoadReport)> {
+    let path = input.path().to_path_buf();
     let io = |source| Error::Io {
-        path: path.to_path_buf(),
+        path: path.clone(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let size = file.metadata().map_err(io)?.len();
+    let (mut reader, size) = input.into_sized_reader(MAX_FILE_BYTES, ".splat file")?;
     if size == 0 || size % BYTES_PER_SPLAT as u64 != 0 {
         return Err(Error::InvalidInput(format!(
             "{}: a .splat file holds 32 bytes per Gaussian, and this one has {size} bytes",
@@ -41,7 +51,6 @@ pub fn read_splat(path: &Path) -> Result<(Scene, LoadReport)> {
         )));
     }
     let count = (size / BYTES_PER_SPLAT as u64) as usize;
-    let mut reader = BufReader::with_capacity((1 << 20).min(size as usize), file);
     let mut scene = Scene {
         sh_degree: 0,
         ..Scene::default()

@@ -26,7 +26,7 @@ use std::path::Path;
 
 use glam::{Quat, Vec3};
 
-use super::{flip_axes, push_decoded, read_file_bounded, MAX_INFLATION};
+use super::{flip_axes, push_decoded, MAX_INFLATION};
 use crate::error::{Error, Result};
 use crate::ply::LoadReport;
 use crate::scene::{sh_coeffs, Scene};
@@ -49,7 +49,7 @@ pub const SH1_BITS: u32 = 5;
 /// See [`SH1_BITS`].
 pub const SH_REST_BITS: u32 = 4;
 /// The largest SPZ file rara reads (4 GiB): its counts are u32 and its streams fit in memory.
-const MAX_FILE_BYTES: u64 = 4 << 30;
+pub const MAX_FILE_BYTES: u64 = 4 << 30;
 
 /// How SPZ's stored axes relate to rara's (RDF).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -467,7 +467,7 @@ pub fn decode(bytes: &[u8], path: &Path, axes: SpzAxes) -> Result<(Scene, LoadRe
 
 /// Reads an SPZ file.
 pub fn read_spz(path: &Path, axes: SpzAxes) -> Result<(Scene, LoadReport)> {
-    let bytes = read_file_bounded(path, MAX_FILE_BYTES)?;
+    let bytes = crate::input::read_bounded(path, MAX_FILE_BYTES, "SPZ file")?;
     decode(&bytes, path, axes)
 }
 
