@@ -114,7 +114,7 @@ pub fn read_compressed_ply(path: &Path) -> Result<(Scene, LoadReport)> {
 
 /// Decodes a compressed PLY's bytes (`path` names it in errors).
 pub fn decode(bytes: &[u8], path: &Path) -> Result<(Scene, LoadReport)> {
-    let mut cursor = Cursor::new(&bytes[..]);
+    let mut cursor = Cursor::new(bytes);
     let (header_bytes, header) = crate::ply::read_header(path, &mut cursor)?;
     if header.encoding != Encoding::BinaryLittleEndian {
         return Err(bad(
