@@ -7,7 +7,6 @@
 //! [`super::export::has_octagon`] selects, 8 vertices each (9 with a centre, first). Anything
 //! that does not add up is an error that says what, never a silent mismatch.
 
-use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DMat4, DVec3};
@@ -15,6 +14,8 @@ use glam::{DMat3, DMat4, DVec3};
 use super::export::{has_octagon, Falloff};
 use super::{fit_lsq, fit_redisplats, octagon_radius, FlatFrame, CORNERS};
 use crate::error::{Error, Result};
+use crate::input::gltf::Document;
+use crate::input::InputFile;
 use crate::scene::Scene;
 
 /// How corners become a Gaussian.
@@ -70,27 +71,38 @@ fn mesh_err(path: &Path, message: impl std::fmt::Display) -> Error {
     Error::InvalidInput(format!("mesh {}: {message}", path.display()))
 }
 
+/// The largest mesh file rara reads: 4 GiB (glb's own lengths are 32-bit; an octagon PLY of
+/// 20 million Gaussians takes about 7 GB, which is past what an import holds in memory anyway).
+pub const MAX_MESH_FILE_BYTES: u64 = 4 << 30;
+
+/// The most vertices a glTF's nodes may place, each mesh counted once per node that places it:
+/// 2^27 (134,217,728). Without it a small file that places one large mesh under thousands of
+/// nodes would be decoded thousands of times.
+pub const MAX_PLACED_VERTICES: u64 = 1 << 27;
+
 /// Reads a mesh (.ply, .obj, .glb, or .gltf with its buffers in files beside it or in
-/// base64 data URIs).
+/// base64 data URIs), told by its extension. The file is opened once and read through
+/// [`crate::input`]: a regular file at most [`MAX_MESH_FILE_BYTES`], a pipe or a device through
+/// the stream cap, a glTF buffer only as a regular file beside it and only up to its
+/// `byteLength`.
 pub fn read_mesh(path: &Path) -> Result<MeshData> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if ext.as_deref() == Some("gltf") {
-        return read_glb_mesh(path);
+    let format = if ext.as_deref() == Some("gltf") {
+        super::export::MeshFormat::Glb
+    } else {
+        super::export::MeshFormat::from_path(path)?
+    };
+    let input = InputFile::open(path, "mesh")?;
+    match format {
+        super::export::MeshFormat::Ply => read_ply_mesh(input),
+        super::export::MeshFormat::Obj => read_obj_mesh(input),
+        super::export::MeshFormat::Glb => {
+            let bytes = input.read_all(MAX_MESH_FILE_BYTES, "mesh")?;
+            read_gltf_mesh(&Document::from_bytes(&bytes, path)?, path)
+        }
     }
-    match super::export::MeshFormat::from_path(path)? {
-        super::export::MeshFormat::Ply => read_ply_mesh(path),
-        super::export::MeshFormat::Obj => read_obj_mesh(path),
-        super::export::MeshFormat::Glb => read_glb_mesh(path),
-    }
-}
-
-fn open(path: &Path) -> Result<std::fs::File> {
-    std::fs::File::open(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 /// A PLY vertex as ply-rs hands it over: only what the import needs.
@@ -175,29 +187,56 @@ impl ply_rs::ply::PropertyAccess for PlyFace {
     }
 }
 
-fn read_ply_mesh(path: &Path) -> Result<MeshData> {
-    let file = open(path)?;
-    let size = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
-    let mut reader = BufReader::with_capacity(1 << 20, file);
+/// The fewest bytes a row of `element` takes in `encoding`: each scalar's size (a list's count)
+/// in binary, a character and a separator per property in ascii; and 1 for an element without
+/// properties, whose rows would otherwise cost nothing to declare by the billion.
+fn min_row_bytes(element: &ply_rs::ply::ElementDef, encoding: ply_rs::ply::Encoding) -> u64 {
+    use ply_rs::ply::{Encoding, PropertyType, ScalarType};
+    let size = |t: &ScalarType| match t {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    };
+    element
+        .properties
+        .values()
+        .map(|p| match (&encoding, &p.data_type) {
+            (Encoding::Ascii, _) => 2,
+            (_, PropertyType::Scalar(t)) => size(t),
+            (_, PropertyType::List(count, _)) => size(count),
+        })
+        .sum::<u64>()
+        .max(1)
+}
+
+fn read_ply_mesh(input: InputFile) -> Result<MeshData> {
+    let path = input.path().to_path_buf();
+    let path = path.as_path();
+    let (mut reader, size) = input.into_sized_reader(MAX_MESH_FILE_BYTES, "mesh")?;
+    // The header through the scene reader's bounded header reader (1 MiB at most).
+    let (header_bytes, header) = crate::ply::read_header(path, &mut reader)?;
+    let mut left = size.saturating_sub(header_bytes.len() as u64);
     let vertex_parser = ply_rs::parser::Parser::<PlyVertex>::new();
-    let header = vertex_parser
-        .read_header(&mut reader)
-        .map_err(|e| mesh_err(path, format!("malformed PLY header: {}", first_line(&e))))?;
     let mut mesh = MeshData::default();
     let face_parser = ply_rs::parser::Parser::<PlyFace>::new();
     let mut ids = (Vec::new(), Vec::new(), true, true);
     let (mut normals, mut all_normals) = (Vec::new(), true);
     for (name, element) in &header.elements {
-        // Every row takes at least a byte: a count beyond the file is refused before reading.
-        if element.count as u64 > size {
+        // Every row takes its fewest bytes at least: a count beyond what is left of the file
+        // is refused before reading.
+        let least = (element.count as u64).saturating_mul(min_row_bytes(element, header.encoding));
+        if least > left {
             return Err(mesh_err(
                 path,
                 format!(
-                    "element '{name}' declares {} rows, more than the file's {size} bytes",
+                    "element '{name}' declares {} rows, which take at least {least} bytes, and \
+                     the file has {left} left",
                     element.count
                 ),
             ));
         }
+        left -= least;
         match name.as_str() {
             "vertex" => {
                 let rows = vertex_parser
@@ -250,23 +289,27 @@ fn first_line(e: &dyn std::fmt::Display) -> String {
     e.to_string().lines().next().unwrap_or("").to_string()
 }
 
-fn read_obj_mesh(path: &Path) -> Result<MeshData> {
+fn read_obj_mesh(input: InputFile) -> Result<MeshData> {
+    let path = input.path().to_path_buf();
+    let path = path.as_path();
+    // Points and lines are kept (as faces of one and two vertices) so that the checks that
+    // follow name them: tobj would otherwise drop a two-vertex `f` as a line, silently.
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: false,
-        ignore_points: true,
-        ignore_lines: true,
+        ignore_points: false,
+        ignore_lines: false,
     };
+    let (mut reader, _) = input.into_sized_reader(MAX_MESH_FILE_BYTES, "mesh")?;
     // Materials do not matter here; a missing .mtl must not fail the import.
-    let (models, _) = tobj::load_obj_buf(&mut BufReader::new(open(path)?), &options, |_| {
-        Ok(Default::default())
-    })
-    .map_err(|e| mesh_err(path, format!("OBJ: {e}")))?;
+    let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default()))
+        .map_err(|e| mesh_err(path, format!("OBJ: {e}")))?;
     let mut mesh = MeshData::default();
     let (mut normals, mut all_normals) = (Vec::new(), true);
     for model in models {
         let m = model.mesh;
-        let base = mesh.positions.len() as u32;
+        let base = u32::try_from(mesh.positions.len())
+            .map_err(|_| mesh_err(path, "more than 2^32 vertices"))?;
         // (single_index: a normal per position, where the file gives them.)
         if m.normals.len() == m.positions.len() {
             normals.extend(
@@ -289,13 +332,13 @@ fn read_obj_mesh(path: &Path) -> Result<MeshData> {
             m.face_arities.clone()
         };
         for n in arities {
-            let n = n as usize;
-            let face = m.indices[next..next + n]
-                .iter()
-                .map(|&i| base + i)
-                .collect();
-            mesh.faces.push(face);
-            next += n;
+            let face = next
+                .checked_add(n as usize)
+                .and_then(|end| m.indices.get(next..end))
+                .ok_or_else(|| mesh_err(path, "OBJ: faces past the index list"))?;
+            mesh.faces
+                .push(face.iter().map(|&i| base.saturating_add(i)).collect());
+            next += n as usize;
         }
     }
     if all_normals && !mesh.positions.is_empty() {
@@ -304,152 +347,109 @@ fn read_obj_mesh(path: &Path) -> Result<MeshData> {
     Ok(mesh)
 }
 
-/// The bytes of a glTF buffer at `uri` (a `data:` URI in base64, or a file relative to the
-/// glTF at `path`), which must hold at least `length` bytes.
-fn buffer_from_uri(path: &Path, uri: &str, length: usize) -> Result<Vec<u8>> {
-    use base64::Engine;
-    let bytes = if let Some(rest) = uri.strip_prefix("data:") {
-        let (_, data) = rest
-            .split_once(";base64,")
-            .ok_or_else(|| mesh_err(path, "a data URI that is not base64"))?;
-        base64::engine::general_purpose::STANDARD
-            .decode(data)
-            .map_err(|e| mesh_err(path, format!("a base64 buffer: {e}")))?
+/// Every triangle primitive of the glTF `doc`, placed by its node's world transform. The nodes
+/// walked are the default scene's (else each scene's, else every node that is nobody's child;
+/// a file with meshes and no nodes has its meshes where they are), each once
+/// ([`Document::walk`]); the vertices they place are counted against
+/// [`MAX_PLACED_VERTICES`] before any is read.
+pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
+    use gltf::json::mesh::{Mode, Semantic};
+    use gltf::json::validation::Checked;
+    let mut placed: Vec<(usize, DMat4)> = Vec::new();
+    if doc.root.nodes.is_empty() {
+        placed.extend((0..doc.root.meshes.len()).map(|m| (m, DMat4::IDENTITY)));
     } else {
-        let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-        let mut bytes = Vec::new();
-        open(&file)?
-            .read_to_end(&mut bytes)
-            .map_err(|source| Error::Io { path: file, source })?;
-        bytes
-    };
-    if bytes.len() < length {
-        return Err(mesh_err(
-            path,
-            format!(
-                "buffer '{uri}' holds {} bytes, the file says {length}",
-                bytes.len()
-            ),
-        ));
+        for roots in doc.scene_roots()? {
+            for (index, world) in doc.walk(&roots)? {
+                if let Some(m) = doc.root.nodes[index].mesh {
+                    placed.push((m.value(), world));
+                }
+            }
+        }
     }
-    Ok(bytes)
-}
-
-fn read_glb_mesh(path: &Path) -> Result<MeshData> {
-    let mut bytes = Vec::new();
-    open(path)?
-        .read_to_end(&mut bytes)
-        .map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| mesh_err(path, format!("glTF: {e}")))?;
-    let blob = gltf.blob.as_deref();
-    // A .gltf's buffers: files beside it, or base64 data URIs.
-    let mut external: Vec<Option<Vec<u8>>> = Vec::new();
-    for b in gltf.buffers() {
-        external.push(match b.source() {
-            gltf::buffer::Source::Bin => None,
-            gltf::buffer::Source::Uri(uri) => Some(buffer_from_uri(path, uri, b.length())?),
-        });
+    let mut total: u64 = 0;
+    for &(m, _) in &placed {
+        let mesh = doc
+            .root
+            .meshes
+            .get(m)
+            .ok_or_else(|| mesh_err(path, format!("a node names a missing mesh {m}")))?;
+        for primitive in &mesh.primitives {
+            if let Some(a) = primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions))
+            {
+                total = total.saturating_add(doc.count(a.value())? as u64);
+            }
+        }
     }
-    let buffer_data = |b: gltf::Buffer| match b.source() {
-        gltf::buffer::Source::Bin => blob,
-        gltf::buffer::Source::Uri(_) => external[b.index()].as_deref(),
-    };
+    check_placed_vertices(total, MAX_PLACED_VERTICES, path)?;
     let mut mesh = MeshData::default();
     let mut all_ids = true;
     let (mut normals, mut all_normals) = (Vec::new(), true);
     let (mut primitive_ids, mut corner_ids) = (Vec::new(), Vec::new());
-    // Every mesh where the scene places it: a glb another tool wrote (Blender's exporter
-    // among them) may put its mesh under a node transform. A file without scenes is read
-    // with its meshes where they are.
-    let mut placed: Vec<(gltf::Mesh, DMat4)> = Vec::new();
-    let scenes: Vec<_> = gltf.scenes().collect();
-    if scenes.is_empty() {
-        placed.extend(gltf.meshes().map(|m| (m, DMat4::IDENTITY)));
-    } else {
-        let mut stack: Vec<(gltf::Node, DMat4)> = scenes
-            .iter()
-            .flat_map(|s| s.nodes())
-            .map(|n| (n, DMat4::IDENTITY))
-            .collect();
-        while let Some((node, parent)) = stack.pop() {
-            let local =
-                DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
-            let world = parent * local;
-            if let Some(m) = node.mesh() {
-                placed.push((m, world));
-            }
-            stack.extend(node.children().map(|c| (c, world)));
-        }
-    }
     for (m, world) in placed {
-        for primitive in m.primitives() {
-            if primitive.mode() != gltf::mesh::Mode::Triangles {
+        for primitive in &doc.root.meshes[m].primitives {
+            if primitive.mode != Checked::Valid(Mode::Triangles) {
                 return Err(mesh_err(path, "a primitive that is not triangles"));
             }
-            let reader = primitive.reader(buffer_data);
-            let base = mesh.positions.len() as u32;
-            let positions = reader.read_positions().ok_or_else(|| {
-                mesh_err(path, "a primitive without POSITION (or external buffer)")
-            })?;
-            mesh.positions.extend(positions.map(|p| {
+            let attribute = |s: Semantic| {
+                primitive
+                    .attributes
+                    .get(&Checked::Valid(s))
+                    .map(|a| a.value())
+            };
+            let position = attribute(Semantic::Positions)
+                .ok_or_else(|| mesh_err(path, "a primitive without POSITION"))?;
+            let base = u32::try_from(mesh.positions.len())
+                .map_err(|_| mesh_err(path, "more than 2^32 vertices"))?;
+            let positions = doc.floats(position, 3)?;
+            mesh.positions.extend(positions.chunks_exact(3).map(|p| {
                 world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
             }));
-            let count = mesh.positions.len() - base as usize;
+            let count = positions.len() / 3;
             // Normals turn with the inverse transpose of the node's matrix.
-            let normal_matrix = glam::DMat3::from_mat4(world).inverse().transpose();
-            match reader.read_normals() {
-                Some(n) => {
-                    let before = normals.len();
-                    normals.extend(n.map(|n| {
+            let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
+            match attribute(Semantic::Normals) {
+                Some(a) => {
+                    let n = doc.floats(a, 3)?;
+                    all_normals &= n.len() / 3 == count;
+                    normals.extend(n.chunks_exact(3).map(|n| {
                         normal_matrix * DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64)
                     }));
-                    all_normals &= normals.len() - before == count;
                 }
                 None => all_normals = false,
             }
-            let read_ids = |name: &str, out: &mut Vec<u32>| -> bool {
-                let semantic = gltf::Semantic::Extras(name.to_string());
-                let Some(accessor) = primitive.get(&semantic) else {
-                    return false;
+            let read_ids = |name: &str, out: &mut Vec<u32>| -> Result<bool> {
+                let Some(a) = attribute(Semantic::Extras(name.to_string())) else {
+                    return Ok(false);
                 };
-                // rara writes floats (glTF has no plain integer attributes); another tool may
-                // write unsigned integers. Anything else is no id.
-                use gltf::accessor::{DataType, Dimensions, Iter};
-                if accessor.dimensions() != Dimensions::Scalar {
-                    return false;
-                }
-                let id = |v: f64| {
-                    if v >= 0.0 && v.fract() == 0.0 && v < u32::MAX as f64 {
-                        v as u32
-                    } else {
-                        u32::MAX
+                Ok(match doc.ids(a)? {
+                    Some(ids) if ids.len() == count => {
+                        out.extend(ids);
+                        true
                     }
-                };
-                let before = out.len();
-                let read = match accessor.data_type() {
-                    DataType::F32 => Iter::<f32>::new(accessor, buffer_data)
-                        .map(|it| out.extend(it.map(|v| id(v as f64)))),
-                    DataType::U32 => {
-                        Iter::<u32>::new(accessor, buffer_data).map(|it| out.extend(it))
-                    }
-                    DataType::U16 => Iter::<u16>::new(accessor, buffer_data)
-                        .map(|it| out.extend(it.map(u32::from))),
-                    DataType::U8 => Iter::<u8>::new(accessor, buffer_data)
-                        .map(|it| out.extend(it.map(u32::from))),
-                    _ => None,
-                };
-                read.is_some() && out.len() - before == count
+                    _ => false,
+                })
             };
-            all_ids &= read_ids("PRIMITIVE_ID", &mut primitive_ids);
-            all_ids &= read_ids("CORNER_ID", &mut corner_ids);
-            match reader.read_indices() {
-                Some(indices) => {
-                    let idx: Vec<u32> = indices.into_u32().collect();
-                    mesh.faces
-                        .extend(idx.chunks(3).map(|t| t.iter().map(|&i| base + i).collect()));
+            all_ids &= read_ids("PRIMITIVE_ID", &mut primitive_ids)?;
+            all_ids &= read_ids("CORNER_ID", &mut corner_ids)?;
+            match primitive.indices {
+                Some(a) => {
+                    let idx = doc.indices(a.value())?;
+                    if idx.len() % 3 != 0 {
+                        return Err(mesh_err(
+                            path,
+                            format!(
+                                "a triangle primitive with {} indices, not a multiple of 3",
+                                idx.len()
+                            ),
+                        ));
+                    }
+                    mesh.faces.extend(
+                        idx.chunks_exact(3)
+                            .map(|t| t.iter().map(|&i| base.saturating_add(i)).collect()),
+                    );
                 }
                 None => mesh.faces.extend(
                     (0..count as u32 / 3).map(|t| (0..3).map(|k| base + 3 * t + k).collect()),
@@ -465,6 +465,20 @@ fn read_glb_mesh(path: &Path) -> Result<MeshData> {
         mesh.normals = Some(normals);
     }
     Ok(mesh)
+}
+
+/// The vertices a glTF's nodes place in all, against the most a mesh may have.
+fn check_placed_vertices(total: u64, most: u64, path: &Path) -> Result<()> {
+    if total > most {
+        return Err(mesh_err(
+            path,
+            format!(
+                "its nodes place {total} vertices in all (each mesh counted once per node that \
+                 places it), more than the {most} rara reads"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// What an import did.
