@@ -234,7 +234,7 @@ fn decompress(path: &Path, bytes: &[u8]) -> Result<Blocks> {
         "SH",
     ];
     if bytes.starts_with(&[0x1f, 0x8b]) {
-        let mut gz = flate2::read::GzDecoder::new(bytes);
+        let mut gz = flate2::bufread::GzDecoder::new(bytes);
         let mut head = [0u8; 16];
         gz.read_exact(&mut head).map_err(|e| {
             bad(
@@ -253,8 +253,36 @@ fn decompress(path: &Path, bytes: &[u8]) -> Result<Blocks> {
             ));
         }
         let sizes = header.block_sizes();
-        // The reference writes extension records after the blocks; they are not read here.
-        let all = read_exactly(path, "gzip stream", gz, sizes.iter().sum(), true)?;
+        let all = read_exactly(path, "gzip stream", &mut gz, sizes.iter().sum(), true)?;
+        // The stream is read to its end, so that gzip's trailer (the CRC-32 and the length of
+        // what it holds) is checked: a cut or corrupt stream is refused, as the reference's
+        // zlib refuses it. Past the blocks come extension records when the header's flag says
+        // so (skipped, and bounded like the blocks); without it, nothing may: a header count
+        // short of the payload would otherwise read every block misaligned.
+        let limit = (bytes.len() as u64).saturating_mul(MAX_INFLATION);
+        let extra = std::io::copy(&mut (&mut gz).take(limit), &mut std::io::sink())
+            .map_err(|e| bad(path, format!("gzip stream: {e} (cut or corrupt)")))?;
+        if extra >= limit {
+            return Err(bad(
+                path,
+                format!("the gzip stream inflates past {limit} bytes: a decompression bomb"),
+            ));
+        }
+        if extra > 0 && !header.has_extensions {
+            return Err(bad(
+                path,
+                format!(
+                    "the gzip stream holds {extra} bytes more than the {} that {} Gaussians take, \
+                     and the header announces no extension records (is its count right?)",
+                    sizes.iter().sum::<u64>(),
+                    header.count
+                ),
+            ));
+        }
+        let after = gz.into_inner().len();
+        if after > 0 {
+            return Err(bad(path, format!("{after} bytes follow the gzip stream")));
+        }
         let mut blocks: [Vec<u8>; 6] = Default::default();
         let mut at = 0usize;
         for (block, size) in blocks.iter_mut().zip(sizes) {
