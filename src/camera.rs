@@ -234,6 +234,14 @@ impl Camera {
     /// Writes cameras as an INRIA `cameras.json` array.
     pub fn save_all(cameras: &[Camera], path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
+        std::fs::write(path, Camera::to_json_text(cameras)).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// Cameras as the text of an INRIA `cameras.json` array ([`Camera::save_all`]).
+    pub fn to_json_text(cameras: &[Camera]) -> String {
         let list: Vec<serde_json::Value> = cameras
             .iter()
             .enumerate()
@@ -247,11 +255,7 @@ impl Camera {
                 })
             })
             .collect();
-        let text = serde_json::to_string_pretty(&list).expect("cameras serialise");
-        std::fs::write(path, text).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        serde_json::to_string_pretty(&list).expect("cameras serialise")
     }
 }
 

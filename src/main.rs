@@ -11,7 +11,7 @@ use rara::{Camera, Context, Error, RenderOptions, Renderer, Result, Scene};
 
 mod cli;
 use cli::clip_args::{describe, ClipArgs};
-use cli::output::Output;
+use cli::output::{Output, Outputs};
 
 /// Renders 3D Gaussian Splatting scenes on Vulkan compute (lavapipe or a GPU).
 #[derive(Parser)]
@@ -349,16 +349,6 @@ fn stream_scene(
     Ok(scene)
 }
 
-pub fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        cli::output::create_dir(dir)?;
-    }
-    img.save(path).map_err(|source| Error::Image {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
 /// Prints each pass's median milliseconds, a line per pass, the names padded to the longest
 /// so that the times line up (`render --repeat`).
 pub fn print_pass_medians(passes: Vec<(&str, Vec<f64>)>) {
@@ -531,7 +521,22 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             rara::reference::project::count_oversized(scene, &camera, &options.clip),
             scene.len(),
         );
-        output.write_png(&img)?;
+        // The image and its depth land together or not at all.
+        let mut set = Outputs::new();
+        set.add_png(output, &img)?;
+        let depth_line = match depth_output {
+            Some(out) => {
+                let depths = if depth_mode == rara::DepthMode::Median {
+                    median
+                } else {
+                    mean
+                };
+                let size = (camera.width, camera.height);
+                Some(cli::depth::stage(&mut set, out, &depths, size, depth_mode)?)
+            }
+            None => None,
+        };
+        set.commit()?;
         println!(
             "wrote {} ({}x{}, CPU reference, {:.0} ms)",
             args.output.display(),
@@ -539,14 +544,8 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             camera.height,
             start.elapsed().as_secs_f64() * 1e3
         );
-        if let Some(out) = depth_output {
-            let depths = if depth_mode == rara::DepthMode::Median {
-                median
-            } else {
-                mean
-            };
-            let size = (camera.width, camera.height);
-            println!("{}", cli::depth::write(out, &depths, size, depth_mode)?);
+        if let Some(line) = depth_line {
+            println!("{line}");
         }
         return Ok(());
     }
@@ -583,14 +582,17 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     };
     spinner.finish_and_clear();
     let (img, depths, stats) = rendered?;
-    output.write_png(&img)?;
+    // The image and its depth land together or not at all.
+    let mut set = Outputs::new();
+    set.add_png(output, &img)?;
     let depth_line = match (depth_output, depths) {
         (Some(out), Some(depths)) => {
             let size = (camera.width, camera.height);
-            Some(cli::depth::write(out, &depths, size, depth_mode)?)
+            Some(cli::depth::stage(&mut set, out, &depths, size, depth_mode)?)
         }
         _ => None,
     };
+    set.commit()?;
     if let Some(t) = &stats.trace {
         println!(
             "wrote {} ({}x{}) on {}: ray traced, per ray {:.1} hits composited (p99 {}), {:.1} \
@@ -835,15 +837,29 @@ fn cmd_synth(
         SynthKindArg::Solid => SynthKind::Solid,
     };
     let scene = rara::synth::generate(kind, count, sh_degree, seed);
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        cli::output::create_dir(dir)?;
-    }
-    rara::ply::write_ply(&scene, output, rara::ply::PlyEncoding::BinaryLittleEndian)?;
     let (lo, hi) = scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
     let radius = lo.abs().max(hi.abs()).length().max(1e-3);
     let cameras = rara::synth::orbit_cameras(8, 2.4 * radius, 640, 480, 50.0)?;
     let cams_path = output.with_extension("cameras.json");
-    Camera::save_all(&cameras, &cams_path)?;
+    // The scene and its cameras land together (in a folder made for them, when missing).
+    let mut set = Outputs::new();
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        set.create_dir(dir)?;
+    }
+    set.add_with(Output::prepare_any(output)?, |w| {
+        rara::ply::write_ply_to(
+            &scene,
+            w,
+            rara::ply::PlyEncoding::BinaryLittleEndian,
+            rara::ply::PlyLayout::Inria,
+            output,
+        )
+    })?;
+    set.add(
+        Output::prepare_any(&cams_path)?,
+        Camera::to_json_text(&cameras).as_bytes(),
+    )?;
+    set.commit()?;
     println!(
         "wrote {} ({} Gaussians, SH degree {sh_degree}) and {} (8 orbit views)",
         output.display(),

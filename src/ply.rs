@@ -1090,6 +1090,36 @@ pub fn write_ply_layout(
         source,
     };
     let mut w = BufWriter::new(File::create(path).map_err(io)?);
+    write_ply_to(scene, &mut w, encoding, layout, path)?;
+    w.flush().map_err(io)
+}
+
+/// Writes `scene` as [`write_ply_layout`] does, to `w` (`path` names it in errors; a file, a
+/// buffer or a staged output).
+pub fn write_ply_to(
+    scene: &Scene,
+    w: &mut dyn Write,
+    encoding: PlyEncoding,
+    layout: PlyLayout,
+    path: &Path,
+) -> Result<()> {
+    if layout == PlyLayout::Games {
+        if let Some(i) =
+            (0..scene.len()).find(|&i| crate::scene::flat_axis(scene.scales[i]).is_none())
+        {
+            return Err(ply_err(
+                path,
+                format!(
+                    "the GaMeS layout holds flat Gaussians only, and Gaussian {i} has three \
+                     nonzero scales (flatten the scene first)"
+                ),
+            ));
+        }
+    }
+    let io = |source| Error::Io {
+        path: PathBuf::from(path),
+        source,
+    };
     let per_channel = scene.sh_coeffs_per_channel();
     let rest = (per_channel - 1) * 3;
     let mut names: Vec<String> = [
@@ -1161,5 +1191,5 @@ pub fn write_ply_layout(
             }
         }
     }
-    w.flush().map_err(io)
+    Ok(())
 }

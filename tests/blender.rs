@@ -62,7 +62,7 @@ fn export(scene: &Scene, path: &Path, falloff: Falloff) {
         ..ExportOptions::default()
     };
     let format = MeshFormat::from_path(path).unwrap();
-    export_mesh(scene, path, path, format, &options, &mut |_, _| {}).unwrap();
+    export_mesh(scene, path, format, &options, &mut |_, _| {}).unwrap();
 }
 
 /// Blender's Simple Deform BEND about Z (MOD_simpledeform.cc): over the whole mesh (limits 0

@@ -122,7 +122,7 @@ fn export(s: &Scene, path: &Path, falloff: Falloff) -> rara::mesh::export::Expor
         ..ExportOptions::default()
     };
     let format = MeshFormat::from_path(path).unwrap();
-    export_mesh(s, path, path, format, &options, &mut |_, _| {}).unwrap()
+    export_mesh(s, path, format, &options, &mut |_, _| {}).unwrap()
 }
 
 fn import(s: &Scene, path: &Path, options: &ImportOptions) -> rara::Result<Scene> {
@@ -437,7 +437,7 @@ fn min_opacity_selects_the_octagons() {
         min_opacity: 0.5,
         ..ExportOptions::default()
     };
-    let report = export_mesh(&s, &path, &path, MeshFormat::Obj, &options, &mut |_, _| {}).unwrap();
+    let report = export_mesh(&s, &path, MeshFormat::Obj, &options, &mut |_, _| {}).unwrap();
     let above = s.opacities.iter().filter(|&&o| o >= 0.5).count();
     assert_eq!(report.octagons, above);
     assert_eq!(report.below_min_opacity, s.len() - above);

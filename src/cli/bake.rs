@@ -9,6 +9,7 @@ use rara::bake::{bake, BakeOpacity};
 use rara::{ClipMode, Error, Result};
 
 use super::clip_args::ClipArgs;
+use super::output::{Output, Outputs};
 use crate::load_scene;
 
 /// `--opacity`.
@@ -37,7 +38,7 @@ pub struct BakeArgs {
     #[arg(long, value_name = "CAMERAS.json")]
     pub views: Option<PathBuf>,
     /// Width of the --views renders.
-    #[arg(long, default_value_t = 320)]
+    #[arg(long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=i64::from(rara::camera::MAX_IMAGE_SIDE)))]
     pub width: u32,
     /// The clip: rara (the default) reshapes the Gaussians it cuts; --clip-mode hard removes
     /// those whose centre is hidden, as centre filters (splat-transform's --filter-box) do.
@@ -54,7 +55,14 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         ));
     }
     let target = super::convert::target_for(&args.output, None)?;
-    let output = super::output::Output::prepare(&args.output, &["ply", "spz", "glb", "splat"])?;
+    // The views' cameras are read and sized before anything is written: a bad camera file or
+    // width fails here, not after the baked scene is on disk.
+    let views = args
+        .views
+        .as_deref()
+        .map(|v| view_cameras(v, args.width))
+        .transpose()?;
+    let output = Output::prepare(&args.output, &["ply", "spz", "glb", "splat"])?;
     let scene = load_scene(&args.scene)?;
     eprintln!("{}", crate::describe(&clip));
     let start = std::time::Instant::now();
@@ -67,9 +75,14 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     let bake_ms = start.elapsed().as_secs_f64() * 1e3;
-    output.write_with(|path| super::convert::write(&baked, path, target, 4))?;
+    // Committed once the views (when asked for) are done: the command's output is whole or
+    // absent.
+    let mut set = Outputs::new();
+    set.add_with(output, |w| {
+        super::convert::write(&baked, w, &args.output, target, 4)
+    })?;
     println!(
-        "baked {} of {} Gaussians into {}: {} dropped, {} kept, {} reshaped ({:.0} ms)",
+        "baked {} of {} Gaussians for {}: {} dropped, {} kept, {} reshaped ({:.0} ms)",
         baked.len(),
         scene.len(),
         args.output.display(),
@@ -78,22 +91,34 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         report.reshaped,
         bake_ms
     );
-    if let Some(views) = &args.views {
-        compare_views(&scene, &baked, &clip, views, args.width)?;
+    if let Some(cameras) = &views {
+        compare_views(&scene, &baked, &clip, cameras)?;
     }
+    set.commit()?;
+    println!("wrote {}", args.output.display());
     Ok(())
 }
 
+/// The cameras of `path`, each resized to `width` (height keeping its aspect ratio).
+pub fn view_cameras(path: &std::path::Path, width: u32) -> Result<Vec<rara::Camera>> {
+    let cameras = rara::Camera::load_all(path)?;
+    if cameras.is_empty() {
+        return Err(Error::InvalidInput(format!(
+            "{}: no cameras to render the views from",
+            path.display()
+        )));
+    }
+    cameras.iter().map(|c| c.resized(width, None)).collect()
+}
+
 /// Prints the PSNR of `baked` rendered unclipped against `scene` rendered under `clip` in rara
-/// mode, per camera of `views` (at `width`), and the mean.
+/// mode, from each of `cameras`, and the mean.
 fn compare_views(
     scene: &rara::Scene,
     baked: &rara::Scene,
     clip: &rara::Clip,
-    views: &std::path::Path,
-    width: u32,
+    cameras: &[rara::Camera],
 ) -> Result<()> {
-    let cameras = rara::Camera::load_all(views)?;
     let ctx = rara::Context::from_env()?;
     let mut renderer = rara::Renderer::new(&ctx)?;
     let (original, cut) = (renderer.upload(scene)?, renderer.upload(baked)?);
@@ -105,9 +130,8 @@ fn compare_views(
     };
     let mut psnrs = Vec::new();
     for (k, camera) in cameras.iter().enumerate() {
-        let camera = camera.resized(width, None)?;
-        let (want, _) = renderer.render(&original, &camera, &clipped)?;
-        let (got, _) = renderer.render(&cut, &camera, &rara::RenderOptions::default())?;
+        let (want, _) = renderer.render(&original, camera, &clipped)?;
+        let (got, _) = renderer.render(&cut, camera, &rara::RenderOptions::default())?;
         let d = rara::metrics::compare(&got, &want);
         // Identical images have no PSNR (infinite): counted as 100 dB in the mean.
         let psnr = if d.psnr.is_finite() { d.psnr } else { 100.0 };

@@ -345,18 +345,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     print_table(&ctx, path, &camera, args, &results);
     let memory = renderer.headless_memory();
     println!("{}", super::describe_memory(&gpu_scene, &memory));
+    // The report and the trace land together.
+    let mut set = super::output::Outputs::new();
+    let mut wrote = Vec::new();
     if let Some(out) = json_out {
         let mut report = json_report(&ctx, path, &camera, &results);
         report["samples"] = args.samples.into();
         report["memory"] = super::memory_json(&gpu_scene, &memory);
-        let shown = out.path().display().to_string();
-        out.write_json(&report)?;
-        println!("wrote {shown}");
+        wrote.push(format!("wrote {}", out.path().display()));
+        set.add_json(out, &report)?;
     }
     if let Some(out) = trace_out {
-        let shown = out.path().display().to_string();
-        out.write_json(&trace(&results))?;
-        println!("wrote {shown} (open in https://ui.perfetto.dev)");
+        wrote.push(format!(
+            "wrote {} (open in https://ui.perfetto.dev)",
+            out.path().display()
+        ));
+        set.add_json(out, &trace(&results))?;
+    }
+    set.commit()?;
+    for line in wrote {
+        println!("{line}");
     }
     Ok(())
 }

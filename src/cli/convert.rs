@@ -1,13 +1,15 @@
 //! `rara convert`: a scene from any readable format to PLY, SPZ, glTF (`.glb`) or `.splat`,
 //! with a warning for what the target drops.
 
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 
 use rara::formats::spz::{SpzAxes, SpzVersion};
 use rara::{Error, Result};
 
+use super::output::{Output, Outputs};
 use crate::load_scene;
 
 /// The formats `convert` writes.
@@ -111,48 +113,76 @@ pub fn losses(scene: &rara::Scene, target: Target, version: u32) -> Vec<String> 
     out
 }
 
-/// Writes `scene` to `output` as `target` (SPZ of `spz_version`, in the axes `--spz-axes`
-/// names).
+/// Writes `scene` to `w` as `target` (SPZ of `spz_version`, in the axes `--spz-axes` names);
+/// `path` names the file in errors.
 pub fn write(
     scene: &rara::Scene,
-    output: &std::path::Path,
+    w: &mut dyn Write,
+    path: &Path,
     target: Target,
     spz_version: u32,
 ) -> Result<()> {
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     match target {
-        Target::Ply => {
-            rara::ply::write_ply(scene, output, rara::ply::PlyEncoding::BinaryLittleEndian)
-        }
-        Target::Spz => rara::formats::spz::write_spz(
+        Target::Ply => rara::ply::write_ply_to(
             scene,
-            output,
-            if spz_version == 3 {
+            w,
+            rara::ply::PlyEncoding::BinaryLittleEndian,
+            rara::ply::PlyLayout::Inria,
+            path,
+        ),
+        Target::Spz => {
+            let version = if spz_version == 3 {
                 SpzVersion::V3
             } else {
                 SpzVersion::V4
-            },
-            crate::spz_axes(),
-        ),
-        Target::Glb => rara::formats::gltf::write_glb(scene, output),
-        Target::Splat => rara::formats::splat::write_splat(scene, output),
+            };
+            let bytes = rara::formats::spz::encode(scene, version, crate::spz_axes())?;
+            w.write_all(&bytes).map_err(io)
+        }
+        Target::Glb => w
+            .write_all(&rara::formats::gltf::encode_glb(scene)?)
+            .map_err(io),
+        Target::Splat => rara::formats::splat::write_splat_to(scene, w, path),
     }
 }
 
 /// Runs `rara convert`.
 pub fn run(args: &ConvertArgs) -> Result<()> {
     let target = target_of(args)?;
+    // The output is checked (and its folder made) before the scene is read; a failure at any
+    // point after leaves neither the file nor the folder.
+    let mut set = Outputs::new();
+    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        set.create_dir(dir)?;
+    }
+    let output = match args.to {
+        Some(_) => Output::prepare_any(&args.output)?,
+        None => Output::prepare(&args.output, &["ply", "spz", "glb", "splat"])?,
+    };
     let scene = load_scene(&args.input)?;
     for warning in losses(&scene, target, args.spz_version) {
         eprintln!("warning: {warning}");
     }
-    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        crate::cli::output::create_dir(dir)?;
-    }
     let start = std::time::Instant::now();
-    write(&scene, &args.output, target, args.spz_version)?;
-    let bytes = std::fs::metadata(&args.output)
-        .map(|m| m.len())
-        .unwrap_or(0);
+    let counted = std::cell::Cell::new(0u64);
+    set.add_with(output, |w| {
+        let mut counting = Counting {
+            inner: w,
+            bytes: &counted,
+        };
+        write(
+            &scene,
+            &mut counting,
+            &args.output,
+            target,
+            args.spz_version,
+        )
+    })?;
+    set.commit()?;
     eprintln!(
         "wrote {} ({:?}{}, {} Gaussians, {} bytes, {:.0} ms)",
         args.output.display(),
@@ -170,8 +200,26 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
             String::new()
         },
         scene.len(),
-        bytes,
+        counted.get(),
         start.elapsed().as_secs_f64() * 1e3
     );
     Ok(())
+}
+
+/// A writer that counts what passes through it (the size `convert` reports, which a device
+/// target has no metadata for).
+struct Counting<'a> {
+    inner: &'a mut dyn Write,
+    bytes: &'a std::cell::Cell<u64>,
+}
+
+impl Write for Counting<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.bytes.set(self.bytes.get() + n as u64);
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
 }

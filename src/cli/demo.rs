@@ -10,8 +10,8 @@ use glam::{Quat, Vec3};
 use rara::clip::{Clip, ClipMode, ClipRegion, Plane};
 use rara::{Camera, Context, RenderOptions, Renderer, Result};
 
+use super::output::{Output, Outputs};
 use super::sweep::{concat_horizontally, GifWriter, Sweep};
-use crate::save_png;
 
 /// Gaussians of the demo scene: few enough that single splats show at the cut, so that hard
 /// clipping's ragged faces are visible.
@@ -46,7 +46,9 @@ pub fn demo_cut() -> Result<ClipRegion> {
 /// Runs the demo into `dir`.
 pub fn run(dir: &Path) -> Result<()> {
     let start = std::time::Instant::now();
-    super::output::create_dir(dir)?;
+    // Both files land together when the demo is done, or nothing does.
+    let mut set = Outputs::new();
+    set.create_dir(dir)?;
     let scene = rara::synth::solid(DEMO_GAUSSIANS, 1, 7);
     let camera = demo_camera()?;
     let ctx = Context::from_env()?;
@@ -76,7 +78,10 @@ pub fn run(dir: &Path) -> Result<()> {
         panels.push(img);
     }
     let comparison = dir.join("demo_cutaway.png");
-    save_png(&concat_horizontally(&panels), &comparison)?;
+    set.add_png(
+        Output::prepare(&comparison, &["png"])?,
+        &concat_horizontally(&panels),
+    )?;
 
     // 2. A plane sweeping through the scene along the view, the far side kept: the camera
     //    looks at the cut face all along, hard | rara.
@@ -93,7 +98,8 @@ pub fn run(dir: &Path) -> Result<()> {
         })
         .collect::<Result<_>>()?;
     let sweep = dir.join("demo_sweep.gif");
-    let mut gif = GifWriter::create(&sweep, 120)?;
+    let mut gif_file = Output::prepare(&sweep, &["gif"])?.begin()?;
+    let mut gif = GifWriter::new(&mut gif_file, &sweep, 120)?;
     let plan = Sweep {
         camera: &camera,
         configs: &configs,
@@ -113,6 +119,8 @@ pub fn run(dir: &Path) -> Result<()> {
         gif.add(frame)
     })?;
     drop(gif);
+    set.add_written(gif_file)?;
+    set.commit()?;
     // p99.9 of the sweep's frame-to-frame change, hard then rara (8-bit units).
     let (hard_p999, rara_p999) = (series[0].change_summary().1, series[1].change_summary().1);
 

@@ -9,7 +9,7 @@ use clap::ValueEnum;
 use rara::depth::DepthMode;
 use rara::{Error, Result};
 
-use super::output::Output;
+use super::output::{Output, Outputs};
 
 /// `--depth-mode`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -64,9 +64,10 @@ pub fn prepare(path: &Path) -> Result<Output> {
     Output::prepare(path, &["exr", "png"])
 }
 
-/// Writes `depths` (`width` x `height`, rows top first) to `output` and returns the line that
-/// says what it holds.
-pub fn write(
+/// Stages `depths` (`width` x `height`, rows top first) as `output` in `set` (committed with
+/// the image it belongs to) and returns the line that says what it holds.
+pub fn stage(
+    set: &mut Outputs,
     output: Output,
     depths: &[f32],
     (width, height): (u32, u32),
@@ -118,6 +119,6 @@ pub fn write(
             path.display()
         )
     };
-    output.write(&bytes)?;
+    set.add(output, &bytes)?;
     Ok(line)
 }

@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use rara::ply::{write_ply_layout, PlyEncoding, PlyLayout};
+use rara::ply::{write_ply_to, PlyEncoding, PlyLayout};
 use rara::{Camera, Context, RenderOptions, Renderer, Result, Scene};
 
-use super::output::Output;
+use super::output::{Output, Outputs};
 
 /// `rara flatten`.
 #[derive(Args)]
@@ -31,7 +31,7 @@ pub struct FlattenArgs {
     #[arg(long, default_value_t = 8)]
     pub views: usize,
     /// Width of the PSNR renders (the height keeps each camera's aspect ratio).
-    #[arg(long, default_value_t = 320)]
+    #[arg(long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=i64::from(rara::camera::MAX_IMAGE_SIDE)))]
     pub width: u32,
 }
 
@@ -116,6 +116,22 @@ pub fn psnr_per_camera(a: &Scene, b: &Scene, cameras: &[Camera]) -> Result<Vec<f
 
 /// Runs `rara flatten`.
 pub fn run(args: &FlattenArgs) -> Result<()> {
+    // The cameras are read and sized before anything is written: a bad camera file fails here,
+    // not after the flat scene is on disk.
+    let camera_file = args.cameras.clone().or_else(|| cameras_beside(&args.scene));
+    let given = match &camera_file {
+        Some(path) => {
+            let cameras = Camera::load_all(path)?;
+            if cameras.is_empty() {
+                return Err(rara::Error::InvalidInput(format!(
+                    "{}: no cameras to measure the PSNR from",
+                    path.display()
+                )));
+            }
+            Some((pick_cameras(cameras, args.views, args.width)?, path))
+        }
+        None => None,
+    };
     let output = Output::prepare(&args.output, &["ply"])?;
     let scene = crate::load_scene(&args.scene)?;
     let already = scene.flat_count();
@@ -126,25 +142,35 @@ pub fn run(args: &FlattenArgs) -> Result<()> {
         scene.len()
     );
     let layout = PlyLayout::from(args.layout);
-    output.write_with(|path| {
-        write_ply_layout(&flat, path, PlyEncoding::BinaryLittleEndian, layout)
+    let mut set = Outputs::new();
+    set.add_with(output, |w| {
+        write_ply_to(
+            &flat,
+            w,
+            PlyEncoding::BinaryLittleEndian,
+            layout,
+            &args.output,
+        )
     })?;
     let layout_name = match args.layout {
         LayoutArg::Inria => "INRIA layout",
         LayoutArg::Games => "GaMeS layout, normal along local x",
     };
-    println!("wrote {} ({layout_name})", args.output.display());
-
-    let camera_file = args.cameras.clone().or_else(|| cameras_beside(&args.scene));
-    let (cameras, source) = match &camera_file {
-        Some(path) => (Camera::load_all(path)?, path.display().to_string()),
+    let (cameras, source) = match given {
+        Some((cameras, path)) => (cameras, path.display().to_string()),
         None => (
-            orbit_around(&scene, args.views.max(1), args.width)?,
+            pick_cameras(
+                orbit_around(&scene, args.views.max(1), args.width)?,
+                args.views,
+                args.width,
+            )?,
             "an orbit around the scene".to_string(),
         ),
     };
-    let cameras = pick_cameras(cameras, args.views, args.width)?;
     let mut psnr = psnr_per_camera(&scene, &flat, &cameras)?;
+    // The flat scene lands once its PSNR is measured: the command's output is whole or absent.
+    set.commit()?;
+    println!("wrote {} ({layout_name})", args.output.display());
     for (k, p) in psnr.iter().enumerate() {
         println!("  view {k}: PSNR {p:.2} dB");
     }

@@ -8,14 +8,14 @@ use clap::{Args, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rara::mesh::export::{
-    export_mesh, ExportOptions, Falloff, GaussianSource, MeshFormat, PlySource,
+    export_mesh_to, ExportOptions, Falloff, GaussianSource, MeshFormat, PlySource,
 };
 use rara::mesh::import::{frame_files, import_mesh, read_mesh, Fit, ImportOptions};
-use rara::ply::{write_ply_layout, PlyEncoding};
+use rara::ply::{write_ply_to, PlyEncoding};
 use rara::{Context, Error, RenderOptions, Renderer, Result};
 
 use super::flatten::LayoutArg;
-use super::output::Output;
+use super::output::{Output, Outputs};
 use super::sweep::GifWriter;
 
 /// `rara mesh`.
@@ -132,6 +132,13 @@ pub fn run(args: &MeshArgs) -> Result<()> {
 fn run_export(args: &ExportArgs) -> Result<()> {
     let format = MeshFormat::from_path(&args.output)?;
     let output = Output::prepare(&args.output, &MeshFormat::EXTENSIONS)?;
+    let mtl_output = match format {
+        MeshFormat::Obj => Some(Output::prepare(
+            &args.output.with_extension("mtl"),
+            &["mtl"],
+        )?),
+        _ => None,
+    };
     let options = ExportOptions {
         q: args.q,
         falloff: match args.falloff {
@@ -147,14 +154,30 @@ fn run_export(args: &ExportArgs) -> Result<()> {
             args.output.display()
         );
     }
-    let source = PlySource::open(&args.scene)?;
+    // A PLY file is read twice, chunk by chunk (memory: one chunk, whatever the scene's
+    // size); any other format, or a scene from a pipe, is loaded once, whole.
+    let streamed = args.scene.is_file()
+        && matches!(
+            rara::formats::detect(&args.scene),
+            Ok(rara::formats::SceneFormat::Ply)
+        );
+    let (ply_source, loaded);
+    let source: &dyn GaussianSource = if streamed {
+        ply_source = PlySource::open(&args.scene)?;
+        &ply_source
+    } else {
+        loaded = crate::load_scene(&args.scene)?;
+        &loaded
+    };
     let start = Instant::now();
     let progress = bar(2 * source.len_hint() as u64, "export (count, then write)");
     let mut report = None;
-    output.write_with(|path| {
-        report = Some(export_mesh(
-            &source,
-            path,
+    let mut mtl = None;
+    let mut set = Outputs::new();
+    set.add_with(output, |w| {
+        let (r, m) = export_mesh_to(
+            source,
+            w,
             &args.output,
             format,
             &options,
@@ -162,9 +185,16 @@ fn run_export(args: &ExportArgs) -> Result<()> {
                 progress.set_length(total.max(done) as u64);
                 progress.set_position(done as u64)
             },
-        )?);
+        )?;
+        report = Some(r);
+        mtl = m;
         Ok(())
     })?;
+    // The OBJ and its material library land together or not at all.
+    if let (Some(out), Some(mtl)) = (mtl_output, mtl) {
+        set.add(out, mtl.text.as_bytes())?;
+    }
+    set.commit()?;
     progress.finish_and_clear();
     let r = report.expect("written");
     if r.flattened > 0 {
@@ -205,8 +235,9 @@ fn import_options(args: &ImportArgs) -> ImportOptions {
     }
 }
 
-/// Imports one mesh file to one PLY.
+/// Imports one mesh file to one PLY, staged in `set`.
 fn import_one(
+    set: &mut Outputs,
     mesh_path: &Path,
     output: Output,
     original: &rara::Scene,
@@ -215,8 +246,9 @@ fn import_one(
     let mesh = read_mesh(mesh_path)?;
     let (scene, report) = import_mesh(&mesh, original, &import_options(args), mesh_path)?;
     let layout = args.layout.into();
-    output.write_with(|path| {
-        write_ply_layout(&scene, path, PlyEncoding::BinaryLittleEndian, layout)
+    let path = output.path().to_path_buf();
+    set.add_with(output, |w| {
+        write_ply_to(&scene, w, PlyEncoding::BinaryLittleEndian, layout, &path)
     })?;
     Ok(report)
 }
@@ -229,6 +261,7 @@ fn run_import(args: &ImportArgs) -> Result<()> {
         )));
     }
     let start = Instant::now();
+    let mut set = Outputs::new();
     if args.mesh.is_dir() {
         let frames = frame_files(&args.mesh)?;
         if args.output.exists() && !args.output.is_dir() {
@@ -237,13 +270,15 @@ fn run_import(args: &ImportArgs) -> Result<()> {
                 args.output.display()
             )));
         }
-        super::output::create_dir(&args.output)?;
         let original = crate::load_scene(&args.original)?;
+        // Every frame is imported before any lands: a bad frame leaves no output at all.
+        set.create_dir(&args.output)?;
         let progress = bar(frames.len() as u64, "import frames");
         for frame in &frames {
             let stem = frame.file_stem().unwrap_or_default().to_string_lossy();
             let out = args.output.join(format!("{stem}.ply"));
-            let report = import_one(frame, Output::prepare(&out, &["ply"])?, &original, args)?;
+            let output = Output::prepare(&out, &["ply"])?;
+            let report = import_one(&mut set, frame, output, &original, args)?;
             progress.println(format!(
                 "{} -> {}: {} Gaussians fitted, {} kept",
                 frame.display(),
@@ -254,6 +289,7 @@ fn run_import(args: &ImportArgs) -> Result<()> {
             progress.inc(1);
         }
         progress.finish_and_clear();
+        set.commit()?;
         println!(
             "imported {} frames into {} in {:.2} s",
             frames.len(),
@@ -264,7 +300,8 @@ fn run_import(args: &ImportArgs) -> Result<()> {
     }
     let output = Output::prepare(&args.output, &["ply"])?;
     let original = crate::load_scene(&args.original)?;
-    let report = import_one(&args.mesh, output, &original, args)?;
+    let report = import_one(&mut set, &args.mesh, output, &original, args)?;
+    set.commit()?;
     println!(
         "wrote {}: {} Gaussians fitted ({:?} fit, matched by {}, {} vertices per octagon{}), {} kept, in {:.2} s",
         args.output.display(),
@@ -297,27 +334,47 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
             args.frames.display()
         )));
     }
-    super::output::create_dir(&args.output)?;
+    if args.output.exists() && !args.output.is_dir() {
+        return Err(Error::InvalidInput(format!(
+            "-o {}: the frames go in a folder, and this is a file",
+            args.output.display()
+        )));
+    }
+    // The first frame is read before any output is made, so that a folder of garbage fails
+    // at once; the rest are staged with it and land together when the last has rendered.
+    let first = rara::ply::load_ply(&frames[0])?.0;
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let options = RenderOptions {
         background: args.background,
         ..RenderOptions::default()
     };
+    let mut set = Outputs::new();
+    set.create_dir(&args.output)?;
     let gif_path = args.output.join("sequence.gif");
-    let mut gif = GifWriter::create(&gif_path, args.delay_ms)?;
+    let mut gif_file = Output::prepare(&gif_path, &["gif"])?.begin()?;
+    let mut gif = GifWriter::new(&mut gif_file, &gif_path, args.delay_ms)?;
     let progress = bar(frames.len() as u64, "render frames");
+    let mut first = Some(first);
     for frame in &frames {
-        let (scene, _) = rara::ply::load_ply(frame)?;
+        let scene = match first.take() {
+            Some(scene) => scene,
+            None => rara::ply::load_ply(frame)?.0,
+        };
         let gpu_scene = renderer.upload(&scene)?;
         let (img, _) = renderer.render(&gpu_scene, &camera, &options)?;
         let stem = frame.file_stem().unwrap_or_default().to_string_lossy();
-        Output::prepare(&args.output.join(format!("{stem}.png")), &["png"])?.write_png(&img)?;
+        set.add_png(
+            Output::prepare(&args.output.join(format!("{stem}.png")), &["png"])?,
+            &img,
+        )?;
         gif.add(img)?;
         progress.inc(1);
     }
     progress.finish_and_clear();
     drop(gif);
+    set.add_written(gif_file)?;
+    set.commit()?;
     println!(
         "rendered {} frames ({}x{}) to {} and {}",
         frames.len(),

@@ -1,6 +1,7 @@
 //! `rara sweep`: a clip plane moving across a scene, as numbered PNGs and an animated GIF,
 //! with the frame-to-frame change that shows popping (hard) or its absence (rara).
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
@@ -11,7 +12,8 @@ use rara::clip::{Clip, ClipMode, Plane};
 use rara::{Context, Error, RenderOptions, Renderer, Result, Scene};
 
 use super::clip_args::{describe, ClipArgs};
-use crate::{load_scene, resolve_camera, save_png, CameraArgs};
+use super::output::{Output, Outputs};
+use crate::{load_scene, resolve_camera, CameraArgs};
 
 /// `rara sweep` options.
 #[derive(Args)]
@@ -189,7 +191,17 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     } else {
         configs.push(base);
     }
-    super::output::create_dir(&args.output)?;
+    if args.output.exists() && !args.output.is_dir() {
+        return Err(Error::InvalidInput(format!(
+            "-o {}: the sweep's frames go in a folder, and this is a file",
+            args.output.display()
+        )));
+    }
+    // Every frame, the GIF and the report land together once the sweep is done, or nothing
+    // does (the folder included, when the sweep made it).
+    let mut set = Outputs::new();
+    set.create_dir(&args.output)?;
+    let json_output = Output::prepare(&args.output.join("sweep.json"), &["json"])?;
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
@@ -212,7 +224,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         },
     };
     let gif_path = args.output.join("sweep.gif");
-    let mut gif = GifWriter::create(&gif_path, args.delay_ms)?;
+    let mut gif_file = Output::prepare(&gif_path, &["gif"])?.begin()?;
+    let mut gif = GifWriter::new(&mut gif_file, &gif_path, args.delay_ms)?;
     let labels = configs.iter().map(describe).collect::<Vec<_>>();
     eprintln!(
         "sweeping {} frames, plane normal ({:.3}, {:.3}, {:.3}), d from {d0} to {d1}: {}",
@@ -232,20 +245,13 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         tracer: args.tracer.into(),
     };
     let mut series = plan.run(target, |k, frame_img| {
-        save_png(&frame_img, &args.output.join(format!("frame_{k:04}.png")))?;
+        let frame = Output::prepare(&args.output.join(format!("frame_{k:04}.png")), &["png"])?;
+        set.add_png(frame, &frame_img)?;
         gif.add(frame_img)
     })?;
     drop(gif);
+    set.add_written(gif_file)?;
 
-    println!(
-        "wrote {} frames and {} ({}x{} per panel, {} on {})",
-        args.frames,
-        gif_path.display(),
-        camera.width,
-        camera.height,
-        scene_path.display(),
-        ctx.info().name
-    );
     println!(
         "{:<60} {:>12} {:>12} {:>10} {:>14} {:>12}",
         "configuration", "mean change", "p99.9 change", "max change", "cutoff/frame", "median GPU"
@@ -280,7 +286,17 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         "device": ctx.info().name,
         "series": report,
     });
-    write_json(&args.output.join("sweep.json"), &json)?;
+    set.add_json(json_output, &json)?;
+    set.commit()?;
+    println!(
+        "wrote {} frames and {} ({}x{} per panel, {} on {})",
+        args.frames,
+        gif_path.display(),
+        camera.width,
+        camera.height,
+        scene_path.display(),
+        ctx.info().name
+    );
     println!(
         "frame-to-frame change is |a - b| per RGB channel in 8-bit units; details in {}",
         args.output.join("sweep.json").display()
@@ -400,22 +416,19 @@ impl Sweep<'_> {
     }
 }
 
-/// An animated GIF written frame by frame, looping.
-pub struct GifWriter {
+/// An animated GIF written frame by frame, looping, into a staged output (or any writer): the
+/// file is whole once the writer is dropped (which writes the GIF's trailer).
+pub struct GifWriter<'a> {
     path: PathBuf,
-    encoder: image::codecs::gif::GifEncoder<std::io::BufWriter<std::fs::File>>,
+    encoder: image::codecs::gif::GifEncoder<&'a mut dyn Write>,
     delay_ms: u32,
 }
 
-impl GifWriter {
-    /// Creates `path`, each frame shown for `delay_ms`.
-    pub fn create(path: &Path, delay_ms: u32) -> Result<GifWriter> {
-        let file = std::fs::File::create(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let mut encoder =
-            image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+impl<'a> GifWriter<'a> {
+    /// A GIF written to `w` (the file at `path`, named in errors), each frame shown for
+    /// `delay_ms`.
+    pub fn new(w: &'a mut dyn Write, path: &Path, delay_ms: u32) -> Result<GifWriter<'a>> {
+        let mut encoder = image::codecs::gif::GifEncoder::new_with_speed(w, 10);
         encoder
             .set_repeat(image::codecs::gif::Repeat::Infinite)
             .map_err(|source| Error::Image {
@@ -467,11 +480,4 @@ pub fn concat_horizontally(panels: &[image::RgbaImage]) -> image::RgbaImage {
         x += p.width();
     }
     out
-}
-
-fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
-    std::fs::write(path, serde_json::to_string_pretty(value).unwrap()).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
 }

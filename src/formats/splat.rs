@@ -129,8 +129,17 @@ pub fn write_splat(scene: &Scene, path: &Path) -> Result<()> {
         source,
     };
     let mut out = BufWriter::with_capacity(1 << 20, std::fs::File::create(path).map_err(io)?);
-    for i in 0..scene.len() {
-        out.write_all(&encode(scene, i)).map_err(io)?;
-    }
+    write_splat_to(scene, &mut out, path)?;
     out.flush().map_err(io)
+}
+
+/// Writes `scene` as a `.splat` to `w` (`path` names it in errors).
+pub fn write_splat_to(scene: &Scene, w: &mut dyn Write, path: &Path) -> Result<()> {
+    for i in 0..scene.len() {
+        w.write_all(&encode(scene, i)).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    }
+    Ok(())
 }

@@ -329,17 +329,51 @@ fn survey(
     Ok(s)
 }
 
-/// Writes every octagon of `source` to `path` in `format`. `named` is where the file will end
-/// up (`path` itself, or the target of a temporary `path`): an OBJ's MTL is written beside it,
-/// with its stem. `progress(done, total)` is called after each chunk of each pass.
+/// An OBJ's material library, which goes beside it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MtlFile {
+    /// Where it goes: the OBJ's path with the extension `.mtl`.
+    pub path: PathBuf,
+    /// Its text.
+    pub text: String,
+}
+
+/// Writes every octagon of `source` to `path` in `format`, an OBJ's MTL beside it with its
+/// stem. `progress(done, total)` is called after each chunk of each pass.
 pub fn export_mesh(
     source: &dyn GaussianSource,
     path: &Path,
-    named: &Path,
     format: MeshFormat,
     options: &ExportOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<ExportReport> {
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut w = BufWriter::with_capacity(1 << 20, File::create(path).map_err(io)?);
+    let (report, mtl) = export_mesh_to(source, &mut w, path, format, options, progress)?;
+    w.flush().map_err(io)?;
+    if let Some(mtl) = mtl {
+        std::fs::write(&mtl.path, &mtl.text).map_err(|source| Error::Io {
+            path: mtl.path.clone(),
+            source,
+        })?;
+    }
+    Ok(report)
+}
+
+/// Writes every octagon of `source` to `w` in `format`: the file that will be at `path`
+/// (named in errors, and by an OBJ's `mtllib`). An OBJ's material library is returned, not
+/// written: the caller puts it beside the OBJ (the CLI commits both together or neither).
+pub fn export_mesh_to(
+    source: &dyn GaussianSource,
+    w: &mut dyn Write,
+    path: &Path,
+    format: MeshFormat,
+    options: &ExportOptions,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(ExportReport, Option<MtlFile>)> {
     if !(options.q > 0.0 && options.q.is_finite()) {
         return Err(Error::InvalidInput(format!(
             "--q {}: Q must be a positive number (default 11.3449)",
@@ -353,14 +387,15 @@ pub fn export_mesh(
         path: path.to_path_buf(),
         source,
     };
-    let mut w = BufWriter::with_capacity(1 << 20, File::create(path).map_err(io)?);
+    let mut w = Counted { inner: w, bytes: 0 };
     let mut report = survey.report.clone();
+    let mut mtl_file = None;
     match format {
         MeshFormat::Ply => {
             write_ply_mesh(&mut w, source, options, &report, &mut second_pass).map_err(io)?
         }
         MeshFormat::Obj => {
-            let mtl = named.with_extension("mtl");
+            let mtl = path.with_extension("mtl");
             let mtl_name = mtl
                 .file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
@@ -369,11 +404,11 @@ pub fn export_mesh(
                 "# rara mesh export: the octagons' colours are per vertex (v x y z r g b)\n\
                  newmtl {material}\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 0\n"
             );
-            std::fs::write(&mtl, &mtl_text).map_err(|source| Error::Io {
-                path: mtl.clone(),
-                source,
-            })?;
             report.bytes += mtl_text.len() as u64;
+            mtl_file = Some(MtlFile {
+                path: mtl,
+                text: mtl_text,
+            });
             write_obj_mesh(
                 &mut w,
                 source,
@@ -389,10 +424,25 @@ pub fn export_mesh(
         }
     }
     w.flush().map_err(io)?;
-    let file = w.into_inner().map_err(|e| io(e.into_error()))?;
-    file.sync_all().map_err(io)?;
-    report.bytes += file.metadata().map_err(io)?.len();
-    Ok(report)
+    report.bytes += w.bytes;
+    Ok((report, mtl_file))
+}
+
+/// A writer that counts the bytes through it.
+struct Counted<'a> {
+    inner: &'a mut dyn Write,
+    bytes: u64,
+}
+
+impl Write for Counted<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.bytes += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
 }
 
 /// Runs `f` on every octagon's vertices in order, with the running octagon number.
