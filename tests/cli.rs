@@ -2,16 +2,10 @@
 //! name what is wrong, never a panic.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Command;
 
 mod common;
-
-fn rara(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rara"))
-        .args(args)
-        .output()
-        .expect("run rara")
-}
+use common::{assert_error, assert_success, rara};
 
 /// `rara` with its standard input, output and error piped, running.
 fn rara_piped(args: &[&str]) -> std::process::Child {
@@ -47,26 +41,6 @@ fn good_scene() -> (PathBuf, PathBuf) {
     let c = dir().join(format!("good{n}.cameras.json"));
     rara::Camera::save_all(&cams, &c).unwrap();
     (p, c)
-}
-
-/// Asserts that the command succeeded, showing its stderr if not.
-fn assert_success(out: &Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-/// Asserts a clean failure whose stderr contains every one of `needles`.
-fn assert_error(out: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "expected failure, stderr: {stderr}");
-    assert_ne!(out.status.code(), Some(101), "rara panicked: {stderr}");
-    assert!(!stderr.contains("panicked"), "rara panicked: {stderr}");
-    for n in needles {
-        assert!(stderr.contains(n), "stderr lacks '{n}': {stderr}");
-    }
 }
 
 fn render_args<'a>(scene: &'a str, cams: &'a str, out: &'a str) -> Vec<&'a str> {

@@ -1114,43 +1114,10 @@ const GLTF_FIELDS: &[&str] = &[
     "\"nodes\"",
 ];
 
-/// The JSON chunk and the binary chunk of a glb, or `None`.
-fn glb_chunks(bytes: &[u8]) -> Option<(Vec<u8>, Vec<u8>)> {
-    let u32_at = |at: usize| -> Option<usize> {
-        Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?) as usize)
-    };
-    let json_len = u32_at(12)?;
-    let json = bytes.get(20..20 + json_len)?.to_vec();
-    let bin_at = 20 + json_len;
-    let bin_len = u32_at(bin_at)?;
-    let bin = bytes.get(bin_at + 8..bin_at + 8 + bin_len)?.to_vec();
-    Some((json, bin))
-}
-
-/// A glb of `json` (padded with spaces) and `bin`.
-fn glb_of(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    let mut json = json.to_vec();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(bin);
-    out
-}
-
 /// The mutations of a glb: byte-level ones; the JSON's numbers and fields (`mutate_json`, the
 /// chunk lengths kept right); the binary chunk's bytes.
 fn mutate_glb(rng: &mut Rng, input: &mut Vec<u8>) {
-    let Some((mut json, mut bin)) = glb_chunks(input) else {
+    let Some((mut json, mut bin)) = common::glb_chunks(input) else {
         return mutate_bytes(rng, input);
     };
     match rng.next_u64() % 4 {
@@ -1158,7 +1125,7 @@ fn mutate_glb(rng: &mut Rng, input: &mut Vec<u8>) {
         1 | 2 => mutate_json(rng, &mut json, GLTF_FIELDS),
         _ => mutate_payload_value(rng, &mut bin),
     }
-    *input = glb_of(&json, &bin);
+    *input = common::glb_of(&json, &bin);
 }
 
 /// The glTF reader (glb) on mutated files: splat-transform's fixture (SH degree 3) and rara's

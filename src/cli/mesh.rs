@@ -130,6 +130,12 @@ pub fn run(args: &MeshArgs) -> Result<()> {
 }
 
 fn run_export(args: &ExportArgs) -> Result<()> {
+    if !(0.0..=1.0).contains(&args.min_opacity) {
+        return Err(Error::InvalidInput(format!(
+            "--min-opacity {}: an opacity, in [0, 1]",
+            args.min_opacity
+        )));
+    }
     let format = MeshFormat::from_path(&args.output)?;
     let output = Output::prepare(&args.output, &MeshFormat::EXTENSIONS)?;
     let mtl_output = match format {
@@ -254,6 +260,19 @@ fn import_one(
 }
 
 fn run_import(args: &ImportArgs) -> Result<()> {
+    if !(args.q > 0.0 && args.q.is_finite()) {
+        return Err(Error::InvalidInput(format!(
+            "--q {}: Q must be a positive number, the one the mesh was exported with (default \
+             11.3449)",
+            args.q
+        )));
+    }
+    if !(0.0..=1.0).contains(&args.min_opacity) {
+        return Err(Error::InvalidInput(format!(
+            "--min-opacity {}: an opacity, in [0, 1]",
+            args.min_opacity
+        )));
+    }
     if !args.original.exists() {
         return Err(Error::InvalidInput(format!(
             "--original {}: no such file (the scene the mesh was exported from)",

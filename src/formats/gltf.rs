@@ -527,3 +527,41 @@ pub fn write_glb(scene: &Scene, path: &Path) -> Result<()> {
         source,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A document whose one splat primitive (POSITION of `count`) is placed by `nodes` nodes.
+    fn placed_by(count: u64, nodes: usize) -> Document {
+        let v = json!({
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": std::iter::once(json!({"children": (1..=nodes).collect::<Vec<_>>()}))
+                .chain((0..nodes).map(|_| json!({"mesh": 0})))
+                .collect::<Vec<_>>(),
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0,
+                "extensions": {EXT: {}}}]}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": count, "type": "VEC3"}]
+        });
+        Document::from_bytes(&serde_json::to_vec(&v).unwrap(), Path::new("t.gltf")).unwrap()
+    }
+
+    #[test]
+    fn the_gaussians_nodes_place_are_bounded_at_the_edge() {
+        let most = crate::constants::MAX_GAUSSIANS;
+        // 67,107,840 = 1024 x 65535: exactly the most, accepted (nothing is decoded here);
+        // one node more is refused.
+        assert_eq!(most, 1024 * 65535);
+        let path = Path::new("t.gltf");
+        assert_eq!(
+            placements(&placed_by(65535, 1024), path).unwrap().len(),
+            1024
+        );
+        let e = placements(&placed_by(65535, 1025), path).unwrap_err();
+        assert!(e.to_string().contains("67173375 Gaussians"), "{e}");
+        check_placed(most, most, path).unwrap();
+        assert!(check_placed(most + 1, most, path).is_err());
+    }
+}

@@ -119,6 +119,12 @@ impl Document {
                     bytes.len()
                 )));
             }
+            if length < bytes.len() {
+                return Err(bad(format!(
+                    "{} bytes follow the {length} the glb header gives",
+                    bytes.len() - length
+                )));
+            }
             if length < 20 {
                 return Err(bad(format!(
                     "the glb header gives {length} bytes, too few for a header and a JSON chunk"

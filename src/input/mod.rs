@@ -118,16 +118,14 @@ impl InputFile {
             None => limit.min(MAX_STREAM_BYTES),
         };
         let mut bytes = std::mem::take(&mut self.head);
-        // Grown as the bytes arrive (a regular file's size reserved at once), one byte past the
-        // cap at most.
-        if let Some(size) = self.size {
-            bytes.reserve_exact((size as usize).saturating_sub(bytes.len()));
+        if self.size.is_some() {
+            // A regular file's size is known: one allocation (fallible, like the growth).
+            let rest = (cap as usize).saturating_sub(bytes.len());
+            bytes
+                .try_reserve_exact(rest)
+                .map_err(|_| input_error(&self.path, format!("no memory for its {cap} bytes")))?;
         }
-        let already = bytes.len() as u64;
-        (&mut self.file)
-            .take((cap + 1).saturating_sub(already))
-            .read_to_end(&mut bytes)
-            .map_err(|e| io_error(&self.path, e))?;
+        read_capped(&mut self.file, &mut bytes, cap + 1).map_err(|e| io_error(&self.path, e))?;
         if bytes.len() as u64 > cap {
             return Err(input_error(
                 &self.path,
@@ -183,6 +181,38 @@ impl InputFile {
             None,
         ))
     }
+}
+
+/// Appends what `reader` holds to `bytes` until it ends or `bytes` holds `most` bytes. The
+/// buffer grows as the bytes arrive, never past `most`, and through a fallible allocation: a
+/// process under an address-space limit gets an error, not an abort.
+fn read_capped(reader: &mut impl Read, bytes: &mut Vec<u8>, most: u64) -> std::io::Result<()> {
+    let most = usize::try_from(most).unwrap_or(usize::MAX);
+    let mut chunk = vec![0u8; 1 << 16];
+    while bytes.len() < most {
+        let want = chunk.len().min(most - bytes.len());
+        let n = match reader.read(&mut chunk[..want]) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if bytes.capacity() - bytes.len() < n {
+            // Double, but never past `most`.
+            let grow = bytes.len().max(n).min(most - bytes.len());
+            bytes.try_reserve_exact(grow).map_err(|_| {
+                std::io::Error::new(
+                    std::io::ErrorKind::OutOfMemory,
+                    format!(
+                        "no memory for more than {} bytes (a process memory limit?)",
+                        bytes.len()
+                    ),
+                )
+            })?;
+        }
+        bytes.extend_from_slice(&chunk[..n]);
+    }
+    Ok(())
 }
 
 /// The text of `path`, a `what` (named in errors) of at most `limit` bytes.

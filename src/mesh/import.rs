@@ -80,6 +80,11 @@ pub const MAX_MESH_FILE_BYTES: u64 = 4 << 30;
 /// nodes would be decoded thousands of times.
 pub const MAX_PLACED_VERTICES: u64 = 1 << 27;
 
+/// The most vertex indices a glTF's nodes may place, counted the same way: 2^28 (a triangle
+/// list of 2^27 vertices takes about 2^28 indices; a few vertices with millions of indices
+/// under many nodes would otherwise make billions of faces).
+pub const MAX_PLACED_INDICES: u64 = 1 << 28;
+
 /// Reads a mesh (.ply, .obj, .glb, or .gltf with its buffers in files beside it or in
 /// base64 data URIs), told by its extension. The file is opened once and read through
 /// [`crate::input`]: a regular file at most [`MAX_MESH_FILE_BYTES`], a pipe or a device through
@@ -367,7 +372,7 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
             }
         }
     }
-    let mut total: u64 = 0;
+    let (mut vertices, mut indices) = (0u64, 0u64);
     for &(m, _) in &placed {
         let mesh = doc
             .root
@@ -379,20 +384,33 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
                 .attributes
                 .get(&Checked::Valid(Semantic::Positions))
             {
-                total = total.saturating_add(doc.count(a.value())? as u64);
+                vertices = vertices.saturating_add(doc.count(a.value())? as u64);
+            }
+            if let Some(a) = primitive.indices {
+                indices = indices.saturating_add(doc.count(a.value())? as u64);
             }
         }
     }
-    check_placed_vertices(total, MAX_PLACED_VERTICES, path)?;
+    check_placed(vertices, MAX_PLACED_VERTICES, "vertices", path)?;
+    check_placed(indices, MAX_PLACED_INDICES, "vertex indices", path)?;
     let mut mesh = MeshData::default();
     let mut all_ids = true;
     let (mut normals, mut all_normals) = (Vec::new(), true);
     let (mut primitive_ids, mut corner_ids) = (Vec::new(), Vec::new());
     for (m, world) in placed {
         for primitive in &doc.root.meshes[m].primitives {
-            if primitive.mode != Checked::Valid(Mode::Triangles) {
-                return Err(mesh_err(path, "a primitive that is not triangles"));
-            }
+            let mode = match primitive.mode {
+                Checked::Valid(m @ (Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan)) => {
+                    m
+                }
+                Checked::Valid(m) => {
+                    return Err(mesh_err(
+                        path,
+                        format!("a primitive of {m:?}, not triangles: a mesh of points or lines"),
+                    ))
+                }
+                Checked::Invalid => return Err(mesh_err(path, "a primitive of an unknown mode")),
+            };
             let attribute = |s: Semantic| {
                 primitive
                     .attributes
@@ -434,27 +452,13 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
             };
             all_ids &= read_ids("PRIMITIVE_ID", &mut primitive_ids)?;
             all_ids &= read_ids("CORNER_ID", &mut corner_ids)?;
-            match primitive.indices {
-                Some(a) => {
-                    let idx = doc.indices(a.value())?;
-                    if idx.len() % 3 != 0 {
-                        return Err(mesh_err(
-                            path,
-                            format!(
-                                "a triangle primitive with {} indices, not a multiple of 3",
-                                idx.len()
-                            ),
-                        ));
-                    }
-                    mesh.faces.extend(
-                        idx.chunks_exact(3)
-                            .map(|t| t.iter().map(|&i| base.saturating_add(i)).collect()),
-                    );
-                }
-                None => mesh.faces.extend(
-                    (0..count as u32 / 3).map(|t| (0..3).map(|k| base + 3 * t + k).collect()),
-                ),
-            }
+            let idx = match primitive.indices {
+                Some(a) => doc.indices(a.value())?,
+                None => (0..count as u32).collect(),
+            };
+            mesh.faces.extend(
+                triangles(mode, &idx, path)?.map(|t| t.map(|i| base.saturating_add(i)).to_vec()),
+            );
         }
     }
     if all_ids && !mesh.positions.is_empty() {
@@ -467,13 +471,52 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
     Ok(mesh)
 }
 
-/// The vertices a glTF's nodes place in all, against the most a mesh may have.
-fn check_placed_vertices(total: u64, most: u64, path: &Path) -> Result<()> {
+/// The triangles of a primitive of `mode` over the vertex indices `idx` (glTF 2.0 section
+/// 3.7.2.1: a list takes three at a time, a strip each new one with the two before it, its
+/// odd ones turned to keep their winding, a fan each new pair with the first).
+fn triangles<'a>(
+    mode: gltf::json::mesh::Mode,
+    idx: &'a [u32],
+    path: &Path,
+) -> Result<Box<dyn Iterator<Item = [u32; 3]> + 'a>> {
+    use gltf::json::mesh::Mode;
+    Ok(match mode {
+        Mode::Triangles => {
+            if idx.len() % 3 != 0 {
+                return Err(mesh_err(
+                    path,
+                    format!(
+                        "a triangle primitive with {} indices, not a multiple of 3",
+                        idx.len()
+                    ),
+                ));
+            }
+            Box::new(idx.chunks_exact(3).map(|t| [t[0], t[1], t[2]]))
+        }
+        Mode::TriangleStrip => Box::new(idx.windows(3).enumerate().map(|(k, t)| {
+            if k % 2 == 0 {
+                [t[0], t[1], t[2]]
+            } else {
+                [t[1], t[0], t[2]]
+            }
+        })),
+        _ => Box::new(
+            idx.get(1..)
+                .unwrap_or_default()
+                .windows(2)
+                .map(move |t| [idx[0], t[0], t[1]]),
+        ),
+    })
+}
+
+/// The vertices (or indices, `what`) a glTF's nodes place in all, against the most a mesh may
+/// have.
+fn check_placed(total: u64, most: u64, what: &str, path: &Path) -> Result<()> {
     if total > most {
         return Err(mesh_err(
             path,
             format!(
-                "its nodes place {total} vertices in all (each mesh counted once per node that \
+                "its nodes place {total} {what} in all (each mesh counted once per node that \
                  places it), more than the {most} rara reads"
             ),
         ));
@@ -515,6 +558,14 @@ pub fn match_octagons(
 ) -> Result<MatchedOctagons> {
     let n = original.len();
     let v = mesh.positions.len();
+    // A point or a line (an OBJ `f` of one or two vertices) is named before any count is
+    // compared: it is the more telling error.
+    if let Some((f, face)) = mesh.faces.iter().enumerate().find(|(_, f)| f.len() < 3) {
+        return Err(mesh_err(
+            path,
+            format!("face {f} has {} vertices", face.len()),
+        ));
+    }
     if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
         return Err(mesh_err(
             path,
@@ -750,4 +801,40 @@ pub fn frame_files(dir: &Path) -> Result<Vec<PathBuf>> {
         )));
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_vertices_nodes_place_are_bounded_at_the_edge() {
+        let path = Path::new("t.gltf");
+        let most = MAX_PLACED_VERTICES;
+        check_placed(most, most, "vertices", path).unwrap();
+        let e = check_placed(most + 1, most, "vertices", path).unwrap_err();
+        assert!(e.to_string().contains("134217729 vertices"), "{e}");
+        let most = MAX_PLACED_INDICES;
+        check_placed(most, most, "vertex indices", path).unwrap();
+        assert!(check_placed(most + 1, most, "vertex indices", path).is_err());
+        // Through a document: 2^17 vertices under 2^10 nodes is the most; one node more is
+        // refused before anything is read (the accessor has no data at all).
+        let doc = |nodes: usize| {
+            let v = serde_json::json!({
+                "asset": {"version": "2.0"},
+                "scene": 0,
+                "scenes": [{"nodes": [0]}],
+                "nodes": std::iter::once(serde_json::json!({"children": (1..=nodes).collect::<Vec<_>>()}))
+                    .chain((0..nodes).map(|_| serde_json::json!({"mesh": 0})))
+                    .collect::<Vec<_>>(),
+                "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+                "accessors": [{"bufferView": 0, "componentType": 5126, "count": 1 << 17, "type": "VEC3"}]
+            });
+            Document::from_bytes(&serde_json::to_vec(&v).unwrap(), path).unwrap()
+        };
+        let e = read_gltf_mesh(&doc(1024), path).unwrap_err();
+        assert!(e.to_string().contains("no buffer view 0"), "{e}");
+        let e = read_gltf_mesh(&doc(1025), path).unwrap_err();
+        assert!(e.to_string().contains("134348800 vertices"), "{e}");
+    }
 }

@@ -201,12 +201,25 @@ pub fn resolve_path(file: &Path, at: &str, path: &str) -> Result<PathBuf> {
             file.parent().unwrap_or(Path::new(".")).join(p)
         }
     };
-    if !resolved.is_file() {
-        return Err(at_error(
-            file,
-            at,
-            format!("no such file: {}", resolved.display()),
-        ));
+    match std::fs::metadata(&resolved) {
+        Ok(m) if m.is_file() => {}
+        Ok(_) => {
+            return Err(at_error(
+                file,
+                at,
+                format!(
+                    "{} is not a regular file (a folder, a pipe or a device)",
+                    resolved.display()
+                ),
+            ))
+        }
+        Err(_) => {
+            return Err(at_error(
+                file,
+                at,
+                format!("no such file: {}", resolved.display()),
+            ))
+        }
     }
     Ok(resolved)
 }

@@ -548,6 +548,13 @@ pub fn mesh_triangles(file: &Path, t: &Transform, material: u32) -> Result<Vec<T
     let n = mesh.positions.len();
     let mut out = Vec::new();
     for (f, face) in mesh.faces.iter().enumerate() {
+        if face.len() < 3 {
+            return Err(Error::InvalidInput(format!(
+                "{}: face {f} has {} vertices (a point or a line): a mesh here is of polygons",
+                file.display(),
+                face.len()
+            )));
+        }
         if face.iter().any(|&i| i as usize >= n) {
             return Err(Error::InvalidInput(format!(
                 "{}: face {f} names a vertex beyond the {n} there are",

@@ -461,3 +461,64 @@ pub fn with_gpu_values(
         })
         .collect()
 }
+
+/// The JSON chunk and the binary chunk of a glb, or `None`.
+pub fn glb_chunks(bytes: &[u8]) -> Option<(Vec<u8>, Vec<u8>)> {
+    let u32_at = |at: usize| -> Option<usize> {
+        Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?) as usize)
+    };
+    let json_len = u32_at(12)?;
+    let json = bytes.get(20..20 + json_len)?.to_vec();
+    let bin_at = 20 + json_len;
+    let bin_len = u32_at(bin_at)?;
+    let bin = bytes.get(bin_at + 8..bin_at + 8 + bin_len)?.to_vec();
+    Some((json, bin))
+}
+
+/// A glb of `json` (padded with spaces) and `bin`.
+pub fn glb_of(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let mut json = json.to_vec();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(bin);
+    out
+}
+
+/// Runs the `rara` binary with `args` to its end.
+pub fn rara(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args(args)
+        .output()
+        .expect("run rara")
+}
+
+/// Asserts that the command succeeded, showing its stderr if not.
+pub fn assert_success(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Asserts a clean failure whose stderr contains every one of `needles`.
+pub fn assert_error(out: &std::process::Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "expected failure, stderr: {stderr}");
+    assert_ne!(out.status.code(), Some(101), "rara panicked: {stderr}");
+    assert!(!stderr.contains("panicked"), "rara panicked: {stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "stderr lacks '{n}': {stderr}");
+    }
+}
