@@ -1,6 +1,8 @@
 //! Fuzzing of the parsers that read untrusted files: the PLY loader, every scene format's
 //! reader (`.splat` with the format detection, SPZ v3 and v4, compressed PLY, SOG, glb), the
-//! cameras.json parser and the clip file parser. A property test,
+//! cameras.json parser, the clip file parser, the mesh readers (OBJ, PLY, glb, and `.gltf` with
+//! its buffers in files beside it) with what follows them (the octagon import's checks, a mixed
+//! scene's triangles), and the mixed scene file with every file it names. A property test,
 //! not a coverage-guided fuzzer: it mutates real headers and payloads
 //! (the real scenes' first vertices when `../shared/data/real` is there, the crate's own
 //! scenes in every encoding and SH degree always) with structure-aware and byte-level
@@ -499,6 +501,8 @@ fn mutate_json(rng: &mut Rng, input: &mut Vec<u8>, fields: &[&str]) {
                     "[]",
                     "{}",
                     "1e-45",
+                    "18446744073709551612",
+                    "18446744073709551615",
                 ],
             );
             format!("{}{}{}", &text[..s], value, &text[e..])
@@ -1145,4 +1149,565 @@ fn gltf_reader_survives_mutated_files() {
     fuzz("glb", &seeds, mutate_glb, |input| {
         load_as_file(&path, input)
     });
+}
+
+// ---------------------------------------------------------------- meshes and scene files
+
+/// The most one parse of a mesh may allocate at once for `len` bytes of input: a PLY row of
+/// one byte becomes a ply-rs record of 72 bytes in a vector that doubles as it grows (144x);
+/// an OBJ or glTF face of a few bytes a face vector of 36; and 16 MiB for headers, buffers
+/// and a read chunk.
+fn mesh_bound(len: usize) -> usize {
+    160 * len + (16 << 20)
+}
+
+/// The scene the mesh seeds are the octagons of, and its octagons in `format` (`falloff`).
+fn octagon_seed(
+    scene: &rara::Scene,
+    format: rara::mesh::export::MeshFormat,
+    falloff: rara::mesh::export::Falloff,
+) -> Vec<u8> {
+    let options = rara::mesh::export::ExportOptions {
+        falloff,
+        ..Default::default()
+    };
+    let mut out = Vec::new();
+    rara::mesh::export::export_mesh_to(
+        scene,
+        &mut out,
+        Path::new("seed.obj"),
+        format,
+        &options,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    out
+}
+
+/// The scene the mesh fuzzers' octagons come from.
+fn mesh_scene() -> rara::Scene {
+    rara::synth::shell(60, 1, 21).flattened()
+}
+
+/// Reads the mesh at `path` (holding `input`) and, when it is accepted, runs what follows a
+/// read: the octagon import against `original`, and a mixed scene's triangles. None may
+/// panic; an accepted mesh's faces must name its vertices or be refused by what follows.
+fn read_mesh_file(path: &Path, input: &[u8], original: &rara::Scene) -> Result<(), String> {
+    std::fs::write(path, input).unwrap();
+    let shown = path.display().to_string();
+    let mesh =
+        rara::mesh::import::read_mesh(path).map_err(|e| e.to_string().replace(&shown, ""))?;
+    if mesh
+        .primitive_ids
+        .as_ref()
+        .is_some_and(|p| p.len() != mesh.positions.len())
+        || mesh
+            .normals
+            .as_ref()
+            .is_some_and(|n| n.len() != mesh.positions.len())
+    {
+        return Err("ACCEPTED BAD INPUT: per-vertex arrays of other lengths".into());
+    }
+    let imported = rara::mesh::import::import_mesh(
+        &mesh,
+        original,
+        &rara::mesh::import::ImportOptions::default(),
+        path,
+    );
+    if let Ok((scene, _)) = &imported {
+        check_scene(scene, original.len()).map_err(|e| format!("ACCEPTED BAD INPUT: {e}"))?;
+    }
+    let triangles = rara::mixed::mesh_triangles(path, &rara::mixed::Transform::default(), 0);
+    match (imported, triangles) {
+        (Ok(_), _) | (_, Ok(_)) => Ok(()),
+        (Err(e), _) => Err(e.to_string().replace(&shown, "")),
+    }
+}
+
+/// Rewrites one line of an OBJ: a number made hostile, a face cut to one or two vertices or
+/// given hostile indices, a line repeated or dropped, a material library that never ends.
+fn mutate_obj_line(rng: &mut Rng, input: &mut Vec<u8>) {
+    let text = String::from_utf8_lossy(input).into_owned();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    if lines.is_empty() {
+        return;
+    }
+    let i = below(rng, lines.len());
+    match rng.next_u64() % 7 {
+        0 => {
+            let mut parts: Vec<String> = lines[i].split(' ').map(str::to_string).collect();
+            let k = below(rng, parts.len());
+            parts[k] = pick(
+                rng,
+                &[
+                    "nan",
+                    "inf",
+                    "-1",
+                    "0",
+                    "4294967296",
+                    "1e39",
+                    "-0",
+                    "1/1/1",
+                    "x",
+                    "",
+                ],
+            )
+            .to_string();
+            lines[i] = parts.join(" ");
+        }
+        1 => {
+            let face = pick(
+                rng,
+                &[
+                    "f 1",
+                    "f 1 2",
+                    "f 1/1 2/2",
+                    "f 0 1 2",
+                    "f -99 1 2",
+                    "f 1 1 1",
+                    "f 4294967295 1 2",
+                ],
+            );
+            lines.insert(i, face.to_string());
+        }
+        2 => {
+            let n = 3 + below(rng, 2000);
+            let face: Vec<String> = (0..n).map(|k| (1 + k % 8).to_string()).collect();
+            lines.insert(i, format!("f {}", face.join(" ")));
+        }
+        3 => {
+            lines.remove(i);
+        }
+        4 => {
+            let l = lines[i].clone();
+            lines.insert(i, l);
+        }
+        5 => lines.insert(
+            i,
+            pick(
+                rng,
+                &[
+                    "mtllib /dev/zero",
+                    "o other",
+                    "g g",
+                    "usemtl x",
+                    "l 1 2",
+                    "p 1",
+                ],
+            )
+            .into(),
+        ),
+        _ => {
+            let j = below(rng, lines.len());
+            lines.swap(i, j);
+        }
+    }
+    *input = (lines.join("\n") + "\n").into_bytes();
+}
+
+/// The OBJ reader, and the import and the triangles after it, on mutated octagon meshes (both
+/// falloffs) and the example meshes.
+#[test]
+fn obj_mesh_reader_survives_mutated_files() {
+    use rara::mesh::export::{Falloff, MeshFormat};
+    let scene = mesh_scene();
+    let example = |name: &str| {
+        std::fs::read(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("examples/scenes/meshes")
+                .join(name),
+        )
+        .unwrap()
+    };
+    let seeds = vec![
+        (
+            "octagons".to_string(),
+            octagon_seed(&scene, MeshFormat::Obj, Falloff::Constant),
+        ),
+        (
+            "octagons, centre".to_string(),
+            octagon_seed(&scene, MeshFormat::Obj, Falloff::Centre),
+        ),
+        ("cube".to_string(), example("cube.obj")),
+        ("quad".to_string(), example("quad.obj")),
+    ];
+    let path = common::tempdir("fuzz_obj").join("fuzz.obj");
+    fuzz_bounded(
+        "obj_mesh",
+        &seeds,
+        |rng, input| match rng.next_u64() % 3 {
+            0 => mutate_bytes(rng, input),
+            _ => mutate_obj_line(rng, input),
+        },
+        |input| read_mesh_file(&path, input, &scene),
+        mesh_bound,
+    );
+}
+
+/// The PLY mesh reader on mutated headers (counts, types, lists, extra elements), payload
+/// values and bytes: rara's octagon PLY and an ascii mesh another tool might write.
+#[test]
+fn ply_mesh_reader_survives_mutated_files() {
+    use rara::mesh::export::{Falloff, MeshFormat};
+    let scene = mesh_scene();
+    let ascii = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 2 1 3\n"
+        .to_vec();
+    let seeds = vec![
+        (
+            "octagons".to_string(),
+            octagon_seed(&scene, MeshFormat::Ply, Falloff::Constant),
+        ),
+        (
+            "octagons, centre".to_string(),
+            octagon_seed(&scene, MeshFormat::Ply, Falloff::Centre),
+        ),
+        ("ascii quad".to_string(), ascii),
+    ];
+    let path = common::tempdir("fuzz_ply_mesh").join("fuzz.ply");
+    fuzz_bounded(
+        "ply_mesh",
+        &seeds,
+        |rng, input| match rng.next_u64() % 4 {
+            0 => mutate_header_line(rng, input),
+            1 => mutate_payload_value(rng, input),
+            _ => mutate_bytes(rng, input),
+        },
+        |input| read_mesh_file(&path, input, &scene),
+        mesh_bound,
+    );
+}
+
+/// URIs a mutated glTF may name: beside it, outside it, a device, a FIFO, escapes.
+const HOSTILE_URIS: &[&str] = &[
+    "fuzz.bin",
+    "zero.bin",
+    "fifo.bin",
+    "missing.bin",
+    "../fuzz.bin",
+    "/dev/zero",
+    "%2e%2e/fuzz.bin",
+    "%zz",
+    "file:///etc/passwd",
+    "sub/../fuzz.bin",
+    "data:application/octet-stream;base64,AAAA",
+    "data:,x",
+    "",
+];
+
+/// Structural mutations of a glTF's JSON: a node made its own child or an ancestor's, a child
+/// listed twice, a chain deeper than the walk allows, a mesh or accessor index out of range, a
+/// hostile buffer URI, another primitive mode, a stride, an offset near 2^64, a sparse
+/// accessor, many nodes placing one mesh.
+fn mutate_gltf_structure(rng: &mut Rng, json: &mut Vec<u8>) {
+    use serde_json::{json, Value};
+    let Ok(mut v) = serde_json::from_slice::<Value>(json) else {
+        return;
+    };
+    // Sets `field` of the object at `pointer`, when there is one (a mutated file may have
+    // anything there).
+    fn set(v: &mut Value, pointer: &str, field: &str, value: Value) {
+        if let Some(o) = v.pointer_mut(pointer).and_then(Value::as_object_mut) {
+            o.insert(field.to_string(), value);
+        }
+    }
+    let len = |v: &Value, key: &str| v.get(key).and_then(Value::as_array).map_or(0, Vec::len);
+    let nodes = len(&v, "nodes");
+    match rng.next_u64() % 10 {
+        0 if nodes > 0 => {
+            let k = below(rng, nodes);
+            let child = below(rng, nodes + 1);
+            set(
+                &mut v,
+                &format!("/nodes/{k}"),
+                "children",
+                json!([child, child]),
+            );
+        }
+        1 if nodes > 0 => {
+            let k = below(rng, nodes);
+            set(&mut v, &format!("/nodes/{k}"), "children", json!([k]));
+        }
+        2 => {
+            let depth = pick(rng, &[64usize, 100, 4096, 4097, 5000]);
+            let chain: Vec<Value> = (0..depth)
+                .map(|i| {
+                    if i + 1 < depth {
+                        json!({"children": [i + 1]})
+                    } else {
+                        json!({"mesh": 0})
+                    }
+                })
+                .collect();
+            set(&mut v, "", "nodes", json!(chain));
+            set(&mut v, "", "scenes", json!([{"nodes": [0]}]));
+            set(&mut v, "", "scene", json!(0));
+        }
+        3 if nodes > 0 => {
+            let k = below(rng, nodes);
+            let mesh = pick(rng, &[0u64, 1, 7, u32::MAX as u64]);
+            set(&mut v, &format!("/nodes/{k}"), "mesh", json!(mesh));
+        }
+        4 => set(&mut v, "/buffers/0", "uri", json!(pick(rng, HOSTILE_URIS))),
+        5 => set(
+            &mut v,
+            "/meshes/0/primitives/0",
+            "mode",
+            json!(below(rng, 8)),
+        ),
+        6 => {
+            let stride = pick(rng, &[0u64, 3, 4, 12, 252, 256]);
+            set(&mut v, "/bufferViews/0", "byteStride", json!(stride));
+        }
+        7 => {
+            let count = len(&v, "accessors");
+            if count > 0 {
+                let k = below(rng, count);
+                let field = pick(rng, &["byteOffset", "count", "bufferView"]);
+                let value = pick(rng, &[u64::MAX - 3, 1 << 62, 1 << 31, 0, 1]);
+                set(&mut v, &format!("/accessors/{k}"), field, json!(value));
+            }
+        }
+        8 => set(
+            &mut v,
+            "/accessors/0",
+            "sparse",
+            json!({"count": 1,
+                "indices": {"bufferView": 0, "componentType": 5125},
+                "values": {"bufferView": 0}}),
+        ),
+        _ => {
+            // At most 64 placements: instancing multiplies what a file holds by design, bounded
+            // by the placement limits (tests/hostile.rs), not by the input's size as here.
+            let n = pick(rng, &[2usize, 16, 64]);
+            let mut list = vec![json!({"children": (1..=n).collect::<Vec<_>>()})];
+            list.extend((0..n).map(|_| json!({"mesh": 0})));
+            set(&mut v, "", "nodes", json!(list));
+            set(&mut v, "", "scenes", json!([{"nodes": [0]}]));
+            set(&mut v, "", "scene", json!(0));
+        }
+    }
+    *json = serde_json::to_vec(&v).unwrap();
+}
+
+/// A glTF fuzz input: its JSON and its binary chunk, mutated.
+fn mutate_gltf_mesh(rng: &mut Rng, input: &mut Vec<u8>) {
+    let Some((mut json, mut bin)) = common::glb_chunks(input) else {
+        return mutate_bytes(rng, input);
+    };
+    match rng.next_u64() % 6 {
+        0 => return mutate_bytes(rng, input),
+        1 | 2 => mutate_json(rng, &mut json, GLTF_FIELDS),
+        3 | 4 => mutate_gltf_structure(rng, &mut json),
+        _ => mutate_payload_value(rng, &mut bin),
+    }
+    *input = common::glb_of(&json, &bin);
+}
+
+/// The folder of the glTF mesh fuzzers, with a device and a FIFO beside the file for URIs to
+/// name (a reader that opened the FIFO would wait forever: the test would hang).
+fn gltf_fuzz_dir(name: &str) -> std::path::PathBuf {
+    let dir = common::tempdir(name);
+    let zero = dir.join("zero.bin");
+    if !zero.exists() {
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    }
+    let fifo = dir.join("fifo.bin");
+    if !fifo.exists() {
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    }
+    dir
+}
+
+/// The glb mesh reader, and what follows it, on mutated octagon glbs (constant alpha, and the
+/// falloff texture).
+#[test]
+fn glb_mesh_reader_survives_mutated_files() {
+    use rara::mesh::export::{Falloff, MeshFormat};
+    let scene = mesh_scene();
+    let seeds = vec![
+        (
+            "octagons".to_string(),
+            octagon_seed(&scene, MeshFormat::Glb, Falloff::Constant),
+        ),
+        (
+            "octagons, texture".to_string(),
+            octagon_seed(&scene, MeshFormat::Glb, Falloff::Texture),
+        ),
+    ];
+    let path = gltf_fuzz_dir("fuzz_glb_mesh").join("fuzz.glb");
+    fuzz_bounded(
+        "glb_mesh",
+        &seeds,
+        mutate_gltf_mesh,
+        |input| read_mesh_file(&path, input, &scene),
+        mesh_bound,
+    );
+}
+
+/// A `.gltf` whose buffer is a file beside it: the input carries the JSON and the buffer's
+/// bytes (as a glb's two chunks); each is mutated, the JSON structurally too (its URI made
+/// hostile among the rest), and written as `fuzz.gltf` and `fuzz.bin`.
+#[test]
+fn gltf_with_external_buffers_survives_mutated_files() {
+    use rara::mesh::export::{Falloff, MeshFormat};
+    let scene = mesh_scene();
+    let glb = octagon_seed(&scene, MeshFormat::Glb, Falloff::Constant);
+    let (json, bin) = common::glb_chunks(&glb).unwrap();
+    let mut v: serde_json::Value = serde_json::from_slice(&json).unwrap();
+    v["buffers"][0]["uri"] = serde_json::json!("fuzz.bin");
+    let seeds = vec![(
+        "octagons, external buffer".to_string(),
+        common::glb_of(&serde_json::to_vec(&v).unwrap(), &bin),
+    )];
+    let dir = gltf_fuzz_dir("fuzz_gltf_external");
+    let (gltf, buffer) = (dir.join("fuzz.gltf"), dir.join("fuzz.bin"));
+    fuzz_bounded(
+        "gltf_external",
+        &seeds,
+        mutate_gltf_mesh,
+        |input| {
+            let Some((json, bin)) = common::glb_chunks(input) else {
+                return Err("no chunks".into());
+            };
+            std::fs::write(&buffer, bin).unwrap();
+            read_mesh_file(&gltf, &json, &scene)
+        },
+        mesh_bound,
+    );
+}
+
+/// Fields of a scene file that `mutate_json` renames away.
+const SCENE_FIELDS: &[&str] = &[
+    "\"splats\"",
+    "\"meshes\"",
+    "\"lights\"",
+    "\"path\"",
+    "\"transform\"",
+    "\"material\"",
+    "\"translation\"",
+    "\"scale\"",
+    "\"rotation_deg\"",
+    "\"clip\"",
+    "\"planes\"",
+    "\"point\"",
+    "\"intensity\"",
+    "\"max_depth\"",
+];
+
+/// Paths a mutated scene file may name.
+const HOSTILE_PATHS: &[&str] = &[
+    "s.ply",
+    "quad.obj",
+    "cube.obj",
+    "tri.gltf",
+    "cycle.gltf",
+    "zero.obj",
+    "fifo.obj",
+    "/dev/zero",
+    "missing.ply",
+    "../s.ply",
+    "$REAL/missing.ply",
+    ".",
+    "",
+];
+
+/// The scene file reader with every file it names (real loads of a small scene and meshes,
+/// and of hostile paths: a device, a FIFO, a node cycle, missing files).
+#[test]
+fn scene_file_loader_survives_mutated_files() {
+    use rara::mixed::{file::SceneFile, MixedScene};
+    let dir = common::tempdir("fuzz_scene_file");
+    rara::ply::write_ply(
+        &rara::synth::shell(40, 1, 2),
+        dir.join("s.ply"),
+        rara::ply::PlyEncoding::BinaryLittleEndian,
+    )
+    .unwrap();
+    let meshes = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/meshes");
+    for m in ["quad.obj", "cube.obj"] {
+        std::fs::copy(meshes.join(m), dir.join(m)).unwrap();
+    }
+    let tri = |nodes: serde_json::Value| {
+        let data: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+            .iter()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
+        use base64::Engine;
+        serde_json::json!({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+            "nodes": nodes, "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "buffers": [{"byteLength": 36, "uri": format!("data:application/octet-stream;base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(&data))}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}]})
+        .to_string()
+    };
+    std::fs::write(dir.join("tri.gltf"), tri(serde_json::json!([{"mesh": 0}]))).unwrap();
+    std::fs::write(
+        dir.join("cycle.gltf"),
+        tri(serde_json::json!([{"mesh": 0, "children": [0]}])),
+    )
+    .unwrap();
+    let zero = dir.join("zero.obj");
+    if !zero.exists() {
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    }
+    let fifo = dir.join("fifo.obj");
+    if !fifo.exists() {
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    }
+    let seed = serde_json::json!({
+        "splats": [{"path": "s.ply", "transform": {"translation": [0, 0, 1], "rotation_deg": [0, 30, 0], "scale": 1.5},
+                    "clip": {"planes": [[1, 0, 0, 0]]}}],
+        "meshes": [{"path": "quad.obj", "transform": {"translation": [0, 0, 2], "scale": [2, 1, 1]},
+                    "material": {"mirror": {"reflectance": 0.9}}},
+                   {"path": "tri.gltf", "material": {"glass": {"ior": 1.5}}},
+                   {"path": "cube.obj", "material": {"diffuse": {"color": [0.5, 0.5, 0.5]}}}],
+        "lights": [{"point": {"position": [0, -2, 0], "intensity": [4, 4, 4]}},
+                   {"directional": {"direction": [0, 1, 0], "intensity": [1, 1, 1]}}],
+        "ambient": [0.2, 0.2, 0.2], "background": [0, 0, 0], "max_depth": 8, "shadow_strength": 0.75
+    });
+    let seeds = vec![(
+        "showcase".to_string(),
+        serde_json::to_vec_pretty(&seed).unwrap(),
+    )];
+    let file = dir.join("scene.json");
+    fuzz(
+        "scene_file",
+        &seeds,
+        |rng, input| match rng.next_u64() % 4 {
+            0 => mutate_bytes(rng, input),
+            1 => {
+                // A path made hostile.
+                let text = String::from_utf8_lossy(input).into_owned();
+                let from = pick(
+                    rng,
+                    &["\"s.ply\"", "\"quad.obj\"", "\"tri.gltf\"", "\"cube.obj\""],
+                );
+                let to = format!("\"{}\"", pick(rng, HOSTILE_PATHS));
+                *input = text.replacen(from, &to, 1).into_bytes();
+            }
+            _ => mutate_json(rng, input, SCENE_FIELDS),
+        },
+        |input| {
+            let shown = file.display().to_string();
+            let text = std::str::from_utf8(input).map_err(|e| e.to_string())?;
+            let parsed =
+                SceneFile::parse(text, &file).map_err(|e| e.to_string().replace(&shown, ""))?;
+            let scene = MixedScene::from_file(parsed, &file, |p| {
+                rara::formats::load_scene(p).map(|(s, _)| s)
+            })
+            .map_err(|e| e.to_string().replace(&shown, ""))?;
+            scene
+                .validate()
+                .map_err(|e| format!("ACCEPTED BAD INPUT: {e}"))?;
+            check_scene(&scene.gaussians, usize::MAX)
+                .map_err(|e| format!("ACCEPTED BAD INPUT: {e}"))
+        },
+    );
 }
