@@ -653,3 +653,31 @@ pub fn write_spz(scene: &Scene, path: &Path, version: SpzVersion, axes: SpzAxes)
         source,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The header's count against the input's size, at the edge of the inflation ratio: a
+    /// count the bytes could hold inflated 1024 times is taken, one more is refused.
+    #[test]
+    fn the_count_is_bounded_by_the_inflation_ratio_at_its_edge() {
+        let stored: u64 = 9000;
+        let most = stored * MAX_INFLATION / 9;
+        let header = |count: u64| {
+            let mut h = [0u8; 16];
+            h[..4].copy_from_slice(&MAGIC.to_le_bytes());
+            h[4..8].copy_from_slice(&3u32.to_le_bytes());
+            h[8..12].copy_from_slice(&(count as u32).to_le_bytes());
+            h[13] = FRACTIONAL_BITS;
+            h
+        };
+        let path = Path::new("x.spz");
+        assert_eq!(
+            parse_header(path, &header(most), stored).unwrap().count as u64,
+            most
+        );
+        let e = parse_header(path, &header(most + 1), stored).unwrap_err();
+        assert!(e.to_string().contains("does not fit in 9000 bytes"), "{e}");
+    }
+}

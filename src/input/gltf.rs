@@ -519,6 +519,23 @@ mod tests {
         }
     }
 
+    /// A buffer's byteLength at the 4 GiB limit is taken (and then found longer than its
+    /// data), one byte more is refused before anything is read.
+    #[test]
+    fn the_buffer_limit_holds_at_its_edge() {
+        let gltf = |length: u64| {
+            json!({"asset": {"version": "2.0"},
+                "buffers": [{"byteLength": length, "uri": "data:application/octet-stream;base64,AAAA"}]})
+        };
+        let e = doc(gltf(MAX_GLTF_BYTES)).err().unwrap().to_string();
+        assert!(
+            e.contains("holds 3 bytes where its byteLength says 4294967296"),
+            "{e}"
+        );
+        let e = doc(gltf(MAX_GLTF_BYTES + 1)).err().unwrap().to_string();
+        assert!(e.contains("more than the 4294967296 rara reads"), "{e}");
+    }
+
     fn base64_of(bytes: &[u8]) -> String {
         use base64::Engine;
         base64::engine::general_purpose::STANDARD.encode(bytes)

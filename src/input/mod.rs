@@ -405,6 +405,36 @@ mod tests {
         }
     }
 
+    /// The stream cap itself, from both sides: a pipe of exactly 1 GiB is read whole, one byte
+    /// more is refused (1 GiB of memory for a moment).
+    #[test]
+    fn the_stream_cap_holds_at_one_gib() {
+        for (len, ok) in [(MAX_STREAM_BYTES, true), (MAX_STREAM_BYTES + 1, false)] {
+            let mut child = std::process::Command::new("head")
+                .args(["-c", &len.to_string(), "/dev/zero"])
+                .stdout(std::process::Stdio::piped())
+                .spawn()
+                .unwrap();
+            let fd = child.stdout.take().unwrap();
+            let path = PathBuf::from(format!("/proc/self/fd/{}", {
+                use std::os::fd::AsRawFd;
+                fd.as_raw_fd()
+            }));
+            let read = read_bounded(&path, u64::MAX, "mesh");
+            match read {
+                Ok(bytes) => assert!(ok && bytes.len() as u64 == len, "{len}"),
+                Err(e) => assert!(
+                    !ok && e
+                        .to_string()
+                        .contains("more than 1073741824 bytes from a pipe"),
+                    "{len}: {e}"
+                ),
+            }
+            drop(fd);
+            child.wait().unwrap();
+        }
+    }
+
     #[test]
     fn peeked_bytes_are_read_again() {
         let d = dir("peek");
