@@ -452,12 +452,13 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
             };
             all_ids &= read_ids("PRIMITIVE_ID", &mut primitive_ids)?;
             all_ids &= read_ids("CORNER_ID", &mut corner_ids)?;
-            let idx = match primitive.indices {
-                Some(a) => doc.indices(a.value())?,
-                None => (0..count as u32).collect(),
+            let (idx, what) = match primitive.indices {
+                Some(a) => (doc.indices(a.value())?, "indices"),
+                None => ((0..count as u32).collect(), "vertices (and no indices)"),
             };
             mesh.faces.extend(
-                triangles(mode, &idx, path)?.map(|t| t.map(|i| base.saturating_add(i)).to_vec()),
+                triangles(mode, &idx, what, path)?
+                    .map(|t| t.map(|i| base.saturating_add(i)).to_vec()),
             );
         }
     }
@@ -477,6 +478,7 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
 fn triangles<'a>(
     mode: gltf::json::mesh::Mode,
     idx: &'a [u32],
+    what: &str,
     path: &Path,
 ) -> Result<Box<dyn Iterator<Item = [u32; 3]> + 'a>> {
     use gltf::json::mesh::Mode;
@@ -486,7 +488,7 @@ fn triangles<'a>(
                 return Err(mesh_err(
                     path,
                     format!(
-                        "a triangle primitive with {} indices, not a multiple of 3",
+                        "a triangle-list primitive with {} {what}, not a multiple of 3",
                         idx.len()
                     ),
                 ));
