@@ -1072,6 +1072,18 @@ pub fn write_ply_layout(
     layout: PlyLayout,
 ) -> Result<()> {
     let path = path.as_ref();
+    check_layout(scene, layout, path)?;
+    let io = |source| Error::Io {
+        path: PathBuf::from(path),
+        source,
+    };
+    let mut w = BufWriter::new(File::create(path).map_err(io)?);
+    write_ply_to(scene, &mut w, encoding, layout, path)?;
+    w.flush().map_err(io)
+}
+
+/// Refuses a scene `layout` cannot hold: [`PlyLayout::Games`] holds flat Gaussians only.
+fn check_layout(scene: &Scene, layout: PlyLayout, path: &Path) -> Result<()> {
     if layout == PlyLayout::Games {
         if let Some(i) =
             (0..scene.len()).find(|&i| crate::scene::flat_axis(scene.scales[i]).is_none())
@@ -1085,13 +1097,7 @@ pub fn write_ply_layout(
             ));
         }
     }
-    let io = |source| Error::Io {
-        path: PathBuf::from(path),
-        source,
-    };
-    let mut w = BufWriter::new(File::create(path).map_err(io)?);
-    write_ply_to(scene, &mut w, encoding, layout, path)?;
-    w.flush().map_err(io)
+    Ok(())
 }
 
 /// Writes `scene` as [`write_ply_layout`] does, to `w` (`path` names it in errors; a file, a
@@ -1103,19 +1109,7 @@ pub fn write_ply_to(
     layout: PlyLayout,
     path: &Path,
 ) -> Result<()> {
-    if layout == PlyLayout::Games {
-        if let Some(i) =
-            (0..scene.len()).find(|&i| crate::scene::flat_axis(scene.scales[i]).is_none())
-        {
-            return Err(ply_err(
-                path,
-                format!(
-                    "the GaMeS layout holds flat Gaussians only, and Gaussian {i} has three \
-                     nonzero scales (flatten the scene first)"
-                ),
-            ));
-        }
-    }
+    check_layout(scene, layout, path)?;
     let io = |source| Error::Io {
         path: PathBuf::from(path),
         source,

@@ -162,6 +162,19 @@ fn scene_file_with_mesh(dir: &Path, mesh: &str) -> PathBuf {
     p
 }
 
+/// The arguments of `rara mesh import MESH --original ORIGINAL -o OUT`.
+fn import_args<'a>(mesh: &'a Path, original: &'a Path, out: &'a Path) -> [&'a str; 7] {
+    [
+        "mesh",
+        "import",
+        s(mesh),
+        "--original",
+        s(original),
+        "-o",
+        s(out),
+    ]
+}
+
 /// `rara render --scene` of `scene_file` from a fixed camera, to `dir/out.png`.
 fn render_scene_file(dir: &Path, scene_file: &Path) -> Output {
     let out = dir.join("out.png");
@@ -220,15 +233,7 @@ fn gltf_offsets_near_2_64_are_errors_not_panics() {
         mesh.pointer_mut(at).unwrap()[field] = json!(value);
         let gltf = d.join("mesh.gltf");
         std::fs::write(&gltf, mesh.to_string()).unwrap();
-        let out = rara(&[
-            "mesh",
-            "import",
-            s(&gltf),
-            "--original",
-            s(&original),
-            "-o",
-            s(&d.join("o.ply")),
-        ]);
+        let out = rara(&import_args(&gltf, &original, &d.join("o.ply")));
         assert_error(&out, &["glTF", message]);
         let out = render_scene_file(&d, &scene_file_with_mesh(&d, "mesh.gltf"));
         assert_error(&out, &["meshes[0].path", message]);
@@ -279,18 +284,7 @@ fn node_cycles_and_multiplying_paths_are_refused_within_a_memory_cap() {
         )
         .unwrap();
         assert_error(
-            &rara_capped(
-                2_000_000,
-                &[
-                    "mesh",
-                    "import",
-                    s(&gltf),
-                    "--original",
-                    s(&original),
-                    "-o",
-                    s(&d.join("o.ply")),
-                ],
-            ),
+            &rara_capped(2_000_000, &import_args(&gltf, &original, &d.join("o.ply"))),
             &["reached twice"],
         );
         let file = scene_file_with_mesh(&d, &format!("{name}.gltf"));
@@ -307,20 +301,8 @@ fn mesh_files_and_buffer_uris_that_never_end_are_refused() {
     let d = case_dir("endless");
     let original = d.join("s.ply");
     let scene = scene_ply(&original, 40, 0);
-    let import = |mesh: &Path| {
-        rara_capped(
-            3_000_000,
-            &[
-                "mesh",
-                "import",
-                s(mesh),
-                "--original",
-                s(&original),
-                "-o",
-                s(&d.join("o.ply")),
-            ],
-        )
-    };
+    let import =
+        |mesh: &Path| rara_capped(3_000_000, &import_args(mesh, &original, &d.join("o.ply")));
     for ext in ["obj", "ply", "glb", "gltf"] {
         let zero = d.join(format!("zero.{ext}"));
         std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
@@ -504,15 +486,7 @@ fn obj_points_and_lines_are_errors() {
     for (extra, vertices) in [("f 1/1 2/2\n", 2), ("f 3/3\n", 1)] {
         let bad = d.join("bad.obj");
         std::fs::write(&bad, format!("{text}{extra}")).unwrap();
-        let out = rara(&[
-            "mesh",
-            "import",
-            s(&bad),
-            "--original",
-            s(&original),
-            "-o",
-            s(&d.join("o.ply")),
-        ]);
+        let out = rara(&import_args(&bad, &original, &d.join("o.ply")));
         assert_error(&out, &[&format!("face {faces} has {vertices} vertices")]);
         let quad = d.join("quad.obj");
         let extra = extra.replace("/1", "").replace("/2", "").replace("/3", "");
@@ -688,18 +662,7 @@ fn instancing_is_bounded_before_anything_is_decoded() {
     v["accessors"][0]["count"] = json!(n);
     let gltf = d.join("instanced.gltf");
     std::fs::write(&gltf, v.to_string()).unwrap();
-    let out = rara_capped(
-        1_500_000,
-        &[
-            "mesh",
-            "import",
-            s(&gltf),
-            "--original",
-            s(&original),
-            "-o",
-            s(&d.join("o.ply")),
-        ],
-    );
+    let out = rara_capped(1_500_000, &import_args(&gltf, &original, &d.join("o.ply")));
     assert_error(&out, &["place 134348800 vertices in all", "134217728"]);
     // Three vertices and 2^18 indices under 1025 nodes: few vertices, past 2^28 indices.
     let m = 1usize << 18;
@@ -716,18 +679,7 @@ fn instancing_is_bounded_before_anything_is_decoded() {
         .push(json!({"bufferView": 1, "componentType": 5125, "count": m, "type": "SCALAR"}));
     v["meshes"][0]["primitives"][0]["indices"] = json!(1);
     std::fs::write(&gltf, v.to_string()).unwrap();
-    let out = rara_capped(
-        1_500_000,
-        &[
-            "mesh",
-            "import",
-            s(&gltf),
-            "--original",
-            s(&original),
-            "-o",
-            s(&d.join("o.ply")),
-        ],
-    );
+    let out = rara_capped(1_500_000, &import_args(&gltf, &original, &d.join("o.ply")));
     assert_error(
         &out,
         &["place 268697600 vertex indices in all", "268435456"],
@@ -762,7 +714,8 @@ fn a_full_disk_leaves_no_partial_file() {
         let mut cmd = Command::new("bash");
         cmd.arg("-c")
             .arg(format!(
-                "{}ulimit -f 1024; exec \"$@\"",
+                // No core dump from the signal: it is the point of the test, not a crash.
+                "{}ulimit -c 0; ulimit -f 1024; exec \"$@\"",
                 if trap { "trap '' XFSZ; " } else { "" }
             ))
             .arg("rara")
@@ -835,15 +788,7 @@ fn a_sequence_with_a_bad_frame_leaves_nothing() {
     ]));
     std::fs::write(meshes.join("f1.obj"), "v 0 0 0\n").unwrap();
     let imported = d.join("imported");
-    let out = rara(&[
-        "mesh",
-        "import",
-        s(&meshes),
-        "--original",
-        s(&original),
-        "-o",
-        s(&imported),
-    ]);
+    let out = rara(&import_args(&meshes, &original, &imported));
     assert_error(&out, &["f1.obj"]);
     assert!(!imported.exists());
 }

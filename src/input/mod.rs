@@ -384,25 +384,31 @@ mod tests {
         // read whole (a pipe from a child process).
         let e = read_bounded(Path::new("/dev/zero"), 4096, "mesh").unwrap_err();
         assert!(e.to_string().contains("more than 4096 bytes"), "{e}");
-        for (len, ok) in [(4096usize, true), (4097, false)] {
-            let mut child = std::process::Command::new("head")
-                .args(["-c", &len.to_string(), "/dev/zero"])
-                .stdout(std::process::Stdio::piped())
-                .spawn()
-                .unwrap();
-            let fd = child.stdout.take().unwrap();
-            let path = PathBuf::from(format!("/proc/self/fd/{}", {
-                use std::os::fd::AsRawFd;
-                fd.as_raw_fd()
-            }));
-            let read = read_bounded(&path, 4096, "mesh");
+        for (len, ok) in [(4096u64, true), (4097, false)] {
+            let read = read_piped(len, 4096);
             assert_eq!(read.is_ok(), ok, "{len}: {read:?}");
             if ok {
-                assert_eq!(read.unwrap().len(), len);
+                assert_eq!(read.unwrap().len() as u64, len);
             }
-            drop(fd);
-            child.wait().unwrap();
         }
+    }
+
+    /// `len` zero bytes from a pipe (another process's output), read with `limit`.
+    fn read_piped(len: u64, limit: u64) -> Result<Vec<u8>> {
+        let mut child = std::process::Command::new("head")
+            .args(["-c", &len.to_string(), "/dev/zero"])
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let fd = child.stdout.take().unwrap();
+        let path = PathBuf::from(format!("/proc/self/fd/{}", {
+            use std::os::fd::AsRawFd;
+            fd.as_raw_fd()
+        }));
+        let read = read_bounded(&path, limit, "mesh");
+        drop(fd);
+        child.wait().unwrap();
+        read
     }
 
     /// The stream cap itself, from both sides: a pipe of exactly 1 GiB is read whole, one byte
@@ -410,18 +416,7 @@ mod tests {
     #[test]
     fn the_stream_cap_holds_at_one_gib() {
         for (len, ok) in [(MAX_STREAM_BYTES, true), (MAX_STREAM_BYTES + 1, false)] {
-            let mut child = std::process::Command::new("head")
-                .args(["-c", &len.to_string(), "/dev/zero"])
-                .stdout(std::process::Stdio::piped())
-                .spawn()
-                .unwrap();
-            let fd = child.stdout.take().unwrap();
-            let path = PathBuf::from(format!("/proc/self/fd/{}", {
-                use std::os::fd::AsRawFd;
-                fd.as_raw_fd()
-            }));
-            let read = read_bounded(&path, u64::MAX, "mesh");
-            match read {
+            match read_piped(len, u64::MAX) {
                 Ok(bytes) => assert!(ok && bytes.len() as u64 == len, "{len}"),
                 Err(e) => assert!(
                     !ok && e
@@ -430,8 +425,6 @@ mod tests {
                     "{len}: {e}"
                 ),
             }
-            drop(fd);
-            child.wait().unwrap();
         }
     }
 
