@@ -95,14 +95,43 @@ fn mkfifo(path: &Path) {
     );
 }
 
-/// Writes `bytes` into the FIFO `path` from another thread: it opens it (waiting for a
-/// reader), writes everything and closes it at once, as `cat file > fifo` does.
+/// Writes `bytes` into the FIFO `path` from another thread: it opens it once a reader has
+/// (polling, for at most 60 s, so that a reader that never comes cannot hang the test),
+/// writes everything and closes it at once, as `cat file > fifo` does.
 fn feed_fifo(path: &Path, bytes: Vec<u8>) -> std::thread::JoinHandle<()> {
+    use std::io::Write;
+    use std::os::unix::fs::OpenOptionsExt;
     let path = path.to_path_buf();
     std::thread::spawn(move || {
+        let start = Instant::now();
+        let mut file = loop {
+            // Without a reader, a non-blocking open for writing fails with ENXIO.
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .custom_flags(libc::O_NONBLOCK)
+                .open(&path)
+            {
+                Ok(f) => break f,
+                Err(_) if start.elapsed() < Duration::from_secs(60) => {
+                    std::thread::sleep(Duration::from_millis(5))
+                }
+                Err(_) => return,
+            }
+        };
+        // Blocking writes from here on.
+        use std::os::fd::AsRawFd;
+        let fd = file.as_raw_fd();
+        // SAFETY: fcntl on a descriptor this thread owns.
+        unsafe {
+            libc::fcntl(
+                fd,
+                libc::F_SETFL,
+                libc::fcntl(fd, libc::F_GETFL) & !libc::O_NONBLOCK,
+            )
+        };
         // A reader that refuses the data early closes its end: the writer then gets EPIPE,
         // which is fine here.
-        let _ = std::fs::write(&path, bytes);
+        let _ = file.write_all(&bytes);
     })
 }
 
