@@ -27,7 +27,7 @@ const SH_C0: f32 = 0.282_094_8;
 
 /// Reads a `.splat` file. A record with a non-finite or negative value is dropped and counted,
 /// and a Gaussian far thinner along one axis is made flat, as every reader does
-/// ([`push_decoded`]).
+/// (`push_decoded`).
 pub fn read_splat(path: &Path) -> Result<(Scene, LoadReport)> {
     read_splat_input(InputFile::open(path, ".splat file")?)
 }

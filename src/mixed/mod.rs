@@ -1,7 +1,7 @@
 //! Mixed scenes (SPEC section 8, issue 33): splat scenes, triangle meshes with a diffuse,
 //! mirror or glass material, point and directional lights, traced together.
 //!
-//! - [`file`]: the JSON scene file;
+//! - [`file`](mod@file): the JSON scene file;
 //! - [`triangles`]: the triangles, their BVH and the watertight ray-triangle test;
 //! - [`MixedScene`]: everything in world space, ready for the CPU reference
 //!   ([`crate::reference::mixed`]) and the GPU ([`crate::stages::mixed`]).
