@@ -32,7 +32,7 @@ pub fn read_splat(path: &Path) -> Result<(Scene, LoadReport)> {
     read_splat_input(InputFile::open(path, ".splat file")?)
 }
 
-/// The most bytes of a `.splat` rara reads: 2^26 records (a scene's most Gaussians).
+/// The most bytes of a `.splat` rara reads: a scene's most Gaussians (67,107,840), 32 bytes each.
 pub const MAX_FILE_BYTES: u64 = crate::constants::MAX_GAUSSIANS * BYTES_PER_SPLAT as u64;
 
 /// [`read_splat`] from an input opened already: a regular file is read record by record, a
