@@ -168,19 +168,8 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     let start = std::time::Instant::now();
-    let counted = std::cell::Cell::new(0u64);
-    set.add_with(output, |w| {
-        let mut counting = Counting {
-            inner: w,
-            bytes: &counted,
-        };
-        write(
-            &scene,
-            &mut counting,
-            &args.output,
-            target,
-            args.spz_version,
-        )
+    let bytes = set.add_with(output, |w| {
+        write(&scene, w, &args.output, target, args.spz_version)
     })?;
     set.commit()?;
     eprintln!(
@@ -200,26 +189,8 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
             String::new()
         },
         scene.len(),
-        counted.get(),
+        bytes,
         start.elapsed().as_secs_f64() * 1e3
     );
     Ok(())
-}
-
-/// A writer that counts what passes through it (the size `convert` reports, which a device
-/// target has no metadata for).
-struct Counting<'a> {
-    inner: &'a mut dyn Write,
-    bytes: &'a std::cell::Cell<u64>,
-}
-
-impl Write for Counting<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.bytes.set(self.bytes.get() + n as u64);
-        Ok(n)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
 }

@@ -21,6 +21,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use rara::input::folder_of;
 use rara::{Error, Result};
 
 fn invalid(path: &Path, message: impl std::fmt::Display) -> Error {
@@ -44,14 +45,6 @@ fn temp_name(path: &Path) -> PathBuf {
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     let n = TEMP_NAMES.fetch_add(1, Ordering::Relaxed);
     folder_of(path).join(format!(".{name}.rara-{}-{n}.tmp", std::process::id()))
-}
-
-/// The folder a file goes in (`.` for a bare name).
-fn folder_of(path: &Path) -> &Path {
-    match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    }
 }
 
 /// Where an output's bytes go until it is committed.
@@ -218,7 +211,11 @@ impl Output {
             )),
             Sink::InPlace => To::Memory(Vec::new()),
         };
-        Ok(Writing { output: self, to })
+        Ok(Writing {
+            output: self,
+            to,
+            written: 0,
+        })
     }
 
     /// Writes `bytes` as the whole file, committed at once.
@@ -308,14 +305,18 @@ enum To {
 pub struct Writing {
     output: Output,
     to: To,
+    /// Bytes written so far (the size a device target has no metadata for).
+    written: u64,
 }
 
 impl Write for Writing {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        match &mut self.to {
+        let n = match &mut self.to {
             To::File(w) => w.write(buf),
             To::Memory(v) => v.write(buf),
-        }
+        }?;
+        self.written += n as u64;
+        Ok(n)
     }
     fn flush(&mut self) -> std::io::Result<()> {
         match &mut self.to {
@@ -371,7 +372,7 @@ impl Outputs {
 
     /// Stages `writing`, written whole: flushed and on disk, not yet in place.
     pub fn add_written(&mut self, writing: Writing) -> Result<()> {
-        let Writing { mut output, to } = writing;
+        let Writing { mut output, to, .. } = writing;
         let bytes = match to {
             To::File(mut w) => {
                 w.flush().map_err(io(&output.path))?;
@@ -400,16 +401,18 @@ impl Outputs {
         Ok(())
     }
 
-    /// Stages `output`, written by `write`.
+    /// Stages `output`, written by `write`; returns the bytes written.
     pub fn add_with(
         &mut self,
         output: Output,
         write: impl FnOnce(&mut dyn Write) -> Result<()>,
-    ) -> Result<()> {
+    ) -> Result<u64> {
         let path = output.path.clone();
         let mut writing = output.begin()?;
         write(&mut writing).map_err(|e| name_io(e, &path))?;
-        self.add_written(writing)
+        let written = writing.written;
+        self.add_written(writing)?;
+        Ok(written)
     }
 
     /// Stages `output` holding `bytes`.
@@ -420,6 +423,7 @@ impl Outputs {
                 source,
             })
         })
+        .map(drop)
     }
 
     /// Stages `output` holding `img` as a PNG.

@@ -32,7 +32,7 @@ use serde_json::{json, Value};
 
 use super::{flip_axes, push_decoded};
 use crate::error::{Error, Result};
-use crate::input::gltf::Document;
+use crate::input::gltf::{bad, check_placed, Document};
 use crate::ply::LoadReport;
 use crate::scene::{sh_coeffs, Scene};
 
@@ -43,10 +43,6 @@ const EXT_SPZ: &str = "KHR_gaussian_splatting_compression_spz_2";
 const SH_C0: f32 = 0.282_094_8;
 /// glTF's LUF against rara's RDF: x and y point the other way.
 const GLTF_FLIPS: [bool; 3] = [true, true, false];
-fn bad(path: &Path, message: impl std::fmt::Display) -> Error {
-    Error::InvalidInput(format!("{}: glTF: {message}", path.display()))
-}
-
 /// One decoded splat primitive, in glTF's axes and the mesh's own frame.
 fn read_primitive(
     doc: &Document,
@@ -252,49 +248,29 @@ pub fn read_gltf_bytes(bytes: &[u8], path: &Path) -> Result<(Scene, LoadReport)>
 /// that places one primitive under many nodes is refused rather than decoded many times.
 fn placements(doc: &Document, path: &Path) -> Result<Vec<(usize, usize, DMat4)>> {
     let meshes = doc.raw.get("meshes").and_then(Value::as_array);
-    let mut out = Vec::new();
+    let placed = doc.placed_meshes()?;
     let mut total: u64 = 0;
-    for roots in doc.scene_roots()? {
-        for (index, world) in doc.walk(&roots)? {
-            let Some(mesh) = doc.root.nodes[index].mesh.map(|m| m.value()) else {
+    for &(index, mesh, _) in &placed {
+        let primitives = meshes
+            .and_then(|m| m.get(mesh))
+            .and_then(|m| m.get("primitives"))
+            .and_then(Value::as_array)
+            .ok_or_else(|| bad(path, format!("node {index} names a missing mesh {mesh}")))?;
+        for primitive in primitives {
+            if primitive.pointer(&format!("/extensions/{EXT}")).is_none() {
                 continue;
-            };
-            let primitives = meshes
-                .and_then(|m| m.get(mesh))
-                .and_then(|m| m.get("primitives"))
-                .and_then(Value::as_array)
-                .ok_or_else(|| bad(path, format!("node {index} names a missing mesh {mesh}")))?;
-            for primitive in primitives {
-                if primitive.pointer(&format!("/extensions/{EXT}")).is_none() {
-                    continue;
-                }
-                let count = primitive
-                    .pointer("/attributes/POSITION")
-                    .and_then(Value::as_u64)
-                    .map(|a| doc.count(usize::try_from(a).unwrap_or(usize::MAX)))
-                    .transpose()?
-                    .unwrap_or(0);
-                total = total.saturating_add(count as u64);
             }
-            out.push((index, mesh, world));
+            let count = primitive
+                .pointer("/attributes/POSITION")
+                .and_then(Value::as_u64)
+                .map(|a| doc.count(usize::try_from(a).unwrap_or(usize::MAX)))
+                .transpose()?
+                .unwrap_or(0);
+            total = total.saturating_add(count as u64);
         }
     }
-    check_placed(total, crate::constants::MAX_GAUSSIANS, path)?;
-    Ok(out)
-}
-
-/// The Gaussians placed by every node in all, against the most a scene may have.
-fn check_placed(total: u64, most: u64, path: &Path) -> Result<()> {
-    if total > most {
-        return Err(bad(
-            path,
-            format!(
-                "its nodes place {total} Gaussians in all (each primitive counted once per node \
-                 that places it), more than the {most} a scene may have"
-            ),
-        ));
-    }
-    Ok(())
+    check_placed(total, crate::constants::MAX_GAUSSIANS, "Gaussians", path)?;
+    Ok(placed)
 }
 
 fn decode_gltf(doc: &Document, path: &Path) -> Result<(Scene, LoadReport)> {
@@ -561,7 +537,7 @@ mod tests {
         );
         let e = placements(&placed_by(65535, 1025), path).unwrap_err();
         assert!(e.to_string().contains("67173375 Gaussians"), "{e}");
-        check_placed(most, most, path).unwrap();
-        assert!(check_placed(most + 1, most, path).is_err());
+        check_placed(most, most, "Gaussians", path).unwrap();
+        assert!(check_placed(most + 1, most, "Gaussians", path).is_err());
     }
 }

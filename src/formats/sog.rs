@@ -198,9 +198,7 @@ const MAX_META_BYTES: u64 = 1 << 20;
 /// Reads a SOG: a folder holding `meta.json`, that `meta.json` itself, or a bundled `.sog`.
 pub fn read_sog(path: &Path) -> Result<(Scene, LoadReport)> {
     if path.is_dir() {
-        let mut source = Source::Folder(path.to_path_buf());
-        let meta = source.read(path, "meta.json", MAX_META_BYTES)?;
-        return decode(source, meta, path);
+        return decode_source(Source::Folder(path.to_path_buf()), path);
     }
     read_sog_input(InputFile::open(path, "SOG")?)
 }
@@ -211,18 +209,15 @@ pub fn read_sog_input(mut input: InputFile) -> Result<(Scene, LoadReport)> {
     let path = input.path().to_path_buf();
     if input.peek(4)? == b"PK\x03\x04" {
         let source = Source::zip(&path, input.read_all(MAX_FILE_BYTES, "SOG bundle")?)?;
-        return decode_bundle(source, &path);
+        return decode_source(source, &path);
     }
     let meta = input.read_all(MAX_META_BYTES, "SOG meta.json")?;
-    let folder = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    decode(Source::Folder(folder.to_path_buf()), meta, &path)
+    let folder = crate::input::folder_of(&path).to_path_buf();
+    decode(Source::Folder(folder), meta, &path)
 }
 
-/// Reads a bundle's meta.json, then the rest.
-fn decode_bundle(mut source: Source, path: &Path) -> Result<(Scene, LoadReport)> {
+/// Reads the meta.json `source` holds (a bundle's, or a folder's), then the rest.
+fn decode_source(mut source: Source, path: &Path) -> Result<(Scene, LoadReport)> {
     let meta = source.read(path, "meta.json", MAX_META_BYTES)?;
     decode(source, meta, path)
 }

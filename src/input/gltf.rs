@@ -375,6 +375,20 @@ impl Document {
         })
     }
 
+    /// Every node of the scenes to walk ([`Document::scene_roots`], [`Document::walk`]) that
+    /// places a mesh: `(node, mesh, world matrix)`, in walk order.
+    pub fn placed_meshes(&self) -> Result<Vec<(usize, usize, DMat4)>> {
+        let mut out = Vec::new();
+        for roots in self.scene_roots()? {
+            for (index, world) in self.walk(&roots)? {
+                if let Some(mesh) = self.root.nodes[index].mesh {
+                    out.push((index, mesh.value(), world));
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// Every node reached from `roots`, parents before children in the document's order, with
     /// its world matrix. glTF's nodes form trees: a node reached twice (a cycle, a node with
     /// two parents or listed twice) is an error, as is a hierarchy deeper than
@@ -414,8 +428,24 @@ impl Document {
     }
 }
 
-fn bad(path: &Path, message: impl std::fmt::Display) -> Error {
+/// An error about the glTF at `path`.
+pub(crate) fn bad(path: &Path, message: impl std::fmt::Display) -> Error {
     Error::InvalidInput(format!("{}: glTF: {message}", path.display()))
+}
+
+/// Refuses `total` things placed by a glTF's nodes (`what`: Gaussians, vertices, vertex
+/// indices; each mesh counted once per node that places it) past `most`.
+pub(crate) fn check_placed(total: u64, most: u64, what: &str, path: &Path) -> Result<()> {
+    if total > most {
+        return Err(bad(
+            path,
+            format!(
+                "its nodes place {total} {what} in all (each mesh counted once per node that \
+                 places it), more than the {most} rara reads"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A node's local matrix: its `matrix`, else translation, rotation (normalised) and scale.

@@ -41,6 +41,22 @@ fn input_error(path: &Path, message: impl std::fmt::Display) -> Error {
     }
 }
 
+/// The error for `size` bytes at `path`, past the `limit` a `what` may have.
+fn too_large(path: &Path, size: u64, limit: u64, what: &str) -> Error {
+    input_error(
+        path,
+        format!("{size} bytes, more than the {limit} a {what} may have"),
+    )
+}
+
+/// The folder a file is in (`.` for a bare name).
+pub fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
 /// An input opened once: a regular file (its size known) or a stream (a pipe, a FIFO, a
 /// device), with the first bytes [`InputFile::peek`] read kept for whoever reads it next.
 #[derive(Debug)]
@@ -74,16 +90,6 @@ impl InputFile {
         &self.path
     }
 
-    /// Its size, for a regular file; `None` for a stream.
-    pub fn size(&self) -> Option<u64> {
-        self.size
-    }
-
-    /// Whether it is a stream (a pipe, a FIFO, a device): read once, size unknown.
-    pub fn is_stream(&self) -> bool {
-        self.size.is_none()
-    }
-
     /// Its first `n` bytes (fewer when it ends sooner), kept: what is read next starts at the
     /// beginning again.
     pub fn peek(&mut self, n: usize) -> Result<&[u8]> {
@@ -108,12 +114,7 @@ impl InputFile {
     /// `min(limit, MAX_STREAM_BYTES) + 1` bytes and refused at the cap.
     pub fn read_all(mut self, limit: u64, what: &str) -> Result<Vec<u8>> {
         let cap = match self.size {
-            Some(size) if size > limit => {
-                return Err(input_error(
-                    &self.path,
-                    format!("{size} bytes, more than the {limit} a {what} may have"),
-                ))
-            }
+            Some(size) if size > limit => return Err(too_large(&self.path, size, limit, what)),
             Some(size) => size,
             None => limit.min(MAX_STREAM_BYTES),
         };
@@ -147,10 +148,7 @@ impl InputFile {
     /// that every count in it can be checked against its length.
     pub fn into_sized_reader(mut self, limit: u64, what: &str) -> Result<(Box<dyn BufRead>, u64)> {
         match self.size {
-            Some(size) if size > limit => Err(input_error(
-                &self.path,
-                format!("{size} bytes, more than the {limit} a {what} may have"),
-            )),
+            Some(size) if size > limit => Err(too_large(&self.path, size, limit, what)),
             Some(size) => {
                 self.file.rewind().map_err(|e| io_error(&self.path, e))?;
                 let reader = BufReader::with_capacity(1 << 20, self.file.take(size));
@@ -278,12 +276,7 @@ pub fn side_file(owner: &Path, owner_is_folder: bool, name: &str, what: &str) ->
     let folder = if owner_is_folder {
         owner
     } else {
-        owner.parent().unwrap_or(Path::new("."))
-    };
-    let folder = if folder.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        folder
+        folder_of(owner)
     };
     let file = folder.join(&decoded);
     // stat, not open: opening a FIFO would wait for a writer.
@@ -318,10 +311,7 @@ pub fn read_side_file(file: &Path, length: Option<u64>, limit: u64, what: &str) 
     })?;
     let want = length.unwrap_or(size);
     if want > limit {
-        return Err(input_error(
-            file,
-            format!("{want} bytes, more than the {limit} a {what} may have"),
-        ));
+        return Err(too_large(file, want, limit, what));
     }
     if size < want {
         return Err(input_error(

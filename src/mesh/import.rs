@@ -14,7 +14,7 @@ use glam::{DMat3, DMat4, DVec3};
 use super::export::{has_octagon, Falloff};
 use super::{fit_lsq, fit_redisplats, octagon_radius, FlatFrame, CORNERS};
 use crate::error::{Error, Result};
-use crate::input::gltf::Document;
+use crate::input::gltf::{check_placed, Document};
 use crate::input::InputFile;
 use crate::scene::Scene;
 
@@ -360,18 +360,16 @@ fn read_obj_mesh(input: InputFile) -> Result<MeshData> {
 pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
     use gltf::json::mesh::{Mode, Semantic};
     use gltf::json::validation::Checked;
-    let mut placed: Vec<(usize, DMat4)> = Vec::new();
-    if doc.root.nodes.is_empty() {
-        placed.extend((0..doc.root.meshes.len()).map(|m| (m, DMat4::IDENTITY)));
+    let placed: Vec<(usize, DMat4)> = if doc.root.nodes.is_empty() {
+        (0..doc.root.meshes.len())
+            .map(|m| (m, DMat4::IDENTITY))
+            .collect()
     } else {
-        for roots in doc.scene_roots()? {
-            for (index, world) in doc.walk(&roots)? {
-                if let Some(m) = doc.root.nodes[index].mesh {
-                    placed.push((m.value(), world));
-                }
-            }
-        }
-    }
+        doc.placed_meshes()?
+            .into_iter()
+            .map(|(_, mesh, world)| (mesh, world))
+            .collect()
+    };
     let (mut vertices, mut indices) = (0u64, 0u64);
     for &(m, _) in &placed {
         let mesh = doc
@@ -509,21 +507,6 @@ fn triangles<'a>(
                 .map(move |t| [idx[0], t[0], t[1]]),
         ),
     })
-}
-
-/// The vertices (or indices, `what`) a glTF's nodes place in all, against the most a mesh may
-/// have.
-fn check_placed(total: u64, most: u64, what: &str, path: &Path) -> Result<()> {
-    if total > most {
-        return Err(mesh_err(
-            path,
-            format!(
-                "its nodes place {total} {what} in all (each mesh counted once per node that \
-                 places it), more than the {most} rara reads"
-            ),
-        ));
-    }
-    Ok(())
 }
 
 /// What an import did.
