@@ -1509,16 +1509,7 @@ fn mutate_gltf_mesh(rng: &mut Rng, input: &mut Vec<u8>) {
 /// name (a reader that opened the FIFO would wait forever: the test would hang).
 fn gltf_fuzz_dir(name: &str) -> std::path::PathBuf {
     let dir = common::tempdir(name);
-    let zero = dir.join("zero.bin");
-    if !zero.exists() {
-        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
-    }
-    let fifo = dir.join("fifo.bin");
-    if !fifo.exists() {
-        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
-        // SAFETY: a valid NUL-terminated path.
-        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-    }
+    common::endless_files(&dir, "bin");
     dir
 }
 
@@ -1651,16 +1642,7 @@ fn scene_file_loader_survives_mutated_files() {
         tri(serde_json::json!([{"mesh": 0, "children": [0]}])),
     )
     .unwrap();
-    let zero = dir.join("zero.obj");
-    if !zero.exists() {
-        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
-    }
-    let fifo = dir.join("fifo.obj");
-    if !fifo.exists() {
-        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
-        // SAFETY: a valid NUL-terminated path.
-        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-    }
+    common::endless_files(&dir, "obj");
     let seed = serde_json::json!({
         "splats": [{"path": "s.ply", "transform": {"translation": [0, 0, 1], "rotation_deg": [0, 30, 0], "scale": 1.5},
                     "clip": {"planes": [[1, 0, 0, 0]]}}],

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{assert_error, assert_success, glb_chunks, glb_of, rara};
+use common::{assert_error, assert_success, glb_chunks, glb_of, mkfifo, rara};
 use serde_json::{json, Value};
 
 /// A fresh folder for one test.
@@ -82,17 +82,6 @@ fn rara_capped(kib: u64, args: &[&str]) -> Output {
         .arg(env!("CARGO_BIN_EXE_rara"))
         .args(args);
     run_with_timeout(cmd, 120)
-}
-
-/// A FIFO at `path`.
-fn mkfifo(path: &Path) {
-    let c = std::ffi::CString::new(s(path)).unwrap();
-    // SAFETY: a valid NUL-terminated path.
-    assert_eq!(
-        unsafe { libc::mkfifo(c.as_ptr(), 0o600) },
-        0,
-        "mkfifo {path:?}"
-    );
 }
 
 /// Writes `bytes` into the FIFO `path` from another thread: it opens it once a reader has
@@ -337,8 +326,7 @@ fn mesh_files_and_buffer_uris_that_never_end_are_refused() {
         std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
         assert_error(&import(&zero), &["more than 1073741824 bytes from a pipe"]);
     }
-    std::os::unix::fs::symlink("/dev/zero", d.join("zero.bin")).unwrap();
-    mkfifo(&d.join("fifo.bin"));
+    common::endless_files(&d, "bin");
     for uri in ["zero.bin", "fifo.bin"] {
         let gltf = d.join("uri.gltf");
         std::fs::write(

@@ -522,3 +522,28 @@ pub fn assert_error(out: &std::process::Output, needles: &[&str]) {
         assert!(stderr.contains(n), "stderr lacks '{n}': {stderr}");
     }
 }
+
+/// A FIFO at `path`.
+pub fn mkfifo(path: &Path) {
+    let c = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(
+        unsafe { libc::mkfifo(c.as_ptr(), 0o600) },
+        0,
+        "mkfifo {path:?}"
+    );
+}
+
+/// `zero.EXT` (a symlink to `/dev/zero`, which never ends) and `fifo.EXT` (a FIFO, which a
+/// reader that opened it would wait on forever) in `dir`, made when missing: what a hostile
+/// file may name beside itself.
+pub fn endless_files(dir: &Path, ext: &str) {
+    let zero = dir.join(format!("zero.{ext}"));
+    if !zero.exists() {
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    }
+    let fifo = dir.join(format!("fifo.{ext}"));
+    if !fifo.exists() {
+        mkfifo(&fifo);
+    }
+}
