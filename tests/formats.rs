@@ -289,11 +289,6 @@ fn spz_and_glb_round_trip_a_generated_scene() {
 
 // ------------------------------------------------------------- splat-transform fixtures
 
-/// The fixtures `scripts/format_fixtures.sh` made with splat-transform from `source.ply`.
-fn fixtures_dir() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/formats")
-}
-
 /// Reads `path` the way splat-transform writes it: SPZ in the file's own axes.
 fn load_as_splat_transform_writes(path: &std::path::Path) -> Scene {
     use rara::formats::{load_scene_with, spz::SpzAxes, ReadOptions};
@@ -567,7 +562,7 @@ fn quantisation_bounds(format: &str, source: &Scene) -> PropertyErrors {
 /// rounding, compressed PLY, SPZ v3 and v4 and SOG within half a level of what they quantise.
 #[test]
 fn splat_transform_fixtures_read_within_each_formats_quantisation() {
-    let dir = fixtures_dir();
+    let dir = common::fixtures_dir();
     let (source, _) = rara::ply::load_ply(dir.join("source.ply")).unwrap();
     for (name, format) in [
         ("st.glb", "glb"),
@@ -635,7 +630,7 @@ fn splat_transform_and_rara_read_each_others_files() {
         );
         return;
     };
-    let fixtures = fixtures_dir();
+    let fixtures = common::fixtures_dir();
     let dir = common::tempdir("formats_cross");
     let (source, _) = rara::ply::load_ply(fixtures.join("source.ply")).unwrap();
     let same = PropertyErrors {
@@ -754,7 +749,7 @@ fn splat_transform_and_rara_read_each_others_files() {
 fn hostile_files_get_clear_errors() {
     use rara::formats::spz::{decode, encode, SpzAxes, SpzVersion};
     let dir = common::tempdir("formats_hostile");
-    let fixtures = fixtures_dir();
+    let fixtures = common::fixtures_dir();
     let scene = rara::synth::shell(300, 1, 9);
     let path = std::path::Path::new("hostile.spz");
     let spz = |bytes: &[u8]| decode(bytes, path, SpzAxes::Rub).unwrap_err().to_string();

@@ -853,16 +853,6 @@ fn inflating_bound(len: usize) -> usize {
     4 * rara::formats::MAX_INFLATION as usize * len + (4 << 20)
 }
 
-/// A file of `tests/fixtures/formats/` (made by splat-transform from a generated scene).
-fn format_fixture(name: &str) -> Vec<u8> {
-    std::fs::read(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/formats")
-            .join(name),
-    )
-    .unwrap()
-}
-
 /// Loads `input` as a file named `name` (the readers of formats with members or an extension
 /// to tell them apart work from a path), and checks what it accepts.
 fn load_as_file(path: &Path, input: &[u8]) -> Result<(), String> {
@@ -915,8 +905,14 @@ fn spz_seeds() -> Vec<(String, Vec<u8>)> {
     use rara::formats::spz::{encode, SpzAxes, SpzVersion};
     let scene = rara::synth::shell(300, 1, 9);
     vec![
-        ("splat-transform v4".into(), format_fixture("st_v4.spz")),
-        ("splat-transform v3".into(), format_fixture("st_v3.spz")),
+        (
+            "splat-transform v4".into(),
+            common::format_fixture("st_v4.spz"),
+        ),
+        (
+            "splat-transform v3".into(),
+            common::format_fixture("st_v3.spz"),
+        ),
         (
             "rara v4".into(),
             encode(&scene, SpzVersion::V4, SpzAxes::Rub).unwrap(),
@@ -1021,7 +1017,7 @@ fn spz_reader_survives_mutated_files_and_bombs() {
 /// fixture (SH degree 3) and its first chunk alone.
 #[test]
 fn compressed_ply_reader_survives_mutated_files() {
-    let whole = format_fixture("st.compressed.ply");
+    let whole = common::format_fixture("st.compressed.ply");
     let seeds = vec![("splat-transform".to_string(), whole)];
     let dir = common::tempdir("fuzz_compressed_ply");
     let path = dir.join("fuzz.compressed.ply");
@@ -1087,7 +1083,10 @@ fn mutate_sog(rng: &mut Rng, input: &mut Vec<u8>) {
 /// The SOG reader (a bundled .sog) on mutated bundles and bombs.
 #[test]
 fn sog_reader_survives_mutated_bundles_and_bombs() {
-    let seeds = vec![("splat-transform".to_string(), format_fixture("st.sog"))];
+    let seeds = vec![(
+        "splat-transform".to_string(),
+        common::format_fixture("st.sog"),
+    )];
     let dir = common::tempdir("fuzz_sog");
     let path = dir.join("fuzz.sog");
     fuzz_bounded(
@@ -1138,7 +1137,10 @@ fn mutate_glb(rng: &mut Rng, input: &mut Vec<u8>) {
 fn gltf_reader_survives_mutated_files() {
     let scene = rara::synth::shell(300, 1, 11);
     let seeds = vec![
-        ("splat-transform".to_string(), format_fixture("st.glb")),
+        (
+            "splat-transform".to_string(),
+            common::format_fixture("st.glb"),
+        ),
         (
             "rara".to_string(),
             rara::formats::gltf::encode_glb(&scene).unwrap(),

@@ -374,14 +374,6 @@ fn a_fifo_scene_is_opened_once_in_every_format() {
     use rara::formats::spz::{encode, SpzAxes, SpzVersion};
     let d = case_dir("fifo");
     let scene = rara::synth::shell(300, 1, 9);
-    let fixture = |name: &str| {
-        std::fs::read(
-            Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("tests/fixtures/formats")
-                .join(name),
-        )
-        .unwrap()
-    };
     let mut ply = Vec::new();
     rara::ply::write_ply_to(
         &scene,
@@ -402,8 +394,11 @@ fn a_fifo_scene_is_opened_once_in_every_format() {
         ),
         ("glb", rara::formats::gltf::encode_glb(&scene).unwrap()),
         ("splat", splat),
-        ("compressed.ply", fixture("st.compressed.ply")),
-        ("sog", fixture("st.sog")),
+        (
+            "compressed.ply",
+            common::format_fixture("st.compressed.ply"),
+        ),
+        ("sog", common::format_fixture("st.sog")),
     ];
     for (ext, bytes) in cases {
         let file = d.join(format!("file.{ext}"));
@@ -549,9 +544,7 @@ fn mesh_export_reads_every_scene_format() {
         assert!(worst < 0.05, "{ext}: octagon corners {worst} apart");
     }
     for fixture in ["st.sog", "st.compressed.ply", "st_v4.spz", "st.glb"] {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/formats")
-            .join(fixture);
+        let path = common::fixtures_dir().join(fixture);
         let (loaded, _) = rara::formats::load_scene(&path).unwrap();
         let octagons = (0..loaded.len())
             .filter(|&i| has_octagon(&loaded, i, rara::mesh::DEFAULT_Q, 0.0))

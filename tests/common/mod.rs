@@ -547,3 +547,14 @@ pub fn endless_files(dir: &Path, ext: &str) {
         mkfifo(&fifo);
     }
 }
+
+/// The folder of the format fixtures (`scripts/format_fixtures.sh` made them with
+/// splat-transform from `source.ply`).
+pub fn fixtures_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/formats")
+}
+
+/// The bytes of the format fixture `name`.
+pub fn format_fixture(name: &str) -> Vec<u8> {
+    std::fs::read(fixtures_dir().join(name)).unwrap()
+}
