@@ -182,6 +182,9 @@ pub struct Engine {
     pub queue_family: u32,
     /// Its first queue.
     pub queue: vk::Queue,
+    /// Whether the device was created with shaderInt64 (rara's faster kernels), which rara is
+    /// told in `EnabledFeatures::optional`.
+    pub shader_int64: bool,
 }
 
 impl Engine {
@@ -249,9 +252,11 @@ impl Engine {
         let mut features = vk::PhysicalDeviceFeatures::default();
         let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
         if merge_rara_requirements {
-            requirements.enable_features(&mut features);
+            let supported = unsafe { instance.get_physical_device_features(physical_device) };
+            requirements.enable_features(&mut features, &supported);
             requirements.enable_vulkan12_features(&mut features12);
         }
+        let shader_int64 = features.shader_int64 == vk::TRUE;
         let priorities = [1.0f32];
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
@@ -270,6 +275,7 @@ impl Engine {
             device,
             queue_family,
             queue,
+            shader_int64,
         })
     }
 
@@ -764,6 +770,7 @@ pub fn run(
                 queue: engine.queue,
                 enabled: EnabledFeatures {
                     optional: rara::vk::Optional {
+                        shader_int64: engine.shader_int64,
                         pipeline_statistics_query: false,
                         debug_utils: true,
                     },

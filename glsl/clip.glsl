@@ -27,22 +27,23 @@ struct CutoffRecord {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer CutoffRecords { CutoffRecord v[]; };
 
-// Address of record i (48 bytes each), and the record moved as 64-bit words (load_vec4 in
+// Address of record i (48 bytes each), and the record moved as 16-byte words (load_vec4 in
 // common.glsl).
-uint64_t cutoff_record_address(CutoffRecords records, uint i) {
-    return uint64_t(records) + uint64_t(i) * 48ul;
+Address cutoff_record_address(CutoffRecords records, uint i) {
+    return address_item(Address(records), i, 48u);
 }
 
 CutoffRecord load_cutoff_record(CutoffRecords records, uint i) {
-    uint64_t a = cutoff_record_address(records, i);
-    return CutoffRecord(load_vec4(a), load_vec4(a + 16ul), load_vec4(a + 32ul));
+    Address a = cutoff_record_address(records, i);
+    return CutoffRecord(load_vec4(a), load_vec4(address_plus(a, 16u)),
+                        load_vec4(address_plus(a, 32u)));
 }
 
 void store_cutoff_record(CutoffRecords records, uint i, CutoffRecord rec) {
-    uint64_t a = cutoff_record_address(records, i);
+    Address a = cutoff_record_address(records, i);
     store_vec4(a, rec.m0);
-    store_vec4(a + 16ul, rec.m1);
-    store_vec4(a + 32ul, rec.m2);
+    store_vec4(address_plus(a, 16u), rec.m1);
+    store_vec4(address_plus(a, 32u), rec.m2);
 }
 
 // Whether rec is a flat Gaussian's record.
@@ -103,13 +104,13 @@ layout(constant_id = FLAT_SPLATS_CONSTANT_ID) const bool FLAT_SPLATS = true;
 // branch or return: Mesa's gallivm then loads each word once per SIMD vector (the address is
 // a push constant), where under a mask it runs a scalar loop over the lanes per word.
 ClipParams load_clip_params(ClipParamsRef ref) {
-    uint64_t a = uint64_t(ref);
+    Address a = Address(ref);
     ClipParams c;
     c.config = load_uvec4(a);
-    c.band = load_vec4(a + 16ul);
-    c.sphere = load_vec4(a + 32ul);
+    c.band = load_vec4(address_plus(a, 16u));
+    c.sphere = load_vec4(address_plus(a, 32u));
     [[unroll]] for (uint k = 0u; k < MAX_CLIP_PLANES; ++k) {
-        c.planes[k] = load_vec4(a + 48ul + 16ul * uint64_t(k));
+        c.planes[k] = load_vec4(address_plus(a, 48u + 16u * k));
     }
     return c;
 }

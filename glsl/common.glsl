@@ -12,7 +12,81 @@
 
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference2 : require
+
+// Device addresses, and the two forms of the kernels. Every kernel is built twice (build.rs):
+// portable, with addresses as a uvec2 (low word, high word) added with a carry
+// (GL_EXT_buffer_reference_uvec2), for devices without shaderInt64 (SwiftShader, many mobile
+// GPUs); and with RARA_INT64, for devices that have it, where an address is a uint64_t and
+// the 64-bit words below move memory in fewer operations on a CPU driver. The host picks the
+// form per device (ComputePipeline::new, DeviceInfo::shader_int64). Both forms read and write
+// the same bytes: a Pair64 word is (x, y) in memory order either way.
+#ifdef RARA_INT64
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#define Address uint64_t
+#define Pair64 uint64_t
+#else
+#extension GL_EXT_buffer_reference_uvec2 : require
+#define Address uvec2
+#define Pair64 uvec2
+#endif
+
+// a + bytes.
+Address address_plus(Address a, uint bytes) {
+#ifdef RARA_INT64
+    return a + uint64_t(bytes);
+#else
+    uint carry;
+    uint lo = uaddCarry(a.x, bytes, carry);
+    return uvec2(lo, a.y + carry);
+#endif
+}
+
+// a + i * stride bytes, exact for any i and stride.
+Address address_item(Address a, uint i, uint stride) {
+#ifdef RARA_INT64
+    return a + uint64_t(i) * uint64_t(stride);
+#else
+    uint hi, lo, carry;
+    umulExtended(i, stride, hi, lo);
+    lo = uaddCarry(a.x, lo, carry);
+    return uvec2(lo, a.y + hi + carry);
+#endif
+}
+
+// Whether a is the null address (a buffer the host left out).
+bool address_is_null(Address a) {
+#ifdef RARA_INT64
+    return a == 0ul;
+#else
+    return a == uvec2(0u);
+#endif
+}
+
+// An address from its (low, high) words, as the host packs one into a uvec4.
+Address address_of_words(uvec2 lo_hi) {
+#ifdef RARA_INT64
+    return packUint2x32(lo_hi);
+#else
+    return lo_hi;
+#endif
+}
+
+// Two 32-bit words as one Pair64 (x first in memory), and back.
+Pair64 pair64(uvec2 w) {
+#ifdef RARA_INT64
+    return packUint2x32(w);
+#else
+    return w;
+#endif
+}
+
+uvec2 pair64_words(Pair64 p) {
+#ifdef RARA_INT64
+    return unpackUint2x32(p);
+#else
+    return p;
+#endif
+}
 
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer U32s { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer F32s { float v[]; };
@@ -83,66 +157,80 @@ struct FrameParams {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer FrameParamsRef { FrameParams p; };
 
-// 16-byte loads and stores as two 64-bit words. A CPU driver (Mesa's gallivm) turns each
-// component of a buffer-reference load or store into a scalar loop over the SIMD lanes, so a
-// vec4 costs four loops and the same 16 bytes as two 64-bit words cost two (plant at 640x480:
-// the project pass 39 -> 31 ms from its frame and Gaussian loads alone). A GPU loads the two
-// words as it would the vec4. `address` must be 16-byte aligned (vk::Buffer::new aligns every
-// buffer rara allocates to 16 bytes; engine targets are never read this way).
+// 16-byte loads and stores. With RARA_INT64 as two 64-bit words: a CPU driver (Mesa's
+// gallivm) turns each component of a buffer-reference load or store into a scalar loop over
+// the SIMD lanes, so a vec4 costs four loops and the same 16 bytes as two 64-bit words cost two
+// (plant at 640x480: the project pass 39 -> 31 ms from its frame and Gaussian loads alone). A
+// GPU loads the two words as it would the vec4. `address` must be 16-byte aligned
+// (vk::Buffer::new aligns every buffer rara allocates to 16 bytes; engine targets are never
+// read this way).
+#ifdef RARA_INT64
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Words16 { u64vec2 w; };
-layout(buffer_reference, std430, buffer_reference_align = 8) buffer U64s { uint64_t v[]; };
+#else
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Words16 { uvec4 w; };
+#endif
+// 8-byte words: sorted pairs (key, value), and other pairs of 32-bit words stored as one.
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer Pairs64 { Pair64 v[]; };
 
-uvec4 load_uvec4(uint64_t address) {
+uvec4 load_uvec4(Address address) {
+#ifdef RARA_INT64
     u64vec2 w = Words16(address).w;
     return uvec4(unpackUint2x32(w.x), unpackUint2x32(w.y));
+#else
+    return Words16(address).w;
+#endif
 }
 
-vec4 load_vec4(uint64_t address) {
+vec4 load_vec4(Address address) {
     return uintBitsToFloat(load_uvec4(address));
 }
 
-void store_uvec4(uint64_t address, uvec4 v) {
+void store_uvec4(Address address, uvec4 v) {
+#ifdef RARA_INT64
     Words16(address).w = u64vec2(packUint2x32(v.xy), packUint2x32(v.zw));
+#else
+    Words16(address).w = v;
+#endif
 }
 
-void store_vec4(uint64_t address, vec4 v) {
+void store_vec4(Address address, vec4 v) {
     store_uvec4(address, floatBitsToUint(v));
 }
 
 // Words first .. first + 3 of a u32 array (first a multiple of 4).
 uvec4 load_u32x4(U32s words, uint first) {
-    return load_uvec4(uint64_t(words) + 4ul * uint64_t(first));
+    return load_uvec4(address_item(Address(words), first, 4u));
 }
 
 // Item i of a vec4 array.
 vec4 load_vec4_item(Vec4s items, uint i) {
-    return load_vec4(uint64_t(items) + 16ul * uint64_t(i));
+    return load_vec4(address_item(Address(items), i, 16u));
 }
 
 void store_vec4_item(Vec4s items, uint i, vec4 v) {
-    store_vec4(uint64_t(items) + 16ul * uint64_t(i), v);
+    store_vec4(address_item(Address(items), i, 16u), v);
 }
 
 FrameParams load_frame_params(FrameParamsRef ref) {
-    uint64_t a = uint64_t(ref);
+    Address a = Address(ref);
     FrameParams f;
     f.world_to_cam0 = load_vec4(a);
-    f.world_to_cam1 = load_vec4(a + 16ul);
-    f.world_to_cam2 = load_vec4(a + 32ul);
-    f.cam_pos = load_vec4(a + 48ul);
-    f.focal = load_vec4(a + 64ul);
-    f.background = load_vec4(a + 80ul);
-    f.size = load_uvec4(a + 96ul);
-    f.scene = load_uvec4(a + 112ul);
+    f.world_to_cam1 = load_vec4(address_plus(a, 16u));
+    f.world_to_cam2 = load_vec4(address_plus(a, 32u));
+    f.cam_pos = load_vec4(address_plus(a, 48u));
+    f.focal = load_vec4(address_plus(a, 64u));
+    f.background = load_vec4(address_plus(a, 80u));
+    f.size = load_uvec4(address_plus(a, 96u));
+    f.scene = load_uvec4(address_plus(a, 112u));
     return f;
 }
 
 Gaussian load_gaussian(Gaussians gaussians, uint i) {
-    uint64_t a = uint64_t(gaussians) + uint64_t(i) * 48ul;
+    Address a = address_item(Address(gaussians), i, 48u);
     Gaussian g;
     g.pos_opacity = load_vec4(a);
-    g.rot = load_vec4(a + 16ul);
-    g.scale = load_vec4(a + 32ul);
+    g.rot = load_vec4(address_plus(a, 16u));
+    g.scale = load_vec4(address_plus(a, 32u));
     return g;
 }
 
@@ -180,8 +268,8 @@ vec3 unpack_splat_color(uvec2 w) {
 
 // Byte offset of ProjectedSplat i's word block k (16 bytes each: uv, opacity, colour word 0 |
 // conic, colour word 1 | depth, cutoff, radius, 0).
-uint64_t splat_block(ProjectedSplats splats, uint i, uint k) {
-    return uint64_t(splats) + uint64_t(i) * 48ul + uint64_t(k) * 16ul;
+Address splat_block(ProjectedSplats splats, uint i, uint k) {
+    return address_plus(address_item(Address(splats), i, 48u), k * 16u);
 }
 
 // ProjectedSplat from its three blocks (splat_block).
@@ -537,7 +625,26 @@ uint pack_rgba8_nearest(vec4 c) {
 // lower half of the image) keeps one thread busy while the others wait. stride 1: the items in
 // order (GPUs, which schedule workgroups as they free up).
 uint spread_item(uint i, uint n, uint stride) {
-    return uint((uint64_t(i) * uint64_t(stride)) % uint64_t(max(n, 1u)));
+    uint m = max(n, 1u);
+#ifdef RARA_INT64
+    return uint((uint64_t(i) * uint64_t(stride)) % uint64_t(m));
+#else
+    uint hi, lo;
+    umulExtended(i, stride, hi, lo);
+    if (hi == 0u) {
+        return lo % m;
+    }
+    // (hi 2^32 + lo) mod m a bit of lo at a time (r <- 2 r + bit, mod m), in 32-bit words: r < m,
+    // so 2 r - m < m, which the wrapped difference gives exactly when 2 r overflows.
+    uint r = hi % m;
+    for (int b = 31; b >= 0; --b) {
+        uint twice = r << 1u;
+        r = (r >= 0x80000000u || twice >= m) ? twice - m : twice;
+        r += (lo >> uint(b)) & 1u;
+        r = r == m ? 0u : r;
+    }
+    return r;
+#endif
 }
 
 #endif

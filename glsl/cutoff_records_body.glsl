@@ -38,7 +38,7 @@ layout(push_constant) uniform Push {
     // Out, in frames whose cutoff pairs are classified by tile (else 0): per record, the
     // TileMassBounds (u_keep, lost) of its splat over the footprint ellipse, lost =
     // CUTOFF_BOUNDS_DECIDED for a splat decided whole.
-    U64s cutoff_bounds;
+    Pairs64 cutoff_bounds;
     U32s tiles_touched;     // the pairs of a splat decided whole, for the frame's counts
 } pc;
 
@@ -80,7 +80,7 @@ void main() {
     Gaussian g = fetch_gaussian(gaussian);
     CutoffRecord rec = gaussian_cutoff_record(g, f.cam_pos.xyz);
     store_cutoff_record(pc.cutoffs, index, rec);
-    if (uint64_t(pc.cutoff_bounds) != 0ul) {
+    if (!address_is_null(Address(pc.cutoff_bounds))) {
         // The bounds over the splat's footprint ellipse, for cutoff_tiles to take with each
         // pair's bounds over its box: they do not depend on the tile.
         ProjectedSplat p = fetch_splat(gaussian);
@@ -100,6 +100,6 @@ void main() {
                                          : COUNTER_CUTOFF_PAIRS_EMPTY], pairs);
         }
         pc.cutoff_bounds.v[index] =
-            packUint2x32(floatBitsToUint(vec2(bounds.u_keep, bounds.lost)));
+            pair64(floatBitsToUint(vec2(bounds.u_keep, bounds.lost)));
     }
 }

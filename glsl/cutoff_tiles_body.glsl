@@ -75,7 +75,7 @@ layout(push_constant) uniform Push {
     ProjectedSplats splats;
     U32s tiles_touched;
     U32s counters;
-    U64s cutoff_pairs;      // per cutoff record: (first pair, splat index), packed
+    Pairs64 cutoff_pairs;      // per cutoff record: (first pair, splat index), packed
     ClipParamsRef clip;
     CutoffRecords cutoffs;
     U32s keys;              // in and out: tile ids, in emit's order (PACKED_PAIRS: the pairs)
@@ -85,7 +85,7 @@ layout(push_constant) uniform Push {
     U32s tile_flags;
     // Per cutoff record, the splat's TileMassBounds over its footprint ellipse (u_keep, lost;
     // cutoff_records_body.glsl), or 0: none.
-    U64s cutoff_bounds;
+    Pairs64 cutoff_bounds;
 } pc;
 
 // The region's planes come through region_plane (clip.glsl): the texel kernel fetches them,
@@ -237,15 +237,15 @@ void classify_pair(FrameParams f, uvec4 config, ProjectedSplat p, CutoffRecord r
 // splat the records' pass decided whole (CUTOFF_BOUNDS_DECIDED), for which emit wrote no range
 // (the entry still holds project's list there).
 void cutoff_pairs(FrameParams f, uint k, out uint slot, out uint end, out uint splat) {
-    if (uint64_t(pc.cutoff_bounds) != 0ul
-            && uintBitsToFloat(unpackUint2x32(pc.cutoff_bounds.v[k]).y)
+    if (!address_is_null(Address(pc.cutoff_bounds))
+            && uintBitsToFloat(pair64_words(pc.cutoff_bounds.v[k]).y)
                    == CUTOFF_BOUNDS_DECIDED) {
         slot = 0u;
         end = 0u;
         splat = 0u;
         return;
     }
-    uvec2 first = unpackUint2x32(pc.cutoff_pairs.v[k]);
+    uvec2 first = pair64_words(pc.cutoff_pairs.v[k]);
     splat = first.y;
 #ifdef SPLAT_TEXELS
     uint touched = texelFetch(tiles_touched, int(splat)).x;
@@ -274,8 +274,8 @@ void cutoff_splat(uint k, uint splat, out ProjectedSplat p, out CutoffRecord rec
 TileMassBounds cutoff_ellipse_bounds(FrameParams f, uint planes, uint k, ProjectedSplat p,
                                      CutoffRecord rec) {
 #ifdef SPLAT_TEXELS
-    if (uint64_t(pc.cutoff_bounds) != 0ul) {
-        vec2 b = uintBitsToFloat(unpackUint2x32(pc.cutoff_bounds.v[k]));
+    if (!address_is_null(Address(pc.cutoff_bounds))) {
+        vec2 b = uintBitsToFloat(pair64_words(pc.cutoff_bounds.v[k]));
         return TileMassBounds(b.x, b.y);
     }
     return tile_mass_bounds_none();
@@ -318,7 +318,7 @@ void main() {
     uint group_end = min(group_first + LINEAR_WORKGROUP, cutoff_count);
     uint records = group_end - group_first;
     uint tile_count = f.size.z * f.size.w;
-    bool tile_lists = uint64_t(pc.tile_flags) != 0ul;
+    bool tile_lists = !address_is_null(Address(pc.tile_flags));
     // Each invocation counts the pairs of one record, in scan order.
     uint rank = workgroup_scan_rank();
     uint slot = 0u;
@@ -417,7 +417,7 @@ void main() {
     PairTally tally = PairTally(0u, 0u);
     bool live = true;
     uint passes_left = CUTOFF_TILES_LOOP_BUDGET / (1u + config.w);
-    bool tile_lists = uint64_t(pc.tile_flags) != 0ul;
+    bool tile_lists = !address_is_null(Address(pc.tile_flags));
     do {
         if (slot == end) {
             uint k = atomicAdd(next_record, 1u);

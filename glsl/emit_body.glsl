@@ -41,7 +41,7 @@ layout(push_constant) uniform Push {
     U32s keys;          // out: tile ids (PACKED_PAIRS: the pairs, a 64-bit word each)
     U32s values;        // out: splat indices (PACKED_PAIRS: unused)
     // RECORD_CUTOFF_PAIRS only, out: per cutoff record (first pair, splat index), packed.
-    U64s cutoff_pairs;
+    Pairs64 cutoff_pairs;
     U32s progress;      // in (rounds after the first) and out: per drawn splat, its next slot
     uint round_index;
 } pc;
@@ -71,7 +71,7 @@ void main() {
     // every tile, which the sort puts last and the tile-ranges stage leaves out.
     uint whole = p.cutoff == NO_CUTOFF ? CUTOFF_WHOLE_FULL : p.cutoff & CUTOFF_WHOLE_BITS;
     if (whole == 0u && pc.round_index == 0u) {
-        pc.cutoff_pairs.v[p.cutoff] = packUint2x32(uvec2(slot, i)); // one 64-bit store
+        pc.cutoff_pairs.v[p.cutoff] = pair64(uvec2(slot, i)); // one 64-bit store
     }
     bool weighted = whole == 0u;
     uint key_past_tiles = whole == CUTOFF_WHOLE_EMPTY ? f.size.z * f.size.w : 0u;
@@ -104,7 +104,7 @@ void main() {
                 uint key = key_past_tiles != 0u ? key_past_tiles : w.xy.y * f.size.z + w.xy.x;
                 uint pair_value = value | footprint_blocks(p.uv, p.conic, q_max, w.xy.x, w.xy.y);
 #ifdef PACKED_PAIRS
-                U64s(uint64_t(pc.keys)).v[slot] = packUint2x32(uvec2(key, pair_value));
+                Pairs64(Address(pc.keys)).v[slot] = pair64(uvec2(key, pair_value));
 #else
                 pc.keys.v[slot] = key;
                 pc.values.v[slot] = pair_value;

@@ -60,8 +60,8 @@ struct MixedParams {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MixedParamsRef { MixedParams p; };
 
-uint64_t mixed_address(uvec2 lo_hi) {
-    return packUint2x32(lo_hi);
+Address mixed_address(uvec2 lo_hi) {
+    return address_of_words(lo_hi);
 }
 
 // The axis of v's largest component, the first on a tie (largest_axis in triangles.rs).

@@ -207,7 +207,7 @@ void main() {
     uint px = pc.generation == 0u ? item : pc.list_in.v[item];
     g_pixel = px;
     MixedParams m = pc.mixed.p;
-    uint64_t ray_at = mixed_address(m.refs2.xy) + 64ul * uint64_t(px);
+    Address ray_at = address_item(mixed_address(m.refs2.xy), px, 64u);
     TreeRay ray;
     bool has_ray;
     if (pc.generation == 0u) {
@@ -252,7 +252,7 @@ void main() {
     }
     if (!has_ray) {
         ray.kind = KIND_NONE;
-        store_uvec4(ray_at + 48ul, uvec4(MIXED_RAY_NONE, 0u, 0u, 0u));
+        store_uvec4(address_plus(ray_at, 48u), uvec4(MIXED_RAY_NONE, 0u, 0u, 0u));
     } else {
         pc.list_out.v[atomicAdd(pc.counters.v[MIXED_COUNTER_LIVE], 1u)] = px;
         uint slot = ray.kind == KIND_CAMERA ? MIXED_COUNTER_PRIMARY
@@ -265,9 +265,9 @@ void main() {
             bool blocked = mesh_hit(m, ray.o, ray.d, SECONDARY_OFFSET, ray.t_end, true, hit, visits) != NO_TRIANGLE;
             tri = blocked ? BLOCKED : NO_TRIANGLE;
             store_vec4(ray_at, vec4(ray.o, SECONDARY_OFFSET));
-            store_vec4(ray_at + 16ul, vec4(ray.d, ray.t_end));
-            store_vec4(ray_at + 32ul, vec4(0.0, 0.0, 0.0, 1.0));
-            store_uvec4(ray_at + 48ul, uvec4(blocked ? MIXED_RAY_NONE : MIXED_RAY_SHADOW, 0u, 0u, 0u));
+            store_vec4(address_plus(ray_at, 16u), vec4(ray.d, ray.t_end));
+            store_vec4(address_plus(ray_at, 32u), vec4(0.0, 0.0, 0.0, 1.0));
+            store_uvec4(address_plus(ray_at, 48u), uvec4(blocked ? MIXED_RAY_NONE : MIXED_RAY_SHADOW, 0u, 0u, 0u));
             if (!blocked) {
                 list_for_tracer(m, px);
             }
@@ -275,9 +275,9 @@ void main() {
             float offset = ray.kind == KIND_CAMERA ? 0.0 : SECONDARY_OFFSET;
             tri = mesh_hit(m, ray.o, ray.d, ray.t_start + offset, UNBOUNDED, false, hit, visits);
             store_vec4(ray_at, vec4(ray.o, ray.t_start));
-            store_vec4(ray_at + 16ul, vec4(ray.d, tri == NO_TRIANGLE ? UNBOUNDED : hit.x));
-            store_vec4(ray_at + 32ul, vec4(g_acc, ray.carry.r));
-            store_uvec4(ray_at + 48ul, uvec4(ray.cull ? MIXED_RAY_CULL : 0u, 0u, 0u, 0u));
+            store_vec4(address_plus(ray_at, 16u), vec4(ray.d, tri == NO_TRIANGLE ? UNBOUNDED : hit.x));
+            store_vec4(address_plus(ray_at, 32u), vec4(g_acc, ray.carry.r));
+            store_uvec4(address_plus(ray_at, 48u), uvec4(ray.cull ? MIXED_RAY_CULL : 0u, 0u, 0u, 0u));
             list_for_tracer(m, px);
         }
         store_vec4_item(pc.cur_hit, px, hit);

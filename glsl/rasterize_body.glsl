@@ -220,30 +220,45 @@ bool advance_to_block(uint base, uint count, inout uint k, inout uint h) {
 }
 #endif
 #else
-// A staged splat is 9 words. The first 8 go in one 32-byte element of
+// A staged splat is 9 words. With RARA_INT64 the first 8 go in one 32-byte element of
 // 64-bit words, the blue and the record index in a second array: a CPU driver reads shared
 // memory with one scalar loop over the lanes per load, however wide, so this is two loops per
 // splat and SIMD vector (it was three, vec4 + vec2 + vec3, plus one for a cutoff splat's
 // record index). Inside the loop each lane's value goes into the vector component by
 // component, through the stack, so the tail is one 64-bit word rather than a uvec2: five
-// such inserts per lane instead of six. Staging a cutoff splat's 48-byte record too would
-// cost a masked copy per pair on such a driver, cutoff or not, so the record is read when the
-// splat is composited.
+// such inserts per lane instead of six. Without 64-bit integers the same words go in two
+// uvec4 arrays and a uvec2 one, the layout any GPU reads as fast. Staging a cutoff splat's
+// 48-byte record too would cost a masked copy per pair on such a driver, cutoff or not, so
+// the record is read when the splat is composited.
+#ifdef RARA_INT64
 shared u64vec4 batch_words[RASTER_BATCH];  // (conic.xy) (conic.z, opacity) (uv) (red, green)
 shared uint64_t batch_tail[RASTER_BATCH];  // (blue bits, cutoff record index)
+#else
+shared uvec4 batch_conic[RASTER_BATCH];    // conic.xyz, opacity
+shared uvec4 batch_uv_rg[RASTER_BATCH];    // uv, red, green
+shared uvec2 batch_tail[RASTER_BATCH];     // blue bits, cutoff record index
+#endif
 #ifdef DEPTH
 shared float batch_depth[RASTER_BATCH];
 #endif
 
 // Staged splat k of the batch. Staging negates a weighted pair's opacity (handle_weighted).
 Staged splat_at(uint base, uint k) {
+#ifdef RARA_INT64
     u64vec4 w = batch_words[k];
+    uvec4 conic = uvec4(unpackUint2x32(w.x), unpackUint2x32(w.y));
+    uvec4 uv_rg = uvec4(unpackUint2x32(w.z), unpackUint2x32(w.w));
     uvec2 tail = unpackUint2x32(batch_tail[k]);
+#else
+    uvec4 conic = batch_conic[k];
+    uvec4 uv_rg = batch_uv_rg[k];
+    uvec2 tail = batch_tail[k];
+#endif
     Staged s;
-    s.co = vec4(uintBitsToFloat(unpackUint2x32(w.x)), uintBitsToFloat(unpackUint2x32(w.y)));
+    s.co = uintBitsToFloat(conic);
     s.co.w = abs(s.co.w);
-    s.uv = uintBitsToFloat(unpackUint2x32(w.z));
-    s.rgb = vec3(uintBitsToFloat(unpackUint2x32(w.w)), uintBitsToFloat(tail.x));
+    s.uv = uintBitsToFloat(uv_rg.xy);
+    s.rgb = vec3(uintBitsToFloat(uv_rg.zw), uintBitsToFloat(tail.x));
     s.cutoff = tail.y;
 #ifdef DEPTH
     s.depth = batch_depth[k];
@@ -255,11 +270,17 @@ void stage(uint slot, vec4 co, vec2 uv, vec3 color, uint cutoff, float depth) {
 #ifdef DEPTH
     batch_depth[slot] = depth;
 #endif
+#ifdef RARA_INT64
     batch_words[slot] = u64vec4(packUint2x32(floatBitsToUint(co.xy)),
                                 packUint2x32(floatBitsToUint(co.zw)),
                                 packUint2x32(floatBitsToUint(uv)),
                                 packUint2x32(floatBitsToUint(color.rg)));
     batch_tail[slot] = packUint2x32(uvec2(floatBitsToUint(color.b), cutoff));
+#else
+    batch_conic[slot] = floatBitsToUint(co);
+    batch_uv_rg[slot] = uvec4(floatBitsToUint(uv), floatBitsToUint(color.rg));
+    batch_tail[slot] = uvec2(floatBitsToUint(color.b), cutoff);
+#endif
 }
 
 // Cutoff record i.
@@ -274,7 +295,11 @@ uint entry_handle(uint base, uint k) {
 
 // Whether the entry takes the clip weight: the sign of its staged opacity.
 bool handle_weighted(uint h) {
+#ifdef RARA_INT64
     return (unpackUint2x32(batch_words[h].y).y & 0x80000000u) != 0u;
+#else
+    return (batch_conic[h].w & 0x80000000u) != 0u;
+#endif
 }
 
 // The entry's splat.
@@ -332,7 +357,7 @@ void strip_spans(vec3 eye, ClipParamsRef clip);
 #ifdef OBJECT_CLIPS
 // Region `region` of the frame's array of regions.
 ClipParamsRef region_clip(uint region) {
-    return ClipParamsRef(uint64_t(pc.clip) + uint64_t(region) * uint64_t(CLIP_PARAMS_BYTES));
+    return ClipParamsRef(address_item(Address(pc.clip), region, CLIP_PARAMS_BYTES));
 }
 #endif
 
@@ -734,7 +759,7 @@ void main() {
         }
 #ifdef DEPTH
         uint at = inside ? pixel.y * f.size.x + pixel.x : 0u;
-        px_limit[i] = uint64_t(pc.depth_limit) != 0ul && inside ? pc.depth_limit.v[at]
+        px_limit[i] = !address_is_null(Address(pc.depth_limit)) && inside ? pc.depth_limit.v[at]
                                                                  : uintBitsToFloat(0x7f800000u);
         px_median[i] = uintBitsToFloat(0x7f800000u);
         px_zsum[i] = 0.0;
@@ -811,7 +836,7 @@ void main() {
 #endif
 
     if (WRITES_TARGET) {
-        U32s target = U32s(uint64_t(pc.state));
+        U32s target = U32s(Address(pc.state));
         vec4 background = vec4(f.background.rgb, 1.0);   // as write target's
         [[unroll]] for (uint i = 0u; i < NPX; ++i) {
             uvec2 pixel = first_pixel + uvec2(i / P, i % P);

@@ -27,7 +27,7 @@ void main() {
         scanned.z = scanned.y + v.y;
         scanned.w = scanned.z + v.z;
         running = scanned.w + v.w;
-        store_uvec4(uint64_t(pc.data) + 4ul * uint64_t(i), scanned);
+        store_uvec4(address_item(Address(pc.data), i, 4u), scanned);
     }
     for (; i < run.y; ++i) {
         uint t = pc.data.v[i];

@@ -27,7 +27,7 @@ void main() {
         scanned.z = scanned.y + v.y;
         scanned.w = scanned.z + v.z;
         running = scanned.w + v.w;
-        store_uvec4(uint64_t(pc.sums) + 4ul * uint64_t(r), scanned);
+        store_uvec4(address_item(Address(pc.sums), r, 4u), scanned);
     }
     for (; r < runs; ++r) {
         uint t = pc.sums.v[r];

@@ -29,11 +29,11 @@ const float SH_C3[7] = float[7](-0.5900435899266435, 2.890611442640554, -0.45704
 // Half floats, four to a 64-bit word.
 #define ShCoefficients U32s
 #define SH_PER_WORD 4
-#define SH_VALUE_BYTES 2ul
+#define SH_VALUE_BYTES 2u
 #else
 #define ShCoefficients F32s
 #define SH_PER_WORD 2
-#define SH_VALUE_BYTES 4ul
+#define SH_VALUE_BYTES 4u
 #endif
 #if SH_VALUES % SH_PER_WORD == 0
 // Every Gaussian's values start on a word.
@@ -93,10 +93,10 @@ void load_sh(uint base, out float values[SH_VALUES]) {
 
 void load_sh(ShCoefficients sh, uint base, out float values[SH_VALUES]) {
     uint skip = base % uint(SH_PER_WORD);
-    U64s words = U64s(uint64_t(sh) + SH_VALUE_BYTES * uint64_t(base - skip));
+    Pairs64 words = Pairs64(address_item(Address(sh), base - skip, SH_VALUE_BYTES));
     float packed[SH_WORDS * SH_PER_WORD];
     [[unroll]] for (uint j = 0u; j < uint(SH_WORDS); ++j) {
-        uvec2 w = unpackUint2x32(words.v[j]);
+        uvec2 w = pair64_words(words.v[j]);
 #ifdef SH_HALF
         vec2 lo = unpackHalf2x16(w.x);
         vec2 hi = unpackHalf2x16(w.y);

@@ -36,14 +36,17 @@
 layout(local_size_x = SORT_OWN_WORKGROUP) in;
 
 // Set 0 is the sort's set for buffer 1 (SortTexels::sets[1]): it reads buffer 1's packed pairs
-// and binds buffer 0 for writing; set 1 the other way round.
+// and binds buffer 0 for writing; set 1 the other way round. The pairs are stored as uvec2 in
+// both kernel forms: on lavapipe this kernel's pass took 14.6-16.1 ms so against 20.7-22.6 ms
+// with one 64-bit store per pair (`bench --sort 2000000`, three rounds in turn), where the
+// scatter of the other passes gains a little from the 64-bit store (docs/PERFORMANCE.md).
 layout(set = 0, binding = 2) uniform utextureBuffer pairs_in_1;
 layout(set = 0, binding = 3, std430) restrict writeonly buffer PairsOut0 {
-    uint64_t pairs_out_0[];
+    uvec2 pairs_out_0[];
 };
 layout(set = 1, binding = 2) uniform utextureBuffer pairs_in_0;
 layout(set = 1, binding = 3, std430) restrict writeonly buffer PairsOut1 {
-    uint64_t pairs_out_1[];
+    uvec2 pairs_out_1[];
 };
 
 layout(push_constant) uniform Push {
@@ -81,9 +84,9 @@ void scatter_pair(uint k, bool from1, uint shift, uint key, uint value) {
     uint dst = counts[k][d];
     counts[k][d] = dst + 1u;
     if (from1) {
-        pairs_out_0[dst] = packUint2x32(uvec2(key, value));
+        pairs_out_0[dst] = uvec2(key, value);
     } else {
-        pairs_out_1[dst] = packUint2x32(uvec2(key, value));
+        pairs_out_1[dst] = uvec2(key, value);
     }
 }
 

@@ -20,7 +20,7 @@
 #error "SORT_OUT_BOUND writes packed pairs"
 #endif
 layout(set = 0, binding = 3, std430) restrict writeonly buffer PairsOut {
-    uint64_t pairs_out[];
+    Pair64 pairs_out[];
 };
 #endif
 
@@ -56,9 +56,9 @@ void scatter_pair(uint key, uint value) {
     // One 64-bit store: gallivm writes each component of a store in a loop of its own over
     // the lanes, so a pair costs one loop instead of two.
 #if SORT_OUT_BOUND
-    pairs_out[dst] = packUint2x32(uvec2(key, value));
+    pairs_out[dst] = pair64(uvec2(key, value));
 #else
-    U64s(pc.keys_out).v[dst] = packUint2x32(uvec2(key, value));
+    Pairs64(pc.keys_out).v[dst] = pair64(uvec2(key, value));
 #endif
 #else
     pc.keys_out.v[dst] = key;

@@ -43,9 +43,9 @@ void load_node(BvhTree nodes, uint i, out uvec4 w0, out uvec4 w1) {
     w0 = texelFetch(bvh_texels, int(2u * i));
     w1 = texelFetch(bvh_texels, int(2u * i + 1u));
 #else
-    uint64_t at = uint64_t(nodes) + 32ul * uint64_t(i);
+    Address at = address_item(Address(nodes), i, 32u);
     w0 = load_uvec4(at);
-    w1 = load_uvec4(at + 16ul);
+    w1 = load_uvec4(address_plus(at, 16u));
 #endif
 }
 
@@ -284,11 +284,11 @@ void main() {
         local = pc.lists.v[((pc.round - 1u) & 1u) * stride + item];
     }
     uint ray = pc.ray_base + local;
-    uint64_t state_at = uint64_t(pc.rays) + 48ul * uint64_t(local);
-    uint64_t k_section = 4ul * uint64_t(TRACE_K) * uint64_t(stride);
-    uint64_t k_t = uint64_t(pc.kbuf) + 4ul * uint64_t(TRACE_K) * uint64_t(local);
-    uint64_t k_index = k_t + k_section;
-    uint64_t k_alpha = k_t + 2ul * k_section;
+    Address state_at = address_item(Address(pc.rays), local, 48u);
+    // The k-buffer's three sections (t, index, alpha) of 4 TRACE_K bytes per ray each.
+    Address k_t = address_item(Address(pc.kbuf), local, 4u * uint(TRACE_K));
+    Address k_index = address_item(k_t, stride, 4u * uint(TRACE_K));
+    Address k_alpha = address_item(k_t, stride, 8u * uint(TRACE_K));
     vec4 colour_t;
     uvec4 info;
     uvec4 more;
@@ -299,8 +299,8 @@ void main() {
         pc.stacks.v[local] = 0u;
     } else {
         colour_t = load_vec4(state_at);
-        info = load_uvec4(state_at + 16ul);
-        more = load_uvec4(state_at + 32ul);
+        info = load_uvec4(address_plus(state_at, 16u));
+        more = load_uvec4(address_plus(state_at, 32u));
     }
     // The pixel's ray (SPEC section 2).
     uvec2 px = uvec2(ray % w, ray / w);
@@ -314,11 +314,11 @@ void main() {
     bool shade = false;
 #ifdef MIXED
     MixedParams mixed = MixedParamsRef(mixed_address(f.mixed.xy)).p;
-    uint64_t ray_at = mixed_address(mixed.refs2.xy) + 64ul * uint64_t(ray);
+    Address ray_at = address_item(mixed_address(mixed.refs2.xy), ray, 64u);
     {
         vec4 r0 = load_vec4(ray_at);
-        vec4 r1 = load_vec4(ray_at + 16ul);
-        uint ray_flags = load_uvec4(ray_at + 48ul).x;
+        vec4 r1 = load_vec4(address_plus(ray_at, 16u));
+        uint ray_flags = load_uvec4(address_plus(ray_at, 48u)).x;
         e = r0.xyz;
         t_lo = r0.w;
         d = r1.xyz;
@@ -326,7 +326,7 @@ void main() {
         cull = (ray_flags & MIXED_RAY_CULL) != 0u;
         shade = (ray_flags & MIXED_RAY_SHADOW) == 0u && mixed.occluder_counts.x > 0u && mixed.counts.z > 0u;
         if (pc.round == 0u) {
-            colour_t = load_vec4(ray_at + 32ul);
+            colour_t = load_vec4(address_plus(ray_at, 32u));
         }
         if ((ray_flags & MIXED_RAY_NONE) != 0u) {
             info.z |= RAY_DONE;
@@ -337,8 +337,8 @@ void main() {
     // that the depth prepare pass left at f.mixed.zw (0: none). A hit at t lies at view depth
     // t (d . forward) and is composited only in front of the engine's surface: gaussian_hit
     // takes t < t_hi, so nothing at the surface or behind it is found, and the ray ends there.
-    uint64_t depth_limit = packUint2x32(f.mixed.zw);
-    if (depth_limit != 0ul) {
+    Address depth_limit = address_of_words(f.mixed.zw);
+    if (!address_is_null(depth_limit)) {
         t_hi = F32s(depth_limit).v[ray] / dot(d, f.forward.xyz);
     }
 #endif
@@ -376,9 +376,9 @@ void main() {
     float ka[TRACE_K];
     if (pc.round != 0u) {
         [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
-            uvec4 t4 = load_uvec4(k_t + 16ul * q);
-            uvec4 i4 = load_uvec4(k_index + 16ul * q);
-            uvec4 a4 = load_uvec4(k_alpha + 16ul * q);
+            uvec4 t4 = load_uvec4(address_item(k_t, q, 16u));
+            uvec4 i4 = load_uvec4(address_item(k_index, q, 16u));
+            uvec4 a4 = load_uvec4(address_item(k_alpha, q, 16u));
             [[unroll]] for (uint c = 0u; c < 4u; ++c) {
                 kt[4u * q + c] = uintBitsToFloat(t4[c]);
                 ki[4u * q + c] = i4[c];
@@ -527,7 +527,7 @@ void main() {
                     weight = clip_weight(clip, spans, g, hit_t, e, d);
                 } else {
                     ClipParams own = load_clip_params(ClipParamsRef(
-                        mixed_address(mixed.refs2.zw) + uint64_t(object) * uint64_t(CLIP_PARAMS_BYTES)));
+                        address_item(mixed_address(mixed.refs2.zw), object, CLIP_PARAMS_BYTES)));
                     weight = clip_weight(own, ray_spans(own, e, d), g, hit_t, e, d);
                 }
                 float alpha = hit_alpha * weight;
@@ -595,14 +595,14 @@ void main() {
     uint at = atomicAdd(pc.live.v[pc.round], 1u);
     pc.lists.v[(pc.round & 1u) * stride + at] = local;
     store_vec4(state_at, vec4(colour, T));
-    store_uvec4(state_at + 16ul, uvec4(last_index, walked, flags, sp | (k_count << 8u) | (k_pos << 16u)));
-    store_uvec4(state_at + 32ul, uvec4(floatBitsToUint(last_t), found, passes, visits));
+    store_uvec4(address_plus(state_at, 16u), uvec4(last_index, walked, flags, sp | (k_count << 8u) | (k_pos << 16u)));
+    store_uvec4(address_plus(state_at, 32u), uvec4(floatBitsToUint(last_t), found, passes, visits));
     [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
-        store_uvec4(k_t + 16ul * q,
+        store_uvec4(address_item(k_t, q, 16u),
                     floatBitsToUint(vec4(kt[4u * q], kt[4u * q + 1u], kt[4u * q + 2u], kt[4u * q + 3u])));
-        store_uvec4(k_index + 16ul * q,
+        store_uvec4(address_item(k_index, q, 16u),
                     uvec4(ki[4u * q], ki[4u * q + 1u], ki[4u * q + 2u], ki[4u * q + 3u]));
-        store_uvec4(k_alpha + 16ul * q,
+        store_uvec4(address_item(k_alpha, q, 16u),
                     floatBitsToUint(vec4(ka[4u * q], ka[4u * q + 1u], ka[4u * q + 2u], ka[4u * q + 3u])));
     }
 }

@@ -139,7 +139,18 @@ fn every_kernel_passes_spirv_val() {
     assert!(out.status.success());
     let dir = std::env::temp_dir().join(format!("rara-spirv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for (name, words) in shaders::ALL_KERNELS {
+    let int64_forms = shaders::INT64_FORMS.iter().map(|(portable, int64)| {
+        let name = shaders::ALL_KERNELS
+            .iter()
+            .find(|(_, w)| w == portable)
+            .map_or("?", |(n, _)| n);
+        (format!("{name}_int64"), *int64)
+    });
+    let every_form = shaders::ALL_KERNELS
+        .iter()
+        .map(|(name, words)| (name.to_string(), *words))
+        .chain(int64_forms);
+    for (name, words) in every_form {
         let path = dir.join(format!("{name}.spv"));
         std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(words)).unwrap();
         let out = std::process::Command::new("spirv-val")
@@ -154,4 +165,41 @@ fn every_kernel_passes_spirv_val() {
         );
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The capabilities a SPIR-V module declares (`OpCapability`, opcode 17).
+fn capabilities(words: &[u32]) -> Vec<u32> {
+    let mut caps = Vec::new();
+    let mut at = 5; // past the header
+    while at < words.len() {
+        let (count, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
+        if opcode == 17 {
+            caps.push(words[at + 1]);
+        }
+        at += count.max(1);
+    }
+    caps
+}
+
+/// The portable form of every kernel runs on a device without shaderInt64 (SwiftShader): it
+/// declares no Int64 capability (11); the RARA_INT64 forms do, and exist for most kernels.
+#[test]
+fn portable_kernels_need_no_int64() {
+    const INT64: u32 = 11;
+    for (name, words) in shaders::ALL_KERNELS {
+        assert!(
+            !capabilities(words).contains(&INT64),
+            "{name} declares the Int64 capability"
+        );
+    }
+    for (portable, int64) in shaders::INT64_FORMS {
+        assert!(capabilities(int64).contains(&INT64));
+        assert_ne!(portable, int64);
+    }
+    assert!(
+        shaders::INT64_FORMS.len() * 2 > shaders::ALL_KERNELS.len(),
+        "{} of {} kernels have an int64 form",
+        shaders::INT64_FORMS.len(),
+        shaders::ALL_KERNELS.len()
+    );
 }

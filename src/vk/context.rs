@@ -40,14 +40,20 @@ pub struct ContextDesc {
     /// Pick the first device whose name contains this (case-insensitive); `None` picks by type
     /// (discrete > integrated > virtual > CPU). [`ContextDesc::from_env`] reads `RARA_DEVICE`.
     pub device_name: Option<String>,
+    /// Enable `shaderInt64` where the device has it, for the kernels' faster form
+    /// ([`DeviceInfo::shader_int64`]); false runs the portable form everywhere (the same
+    /// frames; [`ContextDesc::from_env`] reads `RARA_INT64=0`).
+    pub shader_int64: bool,
 }
 
 impl ContextDesc {
-    /// Validation from `RARA_VALIDATION`, device from `RARA_DEVICE`.
+    /// Validation from `RARA_VALIDATION`, device from `RARA_DEVICE`, `RARA_INT64=0` for the
+    /// portable kernels on any device.
     pub fn from_env() -> Self {
         ContextDesc {
             validation: Validation::from_env(),
             device_name: std::env::var("RARA_DEVICE").ok().filter(|s| !s.is_empty()),
+            shader_int64: std::env::var("RARA_INT64").map_or(true, |v| v.trim() != "0"),
         }
     }
 }
@@ -57,6 +63,7 @@ impl Default for ContextDesc {
         ContextDesc {
             validation: Validation::Off,
             device_name: None,
+            shader_int64: true,
         }
     }
 }
@@ -88,6 +95,23 @@ pub struct DeviceInfo {
     pub device_local_heap_bytes: u64,
     /// Whether pipeline-statistics queries are enabled (compute invocations per pass).
     pub pipeline_statistics: bool,
+    /// Whether the kernels run in their form with 64-bit integers: the device has
+    /// `shaderInt64` and it is enabled (by rara for its own device unless
+    /// [`ContextDesc::shader_int64`] is false, by the engine for a borrowed one:
+    /// [`crate::vk::Optional::shader_int64`]). Otherwise the portable form, the same frames.
+    pub shader_int64: bool,
+}
+
+impl DeviceInfo {
+    /// The form of the kernels the device runs, as reports name it: `"int64"` (the form with
+    /// 64-bit integers, [`DeviceInfo::shader_int64`]) or `"portable"`.
+    pub fn kernel_form(&self) -> &'static str {
+        if self.shader_int64 {
+            "int64"
+        } else {
+            "portable"
+        }
+    }
 }
 
 /// The instance-level objects of a context that rara created itself (headless).
@@ -310,6 +334,7 @@ impl Context {
         }
         let mut info = device_info_of(&lent.instance, lent.physical_device, lent.queue_family);
         info.pipeline_statistics &= lent.enabled.optional.pipeline_statistics_query;
+        info.shader_int64 &= lent.enabled.optional.shader_int64;
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: lent.instance.clone(),
             device: lent.device.clone(),
@@ -383,12 +408,12 @@ impl Context {
             .queue_priorities(&priorities)];
         let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
         super::requirements().enable_vulkan12_features(&mut features12);
-        let mut features = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(
-            unsafe { instance.get_physical_device_features(physical_device) }
-                .pipeline_statistics_query
-                == vk::TRUE,
-        );
-        super::requirements().enable_features(&mut features);
+        let supported = unsafe { instance.get_physical_device_features(physical_device) };
+        let mut features = vk::PhysicalDeviceFeatures::default()
+            .pipeline_statistics_query(supported.pipeline_statistics_query == vk::TRUE);
+        if desc.shader_int64 {
+            super::requirements().enable_features(&mut features, &supported);
+        }
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&features)
@@ -404,7 +429,8 @@ impl Context {
             }
         };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        let info = device_info_of(&instance, physical_device, queue_family);
+        let mut info = device_info_of(&instance, physical_device, queue_family);
+        info.shader_int64 &= features.shader_int64 == vk::TRUE;
 
         let allocator = match Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
@@ -673,6 +699,7 @@ fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
         .max()
         .unwrap_or(0);
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let features = unsafe { instance.get_physical_device_features(pd) };
     let driver_name = driver
         .driver_name_as_c_str()
         .map(|c| c.to_string_lossy().into_owned())
@@ -695,9 +722,8 @@ fn device_info_of(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32)
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
         max_texel_buffer_elements: props.limits.max_texel_buffer_elements,
         device_local_heap_bytes,
-        pipeline_statistics: unsafe { instance.get_physical_device_features(pd) }
-            .pipeline_statistics_query
-            == vk::TRUE,
+        pipeline_statistics: features.pipeline_statistics_query == vk::TRUE,
+        shader_int64: features.shader_int64 == vk::TRUE,
     }
 }
 

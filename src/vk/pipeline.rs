@@ -8,6 +8,20 @@ use ash::vk;
 use super::context::Context;
 use crate::error::{Result, VkContext};
 
+/// The form of a kernel the device runs: `spirv` (a portable kernel of [`crate::shaders`]) or,
+/// where the device runs 64-bit integers ([`crate::vk::DeviceInfo::shader_int64`]), its
+/// `RARA_INT64` form. Every pipeline is made through here, so a call site names the portable
+/// kernel and the choice is made once.
+fn kernel_form<'a>(ctx: &Context, spirv: &'a [u32]) -> &'a [u32] {
+    if !ctx.info().shader_int64 {
+        return spirv;
+    }
+    crate::shaders::INT64_FORMS
+        .iter()
+        .find(|(portable, _)| *portable == spirv)
+        .map_or(spirv, |&(_, int64)| int64)
+}
+
 /// One compute kernel: its pipeline and the layout of its push constants.
 pub struct ComputePipeline {
     /// The pipeline handle.
@@ -68,6 +82,7 @@ impl ComputePipeline {
         constants: &[(u32, u32)],
     ) -> Result<Self> {
         let device = ctx.device();
+        let spirv = kernel_form(ctx, spirv);
         let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
         let module = unsafe { device.create_shader_module(&module_info, None) }
             .vk("vkCreateShaderModule")?;

@@ -3,7 +3,7 @@
 
 use ash::vk;
 
-use crate::constants::MIN_SUBGROUP_SIZE;
+use crate::constants::{LINEAR_WORKGROUP, MIN_SUBGROUP_SIZE};
 use crate::error::{Error, Result};
 
 /// The Vulkan version, extensions, features and properties rara needs ([`requirements`]).
@@ -12,14 +12,25 @@ use crate::error::{Error, Result};
 ///
 /// ```no_run
 /// # use ash::vk;
+/// # fn f(instance: &ash::Instance, physical_device: vk::PhysicalDevice) {
 /// let req = rara::requirements();
 /// // Ask for at least req.api_version in VkApplicationInfo, then:
+/// let supported = unsafe { instance.get_physical_device_features(physical_device) };
 /// let mut features = vk::PhysicalDeviceFeatures::default();
-/// req.enable_features(&mut features);
+/// req.enable_features(&mut features, &supported);
 /// let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
 /// req.enable_vulkan12_features(&mut features12);
 /// // ... features as the engine's VkDeviceCreateInfo::pEnabledFeatures, push_next(&mut
-/// // features12) onto it, and list req.device_extensions (none today) with the engine's own.
+/// // features12) onto it, and list req.device_extensions (none today) with the engine's own;
+/// // then tell rara what was enabled:
+/// let enabled = rara::EnabledFeatures {
+///     optional: rara::vk::Optional {
+///         shader_int64: features.shader_int64 == vk::TRUE,
+///         ..Default::default()
+///     },
+///     ..Default::default()
+/// };
+/// # }
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Requirements {
@@ -35,18 +46,28 @@ pub struct Requirements {
     /// acquire/release atomics (`glsl/bvh_bounds.comp`; a memory barrier in divergent control
     /// flow is not honoured by every driver).
     pub vulkan_memory_model: bool,
-    /// `VkPhysicalDeviceFeatures::shaderInt64`: the kernels move 16-byte records as two
-    /// 64-bit words, which halves the scalar per-lane loops a CPU driver makes of each load
-    /// and store (see `load_vec4` in `glsl/common.glsl`).
-    pub shader_int64: bool,
     /// Subgroup operations the kernels use in compute shaders (basic and arithmetic, for the
     /// prefix sums and the sort); a property of the device, not something to enable.
     pub subgroup_operations: vk::SubgroupFeatureFlags,
+    /// The smallest compute subgroup size (4): the sort's scatter and the workgroup scan keep
+    /// one shared-memory slot per subgroup, sized for subgroups of 4 or more; nothing else
+    /// depends on the size (SwiftShader runs 4, lavapipe 8, NVIDIA 32, AMD 32 or 64).
+    pub min_subgroup_size: u32,
+    /// The workgroup size the largest kernels take, along x and in all (256, past Vulkan's
+    /// guaranteed 128: `maxComputeWorkGroupInvocations`, `maxComputeWorkGroupSize[0]`).
+    pub workgroup_invocations: u32,
 }
 
 /// Optional capabilities: rara uses them when the engine enabled them and works without.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Optional {
+    /// `VkPhysicalDeviceFeatures::shaderInt64`: the kernels then run in their form with 64-bit
+    /// integers ([`crate::vk::DeviceInfo::shader_int64`]), which moves 16-byte records as two
+    /// 64-bit words and halves the scalar per-lane loops a CPU driver makes of each load and
+    /// store (see `load_vec4` in `glsl/common.glsl`); the same frame, faster on lavapipe.
+    /// Without it (SwiftShader, many mobile GPUs) they add addresses as two 32-bit words.
+    /// [`Requirements::enable_features`] turns it on where the device has it.
+    pub shader_int64: bool,
     /// `VkPhysicalDeviceFeatures::pipelineStatisticsQuery`: compute invocations per pass in
     /// the pass timings.
     pub pipeline_statistics_query: bool,
@@ -62,16 +83,23 @@ pub fn requirements() -> Requirements {
         device_extensions: Vec::new(),
         buffer_device_address: true,
         vulkan_memory_model: true,
-        shader_int64: true,
         subgroup_operations: vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
+        min_subgroup_size: MIN_SUBGROUP_SIZE,
+        workgroup_invocations: LINEAR_WORKGROUP,
     }
 }
 
 impl Requirements {
-    /// Turns on, in an engine's `VkPhysicalDeviceFeatures`, the Vulkan 1.0 features rara needs
-    /// (leaves the others as they are).
-    pub fn enable_features(&self, features: &mut vk::PhysicalDeviceFeatures) {
-        if self.shader_int64 {
+    /// Turns on, in an engine's `VkPhysicalDeviceFeatures`, the Vulkan 1.0 features rara uses
+    /// where `supported` (the physical device's) has them, and leaves the others as they are.
+    /// rara needs none; it runs faster with `shaderInt64` ([`Optional::shader_int64`]: tell
+    /// rara whether it was enabled).
+    pub fn enable_features(
+        &self,
+        features: &mut vk::PhysicalDeviceFeatures,
+        supported: &vk::PhysicalDeviceFeatures,
+    ) {
+        if supported.shader_int64 == vk::TRUE {
             features.shader_int64 = vk::TRUE;
         }
     }
@@ -105,7 +133,6 @@ impl Requirements {
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
         instance.get_physical_device_features2(physical_device, &mut f2);
-        let shader_int64 = f2.features.shader_int64 == vk::TRUE;
         let name = props
             .device_name_as_c_str()
             .map(|n| n.to_string_lossy().into_owned())
@@ -129,9 +156,6 @@ impl Requirements {
         {
             missing.push("the vulkanMemoryModel and vulkanMemoryModelDeviceScope features".into());
         }
-        if self.shader_int64 && !shader_int64 {
-            missing.push("the shaderInt64 feature".into());
-        }
         if !subgroup
             .supported_stages
             .contains(vk::ShaderStageFlags::COMPUTE)
@@ -144,13 +168,24 @@ impl Requirements {
                 self.subgroup_operations
             ));
         }
-        // The sort's scatter and the workgroup scan keep one shared-memory slot per subgroup.
-        // (The kernels are SPIR-V 1.5 without varying-size pipelines, so `subgroupSize` is the
-        // size they run at.)
-        if subgroup.subgroup_size < MIN_SUBGROUP_SIZE {
+        // Shared memory: at most 11 KiB a workgroup, within Vulkan's guaranteed 16 KiB.
+        let limits = &props.limits;
+        let wanted = self.workgroup_invocations;
+        if limits.max_compute_work_group_invocations < wanted
+            || limits.max_compute_work_group_size[0] < wanted
+        {
             missing.push(format!(
-                "a subgroup size of {MIN_SUBGROUP_SIZE} or more (the device has {})",
-                subgroup.subgroup_size
+                "workgroups of {wanted} invocations (the device has \
+                 maxComputeWorkGroupInvocations {}, maxComputeWorkGroupSize.x {})",
+                limits.max_compute_work_group_invocations, limits.max_compute_work_group_size[0]
+            ));
+        }
+        // The kernels are SPIR-V 1.5 without varying-size pipelines, so `subgroupSize` is the
+        // size they run at.
+        if subgroup.subgroup_size < self.min_subgroup_size {
+            missing.push(format!(
+                "a subgroup size of {} or more (the device has {})",
+                self.min_subgroup_size, subgroup.subgroup_size
             ));
         }
         if missing.is_empty() {
@@ -182,9 +217,6 @@ impl Requirements {
                     .to_string(),
             );
         }
-        if self.shader_int64 && !enabled.shader_int64 {
-            missing.push("VkPhysicalDeviceFeatures::shaderInt64 enabled at vkCreateDevice".into());
-        }
         if self.vulkan_memory_model && !enabled.vulkan_memory_model {
             missing.push(
                 "VkPhysicalDeviceVulkan12Features::vulkanMemoryModel and \
@@ -213,8 +245,6 @@ pub struct EnabledFeatures {
     pub api_version: u32,
     /// `VkPhysicalDeviceVulkan12Features::bufferDeviceAddress`.
     pub buffer_device_address: bool,
-    /// `VkPhysicalDeviceFeatures::shaderInt64`.
-    pub shader_int64: bool,
     /// `VkPhysicalDeviceVulkan12Features::vulkanMemoryModel` and
     /// `vulkanMemoryModelDeviceScope`.
     pub vulkan_memory_model: bool,
@@ -228,7 +258,6 @@ impl Default for EnabledFeatures {
         EnabledFeatures {
             api_version: vk::API_VERSION_1_2,
             buffer_device_address: true,
-            shader_int64: true,
             vulkan_memory_model: true,
             optional: Optional::default(),
         }
