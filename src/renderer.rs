@@ -169,8 +169,13 @@ impl Renderer {
         Self::with_raster_layout(ctx, RasterLayout::for_device(ctx))
     }
 
-    /// Builds every kernel of the pipeline with the given rasterizer layout.
+    /// Builds every kernel of the pipeline with the given rasterizer layout. The strips layout
+    /// needs texel buffers of [`crate::stages::CPU_LAYOUT_MIN_TEXELS`] texels and is refused
+    /// ([`crate::Error::MissingRequirement`]) on a device with smaller ones.
     pub fn with_raster_layout(ctx: &Context, layout: RasterLayout) -> Result<Self> {
+        if layout == RasterLayout::Strips {
+            crate::stages::check_cpu_layout(ctx, "strips rasterizer", "pixel-per-invocation")?;
+        }
         // CPU drivers (the strips layout) read through texel views wherever that pays.
         let frame_texels_layout = match layout {
             RasterLayout::Strips => Some(FrameTexelsLayout::new(ctx)?),

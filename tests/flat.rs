@@ -9,7 +9,6 @@ use glam::{DVec3, Quat, Vec3};
 use rara::clip::{Clip, ClipRegion, ClipWeight, CutoffRay, Plane};
 use rara::ply::{load_ply, write_ply, write_ply_layout, PlyEncoding, PlyLayout};
 use rara::reference;
-use rara::stages::rasterize::RasterLayout;
 use rara::synth::Rng;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
@@ -134,7 +133,7 @@ fn flat_gpu_matches_cpu_from_every_view() {
     let ctx = common::context();
     let scene = flat_layer(3000, 11);
     assert_eq!(scene.flat_count(), scene.len());
-    for layout in [RasterLayout::Strips, RasterLayout::PixelPerInvocation] {
+    for layout in common::raster_layouts(&ctx) {
         let mut renderer = Renderer::with_raster_layout(&ctx, layout).unwrap();
         let gpu_scene = renderer.upload(&scene).unwrap();
         for (view, camera) in cameras() {

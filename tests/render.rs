@@ -310,7 +310,6 @@ fn stages_match_cpu_twins(scene: &Scene, cam: &Camera, raster: (f64, u8)) {
 #[test]
 fn splat_over_more_tiles_than_one_round_walks() {
     use rara::constants::TILE_RECT_CHUNK;
-    use rara::stages::rasterize::RasterLayout;
     let ctx = common::context();
     let mut scene = rara::synth::shell(2000, 0, 5);
     let dc = rara::scene::rgb_to_sh_dc;
@@ -330,7 +329,7 @@ fn splat_over_more_tiles_than_one_round_walks() {
             ..RenderOptions::default()
         };
         let cpu = reference::render(&scene, &cam, &options);
-        for layout in [RasterLayout::Strips, RasterLayout::PixelPerInvocation] {
+        for layout in common::raster_layouts(&ctx) {
             let mut renderer = Renderer::with_raster_layout(&ctx, layout).unwrap();
             let gpu_scene = renderer.upload(&scene).unwrap();
             let (gpu, stats) = renderer.render(&gpu_scene, &cam, &options).unwrap();
@@ -538,6 +537,9 @@ fn intersection_overflow_grows_and_rerenders() {
 fn raster_layouts_agree() {
     use rara::stages::rasterize::RasterLayout;
     let ctx = common::context();
+    if !common::runs_cpu_layouts(&ctx) {
+        return;
+    }
     let scene = rara::synth::layers(15000, 1, 8);
     let cam = &rara::synth::orbit_cameras(3, 3.0, 203, 149, 50.0).unwrap()[2];
     let region = rara::ClipRegion::sphere(Vec3::new(0.3, 0.0, 0.2), 0.7).unwrap();

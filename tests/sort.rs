@@ -11,7 +11,6 @@ use rara::stages::sort::{
 use rara::vk::Buffer;
 
 /// Both layouts run on every device, so the GPU one is checked here too.
-const LAYOUTS: [SortLayout; 2] = [SortLayout::ShortRuns, SortLayout::OwnCounts];
 use rara::synth::Rng;
 
 fn check_sort(sorter: &RadixSort, ctx: &rara::Context, keys: Vec<u32>, key_bits: u32, what: &str) {
@@ -164,7 +163,7 @@ fn random_keys(n: usize, bits: u32, seed: u64) -> Vec<u32> {
 #[test]
 fn sort_sizes_around_block_boundaries() {
     let ctx = common::context();
-    for layout in LAYOUTS {
+    for layout in common::sort_layouts(&ctx) {
         sort_sizes_in_layout(&ctx, layout);
     }
 }
@@ -202,7 +201,7 @@ fn sort_sizes_in_layout(ctx: &rara::Context, layout: SortLayout) {
 #[test]
 fn sort_key_patterns() {
     let ctx = common::context();
-    for layout in LAYOUTS {
+    for layout in common::sort_layouts(&ctx) {
         key_patterns_in_layout(&ctx, layout);
     }
 }
@@ -252,6 +251,9 @@ fn sort_packed_pairs() {
     assert!(!refused.sorts_packed());
     assert!(refused.sort_packed_pairs(&ctx, &[1, 2], 32).is_err());
     assert!(refused.sort_packed_pairs_split(&ctx, &[1, 2], 32).is_err());
+    if !common::runs_cpu_layouts(&ctx) {
+        return;
+    }
     let sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
     assert!(sorter.sorts_packed());
     let block = SortLayout::OwnCounts.min_block() as usize;
@@ -272,6 +274,9 @@ fn sort_packed_pairs() {
 #[test]
 fn sort_sizes_where_runs_grow() {
     let ctx = common::context();
+    if !common::runs_cpu_layouts(&ctx) {
+        return;
+    }
     let layout = SortLayout::OwnCounts;
     let sorter = RadixSort::with_layout(&ctx, layout).unwrap();
     let parallel = SORT_PARALLEL_BLOCKS as usize;
@@ -308,6 +313,9 @@ fn sort_sizes_where_runs_grow() {
 #[test]
 fn sort_through_buffer_references() {
     let ctx = common::context();
+    if !common::runs_cpu_layouts(&ctx) {
+        return;
+    }
     let mut sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
     sorter.set_bound_output(false);
     let block = SortLayout::OwnCounts.min_block() as usize;
@@ -338,6 +346,9 @@ fn sort_two_million_pairs() {
     let keys = random_keys(2_000_000, 32, 99);
     let short = RadixSort::with_layout(&ctx, SortLayout::ShortRuns).unwrap();
     check_sort(&short, &ctx, keys.clone(), 32, "2M random pairs");
+    if !common::holds_cpu_layouts(&ctx) {
+        return;
+    }
     let own = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
     let how = check_segmented_sort(&own, &ctx, &keys, 32, PairForm::Split, "2M random pairs");
     let way = if own.can_segment() {
@@ -361,6 +372,9 @@ fn sort_two_million_pairs() {
 fn segmented_sorts() {
     use Segmentation::{BucketRuns, LocalBuckets, None as Plain};
     let ctx = common::context();
+    if !common::runs_cpu_layouts(&ctx) {
+        return;
+    }
     let mut sorter = RadixSort::with_layout(&ctx, SortLayout::OwnCounts).unwrap();
     sorter.set_segment_min_keys(Some(1));
     // Buckets of the top byte: one holding `big` keys (top byte 0x40), the others random.

@@ -7,7 +7,7 @@
 use ash::vk;
 
 use crate::constants::{LINEAR_GRID_X, LINEAR_WORKGROUP};
-use crate::error::{Result, VkContext};
+use crate::error::{Error, Result, VkContext};
 use crate::precision::ShPrecision;
 use crate::timing::PassTimer;
 use crate::vk::{compute_barrier, Context};
@@ -139,6 +139,45 @@ pub(crate) struct LinearArgsPush {
 pub(crate) fn linear_grid(items: u32) -> [u32; 3] {
     let groups = items.div_ceil(LINEAR_WORKGROUP);
     [groups.min(LINEAR_GRID_X), groups.div_ceil(LINEAR_GRID_X), 1]
+}
+
+/// The fewest texels a texel buffer must hold (`maxTexelBufferElements`) for the layouts of the
+/// CPU drivers: 2^24, a frame of 4 million splats at 4 texels each. lavapipe's views hold 2^27;
+/// SwiftShader's 2^16 could not hold a 17,000-splat frame.
+pub const CPU_LAYOUT_MIN_TEXELS: u32 = 1 << 24;
+
+/// Whether the device takes the layouts made for CPU drivers (the strips rasterizer, the
+/// own-counts sort, the runs scan, reads through texel views): a CPU device
+/// (`VK_PHYSICAL_DEVICE_TYPE_CPU`, such as lavapipe) whose texel buffers hold
+/// [`CPU_LAYOUT_MIN_TEXELS`]. Every other device, SwiftShader included, takes the GPU layouts,
+/// which read through buffer addresses alone. Each layout's `RARA_*` variable overrides it.
+pub fn cpu_layouts(ctx: &Context) -> bool {
+    ctx.info().device_type == vk::PhysicalDeviceType::CPU && holds_cpu_layouts(ctx)
+}
+
+/// Whether the device's texel buffers hold the [`CPU_LAYOUT_MIN_TEXELS`] that the layouts of
+/// the CPU drivers read through: the check of an explicit choice of one of those layouts
+/// (`RasterLayout::Strips`, `SortLayout::OwnCounts`), which a GPU with large texel buffers may
+/// run too. A device with small ones (SwiftShader: 2^16) could draw only toy frames through
+/// them, and SwiftShader's compiler cannot build two of their kernels (docs/TESTING.md,
+/// "Two drivers").
+pub fn holds_cpu_layouts(ctx: &Context) -> bool {
+    ctx.info().max_texel_buffer_elements >= CPU_LAYOUT_MIN_TEXELS
+}
+
+/// Refuses `layout`, one of the CPU drivers' layouts, on a device whose texel buffers are too
+/// small for it ([`holds_cpu_layouts`]), with a message that names the limit.
+pub(crate) fn check_cpu_layout(ctx: &Context, layout: &str, other: &str) -> Result<()> {
+    if holds_cpu_layouts(ctx) {
+        return Ok(());
+    }
+    Err(Error::MissingRequirement(format!(
+        "the {layout} layout reads through texel buffers of at least {CPU_LAYOUT_MIN_TEXELS} \
+         texels; {} holds {} (maxTexelBufferElements): use the {other} layout, the default \
+         on this device",
+        ctx.info().name,
+        ctx.info().max_texel_buffer_elements
+    )))
 }
 
 /// The stride of `spread_item` (`glsl/common.glsl`) for `n` items: the integer nearest

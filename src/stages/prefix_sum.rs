@@ -92,15 +92,15 @@ pub enum ScanLayout {
 }
 
 impl ScanLayout {
-    /// The layout for a device: runs on CPU devices, blocks elsewhere. `RARA_SCAN=blocks|runs`
-    /// overrides the choice.
+    /// The layout for a device: runs for the CPU drivers' layouts ([`super::cpu_layouts`]),
+    /// blocks elsewhere. `RARA_SCAN=blocks|runs` overrides the choice.
     pub fn for_device(ctx: &Context) -> ScanLayout {
         match std::env::var("RARA_SCAN").as_deref() {
             Ok("blocks") => return ScanLayout::Blocks,
             Ok("runs") => return ScanLayout::Runs,
             _ => {}
         }
-        if ctx.info().device_type == vk::PhysicalDeviceType::CPU {
+        if super::cpu_layouts(ctx) {
             ScanLayout::Runs
         } else {
             ScanLayout::Blocks

@@ -102,8 +102,8 @@ pub enum RasterLayout {
 }
 
 impl RasterLayout {
-    /// The layout for a device: strips on CPU devices ([`RasterLayout::Strips`]), a pixel per
-    /// invocation elsewhere.
+    /// The layout for a device: strips for the CPU drivers' layouts ([`super::cpu_layouts`],
+    /// [`RasterLayout::Strips`]), a pixel per invocation elsewhere.
     /// `RARA_RASTER=pixels|strips` overrides the choice.
     pub fn for_device(ctx: &Context) -> RasterLayout {
         match std::env::var("RARA_RASTER").as_deref() {
@@ -111,7 +111,7 @@ impl RasterLayout {
             Ok("strips") => return RasterLayout::Strips,
             _ => {}
         }
-        if ctx.info().device_type == vk::PhysicalDeviceType::CPU {
+        if super::cpu_layouts(ctx) {
             RasterLayout::Strips
         } else {
             RasterLayout::PixelPerInvocation

@@ -150,7 +150,8 @@ pub enum SortLayout {
 }
 
 impl SortLayout {
-    /// The layout for a device: own counts on CPU devices, short runs elsewhere.
+    /// The layout for a device: own counts for the CPU drivers' layouts
+    /// ([`super::cpu_layouts`]), short runs elsewhere.
     /// `RARA_SORT=short|own` overrides the choice.
     pub fn for_device(ctx: &Context) -> SortLayout {
         match std::env::var("RARA_SORT").as_deref() {
@@ -158,7 +159,7 @@ impl SortLayout {
             Ok("own") => return SortLayout::OwnCounts,
             _ => {}
         }
-        if ctx.info().device_type == vk::PhysicalDeviceType::CPU {
+        if super::cpu_layouts(ctx) {
             SortLayout::OwnCounts
         } else {
             SortLayout::ShortRuns
@@ -585,8 +586,13 @@ impl RadixSort {
         Self::with_layout(ctx, SortLayout::for_device(ctx))
     }
 
-    /// Builds the kernels in `layout`.
+    /// Builds the kernels in `layout`. The own-counts layout needs texel buffers of
+    /// [`super::CPU_LAYOUT_MIN_TEXELS`] texels and is refused
+    /// ([`crate::Error::MissingRequirement`]) on a device with smaller ones.
     pub fn with_layout(ctx: &Context, layout: SortLayout) -> Result<Self> {
+        if layout == SortLayout::OwnCounts {
+            super::check_cpu_layout(ctx, "own-counts sort", "short-runs")?;
+        }
         let (count, scatter) = match layout {
             SortLayout::ShortRuns => (
                 (c"sort_count", shaders::SORT_COUNT),
@@ -637,11 +643,11 @@ impl RadixSort {
                 texel_layout
                     .map(|l| PackedPassKernels::new(ctx, l))
                     .transpose()?,
-                // Segmented sorts on CPU devices only: the local kernels read through texel
+                // Segmented sorts on CPU drivers only ([`super::cpu_layouts`]): the local kernels read through texel
                 // views what they wrote through storage buffers in the same dispatch, which a
                 // GPU's texture cache need not see (sort_local_body.glsl).
                 texel_layout
-                    .filter(|_| ctx.info().device_type == vk::PhysicalDeviceType::CPU)
+                    .filter(|_| super::cpu_layouts(ctx))
                     .map(|l| SegmentKernels::new(ctx, l))
                     .transpose()?,
                 PrefixSum::new(ctx)?,

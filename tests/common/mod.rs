@@ -5,19 +5,68 @@
 use std::path::{Path, PathBuf};
 
 use rara::metrics::{compare, diff_image, ImageDiff};
+pub use rara::stages::holds_cpu_layouts;
+use rara::stages::rasterize::RasterLayout;
+use rara::stages::sort::SortLayout;
 use rara::vk::{Context, ContextDesc, Validation};
 
 /// A headless context with the validation layer on whenever it is installed.
 pub fn context() -> Context {
+    context_with(ContextDesc::from_env())
+}
+
+/// [`context`] from `desc`, with the validation layer on whenever it is installed.
+pub fn context_with(desc: ContextDesc) -> Context {
     let ctx = Context::headless(&ContextDesc {
         validation: Validation::IfAvailable,
-        device_name: std::env::var("RARA_DEVICE").ok(),
+        ..desc
     })
     .expect("Vulkan context (is mesa-vulkan-drivers installed?)");
     if !ctx.validation_enabled() {
         eprintln!("note: the validation layer is not installed; running without it");
     }
     ctx
+}
+
+/// The rasterizer layouts `ctx`'s device runs: both, or the pixel-per-invocation one alone
+/// where its texel buffers are too small for the strips (`stages::holds_cpu_layouts`; so on
+/// SwiftShader), which is printed.
+pub fn raster_layouts(ctx: &Context) -> Vec<RasterLayout> {
+    if holds_cpu_layouts(ctx) {
+        vec![RasterLayout::Strips, RasterLayout::PixelPerInvocation]
+    } else {
+        eprintln!(
+            "layout Strips not run: {} has small texel buffers",
+            ctx.info().name
+        );
+        vec![RasterLayout::PixelPerInvocation]
+    }
+}
+
+/// The sort layouts `ctx`'s device runs, as [`raster_layouts`] (own counts need texel buffers).
+pub fn sort_layouts(ctx: &Context) -> Vec<SortLayout> {
+    if holds_cpu_layouts(ctx) {
+        vec![SortLayout::ShortRuns, SortLayout::OwnCounts]
+    } else {
+        eprintln!(
+            "layout OwnCounts not run: {} has small texel buffers",
+            ctx.info().name
+        );
+        vec![SortLayout::ShortRuns]
+    }
+}
+
+/// Whether the test of a CPU driver's layout can run on `ctx`'s device; when not, says the
+/// test skipped (`test_skipped`).
+pub fn runs_cpu_layouts(ctx: &Context) -> bool {
+    let runs = holds_cpu_layouts(ctx);
+    if !runs {
+        test_skipped(&format!(
+            "{} has small texel buffers: it runs the GPU layouts only",
+            ctx.info().name
+        ));
+    }
+    runs
 }
 
 /// Fails the calling test when the validation layer reported anything.
@@ -503,12 +552,23 @@ pub fn rara(args: &[&str]) -> std::process::Output {
         .expect("run rara")
 }
 
-/// Asserts that the command succeeded, showing its stderr if not.
+/// Asserts that the command succeeded, showing its stderr if not, and that the validation
+/// layer said nothing (with `RARA_VALIDATION=1`, which `scripts/test.sh` sets on SwiftShader).
 pub fn assert_success(out: &std::process::Output) {
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
+    );
+    assert_no_validation_output(out);
+}
+
+/// Fails when the binary printed a validation message (`rara: Vulkan validation: ...`).
+pub fn assert_no_validation_output(out: &std::process::Output) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("Vulkan validation:"),
+        "the validation layer reported: {stderr}"
     );
 }
 
@@ -518,6 +578,7 @@ pub fn assert_error(out: &std::process::Output, needles: &[&str]) {
     assert!(!out.status.success(), "expected failure, stderr: {stderr}");
     assert_ne!(out.status.code(), Some(101), "rara panicked: {stderr}");
     assert!(!stderr.contains("panicked"), "rara panicked: {stderr}");
+    assert_no_validation_output(out);
     for n in needles {
         assert!(stderr.contains(n), "stderr lacks '{n}': {stderr}");
     }
