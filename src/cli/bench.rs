@@ -422,7 +422,7 @@ fn print_table(
     results: &[ModeResult],
 ) {
     println!(
-        "{} at {}x{}, {} frames per mode{}, on {} ({})",
+        "{} at {}x{}, {} frames per mode{}, on {} ({}), {} kernels",
         path.display(),
         camera.width,
         camera.height,
@@ -433,7 +433,8 @@ fn print_table(
             String::new()
         },
         ctx.info().name,
-        ctx.info().driver
+        ctx.info().driver,
+        ctx.info().kernel_form()
     );
     // Every mode's pass groups in pass order: rara frames have a pass the others lack.
     let mut groups: Vec<String> = Vec::new();
@@ -787,6 +788,13 @@ fn json_report(
     serde_json::json!({
         "device": ctx.info().name,
         "driver": ctx.info().driver,
+        "kernels": ctx.info().kernel_form(),
+        // The layout `Renderer::new` takes on this device; it decides some passes (strips:
+        // "cutoff records", no "write target").
+        "raster_layout": match rara::stages::rasterize::RasterLayout::for_device(ctx) {
+            rara::stages::rasterize::RasterLayout::Strips => "strips",
+            rara::stages::rasterize::RasterLayout::PixelPerInvocation => "pixels",
+        },
         "scene": path.display().to_string(),
         "width": camera.width,
         "height": camera.height,
@@ -906,10 +914,11 @@ fn bench_sort(n: u64) -> Result<()> {
     let (g, c) = (median(&mut gpu_ms), median(&mut cpu_ms));
     let rate = |ms: f64| n as f64 / (ms * 1e-3) / 1e6;
     println!(
-        "sort of {n} random (u32 key, u32 value) pairs on {} ({}), {:?} layout, {}, medians \
-         of {RUNS} runs:",
+        "sort of {n} random (u32 key, u32 value) pairs on {} ({}, {} kernels), {:?} layout, {}, \
+         medians of {RUNS} runs:",
         ctx.info().name,
         ctx.info().driver,
+        ctx.info().kernel_form(),
         sort.layout(),
         if sort.sorts_packed() {
             "packed pairs"
