@@ -355,32 +355,96 @@ pub fn composite(
     max_hits: usize,
 ) -> (Vec3, usize, bool) {
     hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.index.cmp(&b.index)));
-    let mut colour = Vec3::ZERO;
-    let mut transmittance = 1.0f32;
-    let mut walked = 0;
+    let mut ray = RayComposite::default();
     for hit in hits.iter() {
-        if walked == max_hits {
-            return (colour + transmittance * background, walked, true);
+        if !ray.take(scene, hit, e, d, clip, max_hits) {
+            break;
         }
-        walked += 1;
+    }
+    ray.finish(background)
+}
+
+/// One ray's compositing, hit by hit in `(t, index)` order (SPEC section 4's rule as section 7
+/// applies it): what [`composite`] and the tiled tracer of section 11
+/// ([`super::tiled`]) share, so that the two agree to the bit.
+#[derive(Clone, Copy, Debug)]
+pub struct RayComposite {
+    colour: Vec3,
+    transmittance: f32,
+    walked: usize,
+    /// The next hit would have been past the per-ray cap.
+    capped: bool,
+    /// The ray stopped: `T_next < 1e-4`, or capped.
+    done: bool,
+}
+
+impl Default for RayComposite {
+    fn default() -> Self {
+        RayComposite {
+            colour: Vec3::ZERO,
+            transmittance: 1.0,
+            walked: 0,
+            capped: false,
+            done: false,
+        }
+    }
+}
+
+impl RayComposite {
+    /// Takes the next hit: skipped when `alpha w < 1/255`, the ray stopped before
+    /// `T_next < 1e-4`, capped when `max_hits` were walked before it. Returns whether the ray
+    /// takes more hits.
+    pub fn take(
+        &mut self,
+        scene: &Scene,
+        hit: &Hit,
+        e: DVec3,
+        d: DVec3,
+        clip: &Clip,
+        max_hits: usize,
+    ) -> bool {
+        if self.done {
+            return false;
+        }
+        if self.walked == max_hits {
+            self.capped = true;
+            self.done = true;
+            return false;
+        }
+        self.walked += 1;
         let alpha = (hit.alpha * clip_weight(scene, hit, e, d, clip)) as f32;
         if alpha < 1.0 / 255.0 {
-            continue;
+            return true;
         }
-        let next = transmittance * (1.0 - alpha);
+        let next = self.transmittance * (1.0 - alpha);
         if next < 1e-4 {
-            break;
+            self.done = true;
+            return false;
         }
         let i = hit.index as usize;
         let dir = (scene.means[i].as_dvec3() - e).normalize().as_vec3();
-        colour += alpha * transmittance * eval_sh(scene.sh_of(i), scene.sh_degree, dir);
-        transmittance = next;
+        self.colour += alpha * self.transmittance * eval_sh(scene.sh_of(i), scene.sh_degree, dir);
+        self.transmittance = next;
+        true
     }
-    (colour + transmittance * background, walked, false)
+
+    /// Whether the ray takes no more hits.
+    pub fn done(&self) -> bool {
+        self.done
+    }
+
+    /// The colour over `background`, the hits walked and whether the cap cut the ray short.
+    pub fn finish(self, background: Vec3) -> (Vec3, usize, bool) {
+        (
+            self.colour + self.transmittance * background,
+            self.walked,
+            self.capped,
+        )
+    }
 }
 
 /// Which Gaussians a primary ray may hit: all but those section 3 culls (`t.z <= 0.2`).
-fn not_culled(scene: &Scene, camera: &Camera) -> Vec<bool> {
+pub(crate) fn not_culled(scene: &Scene, camera: &Camera) -> Vec<bool> {
     let forward = camera.rotation.col(2);
     scene
         .means
