@@ -7,6 +7,7 @@ pub mod mixed;
 pub mod project;
 pub mod rasterize;
 pub mod raytrace;
+pub mod tiled;
 
 use crate::camera::Camera;
 use crate::renderer::RenderOptions;
