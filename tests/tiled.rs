@@ -144,8 +144,8 @@ fn tiles_give_section_7_to_the_bit_on_generated_scenes() {
     ] {
         let cam = common::tracer_camera(96);
         let (lo, hi) = common::percentile_box(&scene);
-        // Both keys: SPEC section 11's ball and the proxy's nearest depth (the default).
-        for key in [TileKey::Ball, TileKey::Depth] {
+        // Every key: SPEC section 11's ball, the nearest hit depth (the default), per tile.
+        for key in [TileKey::Ball, TileKey::Depth, TileKey::TileHits] {
             let clips = common::tracer_clips(lo, hi);
             let most = tiled_equals_section_7(name, &scene, &cam, &clips, key);
             println!("{name} {key:?}: pending buffer held at most {most} of {DEFAULT_PENDING}");

@@ -168,16 +168,44 @@ pub enum TileKey {
     /// an anisotropic Gaussian: on the shared real scenes at 320 px a pixel held up to 473
     /// pending hits (guitar), 146 on plant.
     Ball,
-    /// The nearest view depth of the proxy (`m_z - sqrt(q_max Sigma_zz)` for the ellipsoid,
-    /// the nearest corner for the octagon), compared with a pending hit's view depth
-    /// `t (d . forward)`: on one ray depth orders hits as `t` does, and no hit of a Gaussian
-    /// lies nearer than its proxy, so the order is as exact as the ball's, and much tighter
-    /// for the flat, facing Gaussians real scenes are made of.
+    /// The least view depth at which a ray from the eye can hit the Gaussian ([`depth_key`]:
+    /// the octagon's nearest corner; for the ellipsoid the nearest point of maximum response
+    /// inside the proxy), compared with a pending hit's view depth `t (d . forward)`: on one
+    /// ray depth orders hits as `t` does, and no hit lies nearer than the key, so the order is
+    /// as exact as the ball's, and tighter.
     Depth,
+    /// Per (Gaussian, tile), the least view depth of its hits on the tile's own pixel rays
+    /// ([`tile_hit_depth`]), compared as [`TileKey::Depth`] is: the tightest key there is,
+    /// found by testing every pixel of the tile; a pair no pixel hits is left out.
+    TileHits,
 }
 
-/// Gaussian `i`'s depth key ([`TileKey::Depth`]): the least view depth of its proxy, or
-/// `None` for an empty proxy.
+/// The least view depth of Gaussian `i`'s hits on the pixel rays of tile `(tx, ty)`
+/// ([`TileKey::TileHits`]), or `None` when none of them hits it.
+pub fn tile_hit_depth(
+    scene: &Scene,
+    i: usize,
+    camera: &Camera,
+    q: f64,
+    tx: u32,
+    ty: u32,
+) -> Option<f64> {
+    let forward = camera.rotation.col(2).as_dvec3();
+    let mut least: Option<f64> = None;
+    for v in ty * TILE_SIZE..((ty + 1) * TILE_SIZE).min(camera.height) {
+        for u in tx * TILE_SIZE..((tx + 1) * TILE_SIZE).min(camera.width) {
+            let (e, d) = pixel_ray(camera, u, v);
+            if let Some(hit) = gaussian_hit(scene, i, e, d, q) {
+                let depth = hit.t * d.dot(forward);
+                least = Some(least.map_or(depth, |l: f64| l.min(depth)));
+            }
+        }
+    }
+    least
+}
+
+/// Gaussian `i`'s depth key ([`TileKey::Depth`]): the least view depth of a hit of it on any
+/// ray from `camera`'s eye, or `None` for an empty proxy.
 pub fn depth_key(scene: &Scene, i: usize, camera: &Camera, q: f64) -> Option<f64> {
     let e = camera.position.as_dvec3();
     let forward = camera.rotation.col(2).as_dvec3();
@@ -199,14 +227,47 @@ pub fn depth_key(scene: &Scene, i: usize, camera: &Camera, q: f64) -> Option<f64
     }
     let r = DMat3::from_quat(scene.rotations[i].as_dquat().normalize());
     let s = scene.scales[i].as_dvec3();
-    // Sigma_ff = sum_k (f . R_k s_k)^2: the ellipsoid's half depth is sqrt(q_max Sigma_ff).
-    let spread = DVec3::new(
+    // In the Gaussian's whitened frame x' = S^-1 R^T (x - mu) the proxy is the ball
+    // |x'|^2 <= q_max, and a ray from the eye e' has its maximum response where x' . d' = 0,
+    // d' along x' - e': on the sphere with diameter [0, e'] (centre e'/2, radius |e'|/2).
+    // View depth is linear there, z0 + g . x' with g = S R^T forward, so the nearest depth of
+    // any hit is the least of g . x' over that sphere's cap inside the ball: the sphere's own
+    // least point if it lies in the ball, else the least point of the rim circle (the plane
+    // x' . e' = q_max, where the two spheres meet).
+    let g = DVec3::new(
         forward.dot(r.x_axis) * s.x,
         forward.dot(r.y_axis) * s.y,
         forward.dot(r.z_axis) * s.z,
     );
-    let depth = forward.dot(scene.means[i].as_dvec3() - e);
-    Some(margin(depth - (q_max * spread.length_squared()).sqrt()))
+    let to_eye = e - scene.means[i].as_dvec3();
+    let e_w = DVec3::new(
+        to_eye.dot(r.x_axis) / s.x,
+        to_eye.dot(r.y_axis) / s.y,
+        to_eye.dot(r.z_axis) / s.z,
+    );
+    let z0 = -forward.dot(to_eye);
+    let (g_len, e_len2) = (g.length(), e_w.length_squared());
+    let proxy_front = -q_max.sqrt() * g_len; // the least of g . x' over the whole ball
+    let lowest = if g_len == 0.0 || e_len2 <= 0.0 {
+        proxy_front
+    } else {
+        let (c, radius) = (0.5 * e_w, 0.5 * e_len2.sqrt());
+        let on_sphere = c - radius * g / g_len;
+        if on_sphere.length_squared() <= q_max {
+            g.dot(c) - radius * g_len
+        } else {
+            // The rim: centre (q_max / |e'|^2) e', radius sqrt(q_max (1 - q_max / |e'|^2)),
+            // in the plane of normal e'.
+            let n = e_w / e_len2.sqrt();
+            let rim_radius2 = q_max * (1.0 - q_max / e_len2);
+            let g_in_plane = g - g.dot(n) * n;
+            g.dot(e_w) * q_max / e_len2 - rim_radius2.max(0.0).sqrt() * g_in_plane.length()
+        }
+    };
+    // Never looser than the proxy's front, and never past it by rounding the other way.
+    let lowest = lowest.max(proxy_front);
+    let size = z0.abs() + q_max.sqrt() * g_len + 0.5 * e_len2.sqrt() * g_len;
+    Some(z0 + lowest - KEY_MARGIN * (1.0 + size))
 }
 
 /// Per tile (row-major), the Gaussians primary rays may hit whose silhouette rectangle covers
@@ -219,7 +280,7 @@ pub fn tile_lists(scene: &Scene, camera: &Camera, q: f64, key: TileKey) -> Vec<V
     for (i, _) in live.iter().enumerate().filter(|(_, &live)| live) {
         let k = match key {
             TileKey::Ball => bound(scene, i, e, q).map(|(_, k)| k),
-            TileKey::Depth => depth_key(scene, i, camera, q),
+            TileKey::Depth | TileKey::TileHits => depth_key(scene, i, camera, q),
         };
         let Some(k) = k else {
             continue;
@@ -227,6 +288,13 @@ pub fn tile_lists(scene: &Scene, camera: &Camera, q: f64, key: TileKey) -> Vec<V
         let [x0, y0, x1, y1] = silhouette_tiles(scene, i, camera, q);
         for ty in y0..y1 {
             for tx in x0..x1 {
+                let k = match key {
+                    TileKey::TileHits => match tile_hit_depth(scene, i, camera, q, tx, ty) {
+                        Some(depth) => depth,
+                        None => continue, // no pixel of the tile hits it
+                    },
+                    _ => k,
+                };
                 lists[(ty * gx + tx) as usize].push((k, i as u32));
             }
         }
@@ -344,7 +412,7 @@ pub fn render(
             let (e, d) = pixel_ray(camera, i, j);
             let along = match tiled.key {
                 TileKey::Ball => 1.0,
-                TileKey::Depth => d.dot(forward),
+                TileKey::Depth | TileKey::TileHits => d.dot(forward),
             };
             trace(scene, list, (e, d, along), options, rt, tiled.pending, s)
         },
