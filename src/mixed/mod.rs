@@ -528,7 +528,11 @@ pub fn moved(scene: &Scene, t: &Transform) -> Scene {
     let mut out = scene.clone();
     for g in 0..out.len() {
         out.means[g] = t.point(out.means[g]);
-        out.rotations[g] = (r * out.rotations[g]).normalize();
+        // Not turned (nor renormalized) by the identity: a scene placed as it is must stay
+        // the same bits, so that a scene file of it renders as the scene alone (SPEC 8).
+        if r != Quat::IDENTITY {
+            out.rotations[g] = (r * out.rotations[g]).normalize();
+        }
         out.scales[g] *= s;
     }
     if r != Quat::IDENTITY && scene.sh_degree > 0 {
