@@ -605,15 +605,31 @@ uint count_touched_cells(vec2 uv, vec3 conic, float q_max, uvec4 rect, uint firs
 // The rasterizer's per-pixel state s = (C, T), T negated once the pixel was done, composited
 // over `under` (premultiplied alpha): (C + T under.rgb, (1 - T) + T under.a). write_target and
 // the rasterizer kernels that write the target themselves (WRITES_TARGET) share it.
+// Pixel `px`'s camera ray direction (SPEC section 2) from the camera's axes and
+// focal = (fx, fy, cx, cy). `precise`: no fused multiply-add, so the ray tracer and the mixed
+// scenes' tree (two kernels, compiled apart) trace the same ray to the bit.
+vec3 camera_ray_direction(vec3 right, vec3 down, vec3 forward, vec4 focal, uvec2 px) {
+    precise vec3 d = right * ((float(px.x) - focal.z) / focal.x)
+                   + down * ((float(px.y) - focal.w) / focal.y) + forward;
+    return normalize(d);
+}
+
+// `precise`: no fused multiply-add, so every kernel that ends a pixel this way (and the
+// mixed scenes' tree, `mixed_spawn`) rounds the same, as the CPU reference does.
 vec4 state_over(vec4 s, vec4 under) {
     float T = abs(s.a);
-    return vec4(s.rgb + T * under.rgb, (1.0 - T) + T * under.a);
+    precise vec4 over = vec4(s.rgb + T * under.rgb, (1.0 - T) + T * under.a);
+    return over;
 }
 
 // c as an RGBA8 texel, each channel clamped to [0, 1] and rounded to nearest, as the CPU
 // reference does (SPEC section 4).
 uint pack_rgba8_nearest(vec4 c) {
-    uvec4 b = uvec4(floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5));
+    // `precise`: c * 255 rounded before the + 0.5, as on the host (`reference::rasterize::
+    // to_rgba8`), never one fused multiply-add, which rounds a channel near a level's middle
+    // the other way.
+    precise vec4 scaled = clamp(c, 0.0, 1.0) * 255.0 + 0.5;
+    uvec4 b = uvec4(floor(scaled));
     return b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
 }
 

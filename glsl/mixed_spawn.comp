@@ -216,8 +216,8 @@ void main() {
         g_acc = vec3(0.0);
         g_sp = 0u;
         ray.o = cam.eye.xyz;
-        ray.d = normalize(cam.right.xyz * ((float(px % w) - cam.focal.z) / cam.focal.x)
-                        + cam.down.xyz * ((float(px / w) - cam.focal.w) / cam.focal.y) + cam.forward.xyz);
+        ray.d = camera_ray_direction(cam.right.xyz, cam.down.xyz, cam.forward.xyz, cam.focal,
+                                     uvec2(px % w, px / w));
         ray.t_start = 0.0;
         ray.t_end = UNBOUNDED;
         ray.carry = vec3(1.0, 0.0, 0.0);
@@ -239,7 +239,9 @@ void main() {
             g_acc = s.rgb;
             float t = abs(s.w);
             if (s.w < 0.0 || tri == NO_TRIANGLE) {
-                g_acc += t * m.background.rgb;
+                // Over the background as write_target ends a ray-traced frame (state_over,
+                // no fused multiply-add), so a scene without meshes is that frame to the bit.
+                g_acc = state_over(s, vec4(m.background.rgb, 0.0)).rgb;
             } else {
                 shade(m, last, tri, load_vec4_item(pc.cur_hit, px), t);
             }

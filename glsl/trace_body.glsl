@@ -305,8 +305,7 @@ void main() {
     // The pixel's ray (SPEC section 2).
     uvec2 px = uvec2(ray % w, ray / w);
     vec3 e = f.eye.xyz;
-    vec3 d = normalize(f.right.xyz * ((float(px.x) - f.focal.z) / f.focal.x)
-                     + f.down.xyz * ((float(px.y) - f.focal.w) / f.focal.y) + f.forward.xyz);
+    vec3 d = camera_ray_direction(f.right.xyz, f.down.xyz, f.forward.xyz, f.focal, px);
     // The Gaussians' stretch of the ray, and whether it culls as a camera ray does.
     float t_lo = 0.0;
     float t_hi = UNBOUNDED;
