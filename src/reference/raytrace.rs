@@ -81,11 +81,16 @@ impl Aabb {
     }
 }
 
+/// `q_max = 2 ln(255 o)`, the volumetric proxy's bound (SPEC section 7): past it a Gaussian
+/// of opacity `o` has alpha under 1/255. Not positive (or NaN) when it can never be hit.
+pub fn proxy_q_max(opacity: f32) -> f64 {
+    2.0 * (255.0 * opacity as f64).ln()
+}
+
 /// The proxy box of Gaussian `i`: for a flat Gaussian its octagon's corners, for a volumetric
 /// one the ellipsoid `q <= 2 ln(255 o)` (half extent `sqrt(q_max Sigma_jj)` along axis j).
 /// `None` when it can never be hit (an opacity under 1/255, or no octagon).
 pub fn proxy_bounds(scene: &Scene, i: usize, q: f64) -> Option<Aabb> {
-    let o = scene.opacities[i] as f64;
     if flat_axis(scene.scales[i]).is_some() {
         let rho = octagon_radius(q, scene.opacities[i]);
         if rho <= 0.0 {
@@ -100,7 +105,7 @@ pub fn proxy_bounds(scene: &Scene, i: usize, q: f64) -> Option<Aabb> {
         }
         return Some(Aabb { lo, hi });
     }
-    let q_max = 2.0 * (255.0 * o).ln();
+    let q_max = proxy_q_max(scene.opacities[i]);
     // (NaN, from a zero opacity, fails too.)
     if q_max.is_nan() || q_max <= 0.0 {
         return None;
@@ -179,7 +184,7 @@ pub fn gaussian_hit(scene: &Scene, i: usize, e: DVec3, d: DVec3, q: f64) -> Opti
     let cq = mo.length_squared();
     let t = -b / (2.0 * a);
     let q_ray = (cq - b * b / (4.0 * a)).max(0.0);
-    let q_max = 2.0 * (255.0 * o).ln();
+    let q_max = proxy_q_max(scene.opacities[i]);
     if t.is_nan() || t <= 0.0 || q_ray.is_nan() || q_ray > q_max {
         return None;
     }

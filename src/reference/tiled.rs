@@ -13,7 +13,9 @@
 use glam::{DMat3, DVec3, Vec3};
 
 use super::rasterize::pixel_ray;
-use super::raytrace::{gaussian_hit, not_culled, render_rows, Hit, RayComposite, RayTraceOptions};
+use super::raytrace::{
+    gaussian_hit, not_culled, proxy_q_max, render_rows, Hit, RayComposite, RayTraceOptions,
+};
 use super::Rgba8Image;
 use crate::camera::{tile_grid, Camera};
 use crate::constants::TILE_SIZE;
@@ -39,7 +41,7 @@ pub fn bound(scene: &Scene, i: usize, e: DVec3, q: f64) -> Option<(f64, f64)> {
         let frame = FlatFrame::of(scene, i);
         r * frame.s_a.max(frame.s_b)
     } else {
-        let q_max = 2.0 * (255.0 * scene.opacities[i] as f64).ln();
+        let q_max = proxy_q_max(scene.opacities[i]);
         if q_max.is_nan() || q_max <= 0.0 {
             return None;
         }
@@ -97,7 +99,7 @@ pub fn silhouette(scene: &Scene, i: usize, camera: &Camera, q: f64) -> Silhouett
     // pixel column u (normal (fx, 0, -w) in the camera's frame, w = u - cx) when
     // (n . m)^2 <= q_max n^T Sigma n, m the centre in the camera's frame: a quadratic in w
     // whose roots bound the columns; the same for the rows.
-    let q_max = 2.0 * (255.0 * scene.opacities[i] as f64).ln();
+    let q_max = proxy_q_max(scene.opacities[i]);
     if q_max.is_nan() || q_max <= 0.0 {
         return Silhouette::Empty;
     }
@@ -221,7 +223,7 @@ pub fn depth_key(scene: &Scene, i: usize, camera: &Camera, q: f64) -> Option<f64
             .fold(f64::INFINITY, f64::min);
         return Some(margin(nearest));
     }
-    let q_max = 2.0 * (255.0 * scene.opacities[i] as f64).ln();
+    let q_max = proxy_q_max(scene.opacities[i]);
     if q_max.is_nan() || q_max <= 0.0 {
         return None;
     }
