@@ -17,6 +17,18 @@
 // the SIMD lanes of a CPU driver and a GPU's warps are refilled with live rays each round
 // instead of idling beside finished ones. Nothing waits on another invocation.
 //
+// With TILED (SPEC section 11, camera rays without a BVH): a pass walks the pixel's tile list
+// (tiled_bounds.comp, tiled_emit.comp, the pair sort) instead of the tree: the Gaussians by
+// their key, the least view depth of any hit of theirs, so a pass whose buffer is full ends at
+// the first entry whose key lies past the buffer's farthest hit: nothing from there on can
+// precede it. The next pass starts at the first entry whose hit the last one left out (a hit
+// it found no room for; for one a nearer hit pushed out of the full buffer, the pass's first
+// hit, at or before it), and takes, as a BVH pass does, the K hits after the last one
+// composited. So the hits are composited in section 7's (t, index) order with any K, and no
+// hit is ever forced out of order (section 11's forced count is 0 by construction); the cost
+// of a small K is entries walked again, counted as visits. Rays run tile by tile (ray r is
+// pixel r % 256 of tile r / 256), so neighbouring lanes walk the same list.
+//
 // Included by trace_deg<D> (SH of degree D in 32-bit floats) and trace_deg<D>_sh16.
 // With SCENE_TEXELS (CPU drivers) the BVH, the Gaussians and their coefficients are read
 // through texel views (a gather, where a buffer load is a scalar loop over the SIMD lanes per
@@ -26,9 +38,13 @@
 #include "bvh_common.glsl"
 #include "sh.glsl"
 #include "clip.glsl"
-#ifdef SCENE_TEXELS
+#if defined(SCENE_TEXELS) && !defined(TILED)
 layout(set = 0, binding = 12) uniform utextureBuffer bvh_texels;
 #endif
+// With TILED and SCENE_TEXELS the set is the rasterizer's frame set (frame_texels.glsl, which
+// sh.glsl includes): the tile lists' Gaussians four to a texel (sorted_value_quads) and the
+// Gaussians' records (splat_texels, three texels each, the record's first 16 bytes in the
+// first) beside the Gaussians and their coefficients.
 // With MIXED (mixed scenes, SPEC section 8): each pixel's ray of this generation comes from
 // the ray tree (mixed_spawn.comp) with its origin, direction, the t range of its Gaussians and
 // the (colour, T) it starts from; a hit's clip is its splat object's; a composited Gaussian is
@@ -37,6 +53,7 @@ layout(set = 0, binding = 12) uniform utextureBuffer bvh_texels;
 #include "mixed_common.glsl"
 #endif
 
+#ifndef TILED
 // Node i as its two 16-byte words.
 void load_node(BvhTree nodes, uint i, out uvec4 w0, out uvec4 w1) {
 #ifdef SCENE_TEXELS
@@ -48,6 +65,7 @@ void load_node(BvhTree nodes, uint i, out uvec4 w0, out uvec4 w1) {
     w1 = load_uvec4(address_plus(at, 16u));
 #endif
 }
+#endif
 
 // Gaussian i of the scene.
 Gaussian trace_gaussian(Gaussians gaussians, uint i) {
@@ -96,6 +114,8 @@ struct TraceParams {
     vec4 options;       // Q, max hits (as float), unused, unused
     uvec4 mixed;        // MIXED: the MixedParams' address (lo, hi); else the depth test's
                         // per-pixel view depth (lo, hi; 0: no depth test)
+    uvec4 lists;        // TILED: the tile ranges' address (lo, hi), the sorted pairs' Gaussians
+    uvec4 list_keys;    // TILED: the records' address (lo, hi; tiled_bounds.comp), tiles across
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer TraceParamsRef { TraceParams p; };
 
@@ -106,8 +126,10 @@ layout(push_constant) uniform Push {
     BvhTree nodes;
     U32s rays;          // per ray of the batch its state, 12 words
     U32s stacks;        // TRACE_STACK entries per ray, entry k of ray r at k * stride + r
+                        // (TILED: entry 0 the next list position, 1 the next pass's start, 2
+                        // the list position of this pass's first hit)
     U32s kbuf;          // TRACE_K per ray, three sections of stride * TRACE_K words: t (float
-                        // bits), Gaussian, alpha (float bits)
+                        // bits), Gaussian, alpha (float bits; TILED: unused, found again)
     Vec4s state;        // out: per pixel (premultiplied colour, transmittance)
     U32s counters;      // TRACE_* slots, then the HIST_* bins from word TRACE_COUNTER_WORDS
     U32s lists;         // two lists of the batch's live rays, `stride` entries each
@@ -284,6 +306,22 @@ void main() {
         local = pc.lists.v[((pc.round - 1u) & 1u) * stride + item];
     }
     uint ray = pc.ray_base + local;
+#ifdef TILED
+    // Tile by tile: ray r is pixel r % 256 of tile r / 256 (the rays of tiles' pixels past the
+    // image's edge do nothing).
+    uint tiles_across = f.list_keys.z;
+    uint tile = ray / (TILE_SIZE * TILE_SIZE);
+    uint within = ray % (TILE_SIZE * TILE_SIZE);
+    uvec2 px = uvec2((tile % tiles_across) * TILE_SIZE + within % TILE_SIZE,
+                     (tile / tiles_across) * TILE_SIZE + within / TILE_SIZE);
+    if (px.x >= w || px.y >= f.size.y) {
+        return;
+    }
+    uint pixel = px.y * w + px.x;
+#else
+    uvec2 px = uvec2(ray % w, ray / w);
+    uint pixel = ray;
+#endif
     Address state_at = address_item(Address(pc.rays), local, 48u);
     // The k-buffer's three sections (t, index, alpha) of 4 TRACE_K bytes per ray each.
     Address k_t = address_item(Address(pc.kbuf), local, 4u * uint(TRACE_K));
@@ -303,7 +341,6 @@ void main() {
         more = load_uvec4(address_plus(state_at, 32u));
     }
     // The pixel's ray (SPEC section 2).
-    uvec2 px = uvec2(ray % w, ray / w);
     vec3 e = f.eye.xyz;
     vec3 d = camera_ray_direction(f.right.xyz, f.down.xyz, f.forward.xyz, f.focal, px);
     // The Gaussians' stretch of the ray, and whether it culls as a camera ray does.
@@ -338,7 +375,7 @@ void main() {
     // takes t < t_hi, so nothing at the surface or behind it is found, and the ray ends there.
     Address depth_limit = address_of_words(f.mixed.zw);
     if (!address_is_null(depth_limit)) {
-        t_hi = F32s(depth_limit).v[ray] / dot(d, f.forward.xyz);
+        t_hi = F32s(depth_limit).v[pixel] / dot(d, f.forward.xyz);
     }
 #endif
     // No zero component: 0 * inf in the slab test would be NaN and lose the box.
@@ -373,6 +410,20 @@ void main() {
     float kt[TRACE_K];
     uint ki[TRACE_K];
     float ka[TRACE_K];
+#ifdef TILED
+    // The tile's list, where this ray is in it, and where the next pass starts (NO_NODE: at
+    // the list's end).
+    uvec2 list = UVec2s(address_of_words(f.lists.xy)).v[tile];
+    U32s list_gaussians = U32s(address_of_words(f.lists.zw));
+    Address records = address_of_words(f.list_keys.xy);
+    uint pos = pc.round == 0u ? list.x : pc.stacks.v[local];
+    uint restart = pc.round == 0u ? NO_NODE : pc.stacks.v[stride + local];
+    // The list position of this pass's first hit: a hit pushed out of the full buffer lies
+    // at or after it.
+    uint pass_first = pc.round == 0u ? NO_NODE : pc.stacks.v[2u * stride + local];
+    // A hit's view depth is t along.
+    float along = dot(d, f.forward.xyz);
+#endif
     if (pc.round != 0u) {
         [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
             uvec4 t4 = load_uvec4(address_item(k_t, q, 16u));
@@ -394,6 +445,134 @@ void main() {
     uint found_now = 0u;
     uint visits_now = 0u;
     uint steps = 0u;
+#ifdef TILED
+    // A pass walks the list from `pos`; each entry's hit joins the buffer of the K nearest
+    // hits after the last one composited. With the buffer full, the pass ends at the first
+    // entry whose key lies past the buffer's farthest hit (nothing from there on can precede
+    // it), and then composites the buffer in order. A hit it found no room for, or one a
+    // nearer hit pushed out, is left to the next pass, which starts at the first entry whose
+    // hit was left out; a pass that left nothing out ends the ray.
+    while ((flags & RAY_DONE) == 0u && steps < pc.budget) {
+        while ((flags & RAY_COMPOSITING) == 0u && steps < pc.budget) {
+            ++steps;
+            uint g = NO_LEAF;
+            bool inside = false;
+            if (pos < list.y) {
+                // The Gaussian's silhouette rectangle (pixels, inclusive) and key.
+#ifdef SCENE_TEXELS
+                g = texelFetch(sorted_value_quads, int(pos >> 2u))[pos & 3u];
+                uvec4 record = texelFetch(splat_texels, int(3u * g));
+#else
+                g = list_gaussians.v[pos];
+                uvec4 record = load_uvec4(address_item(records, g, 48u));
+#endif
+                float key = uintBitsToFloat(record.z);
+                inside = px.x >= (record.x & 0xffffu) && px.x <= (record.x >> 16u)
+                      && px.y >= (record.y & 0xffffu) && px.y <= (record.y >> 16u);
+                if (key >= t_hi * along) {
+                    // No hit from here on is taken, in this pass or a later one.
+                    g = NO_LEAF;
+                } else if (k_count == uint(TRACE_K) && key > kt[TRACE_K - 1] * along) {
+                    // None from here on precedes the buffer's farthest hit: the next pass
+                    // starts here at the latest.
+                    restart = min(restart, pos);
+                    g = NO_LEAF;
+                }
+            }
+            if (g == NO_LEAF) {
+                // The pass is over: composite what it found.
+                pos = list.y;
+                flags |= RAY_COMPOSITING;
+                k_pos = 0u;
+                ++passes;
+            } else if (subgroupAny(inside) && inside) {
+                // Only a pixel inside the silhouette's rectangle can hit it (most of a tile's
+                // pixels are not): the lanes that are test together.
+                ++visits_now;
+                vec2 hit = gaussian_hit(f, g, e, d, cull, t_lo, t_hi);
+                bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
+                bool room = k_count < uint(TRACE_K) || before(hit.x, g, kt[TRACE_K - 1], ki[TRACE_K - 1]);
+                if (hit.y > 0.0 && after && !room) {
+                    restart = min(restart, pos);  // left out: found again by a later pass
+                }
+                if (hit.y > 0.0 && after && room) {
+                    ++found_now;
+                    if (k_count == uint(TRACE_K)) {
+                        // The farthest is pushed out: a later pass finds it again.
+                        restart = min(restart, pass_first);
+                    }
+                    pass_first = min(pass_first, pos);
+                    // The buffer holds (t, Gaussian) alone, the least state a step carries (a
+                    // CPU driver keeps it all live through the walk): a hit's alpha is found
+                    // again when it is composited.
+                    uint p0 = min(k_count, uint(TRACE_K - 1));
+                    k_count = min(k_count + 1u, uint(TRACE_K));
+                    [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
+                        if (k == p0) {
+                            kt[k] = hit.x;
+                            ki[k] = g;
+                        }
+                    }
+                    [[unroll]] for (int k = TRACE_K - 1; k > 0; --k) {
+                        if (uint(k) <= p0 && before(kt[k], ki[k], kt[k - 1], ki[k - 1])) {
+                            float tt = kt[k]; kt[k] = kt[k - 1]; kt[k - 1] = tt;
+                            uint ti = ki[k]; ki[k] = ki[k - 1]; ki[k - 1] = ti;
+                        }
+                    }
+                }
+                ++pos;
+            } else {
+                ++pos;
+            }
+        }
+        bool compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
+        while (subgroupAny(compositing) && compositing && steps < pc.budget) {
+            ++steps;
+            // Compositing the pass's hits in order (SPEC section 4's rule).
+            if (k_pos == k_count) {
+                if (restart == NO_NODE) {
+                    flags |= RAY_DONE;  // the pass left nothing out
+                } else {
+                    // The next pass: from the first entry whose hit this one left out.
+                    flags &= ~RAY_COMPOSITING;
+                    k_count = 0u;
+                    pos = restart;
+                    restart = NO_NODE;
+                    pass_first = NO_NODE;
+                }
+            } else if (walked == max_hits) {
+                flags |= RAY_DONE | RAY_CAPPED | RAY_ENDED;
+            } else {
+                ++walked;
+                // Entry k_pos by fixed indices (selects), not a dynamic index into the arrays.
+                uint g = 0u;
+                float hit_t = 0.0;
+                [[unroll]] for (uint k = 0u; k < uint(TRACE_K); ++k) {
+                    bool at = k == k_pos;
+                    g = at ? ki[k] : g;
+                    hit_t = at ? kt[k] : hit_t;
+                }
+                float alpha = gaussian_hit(f, g, e, d, cull, t_lo, t_hi).y
+                            * clip_weight(clip, spans, g, hit_t, e, d);
+                last_t = hit_t;
+                last_index = g;
+                flags |= RAY_HAS_LAST;
+                ++k_pos;
+                if (alpha >= 1.0 / 255.0) {
+                    float next_t = T * (1.0 - alpha);
+                    if (next_t < 1e-4) {
+                        flags |= RAY_DONE | RAY_ENDED;
+                    } else {
+                        vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
+                        colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
+                        T = next_t;
+                    }
+                }
+            }
+            compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
+        }
+    }
+#else
     while ((flags & RAY_DONE) == 0u && steps < pc.budget) {
         // A step is a node visit (or the end of a pass) or a composited hit. A CPU driver
         // runs every branch under a mask and every loop body at least once, so the loops nest
@@ -561,6 +740,7 @@ void main() {
             compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
         }
     }
+#endif
     found += found_now;
     visits += visits_now;
     if (found_now > 0u) {
@@ -572,7 +752,7 @@ void main() {
 #ifdef MIXED
     store_vec4_item(pc.state, ray, vec4(colour, (flags & RAY_ENDED) != 0u ? -T : T));
 #else
-    store_vec4_item(pc.state, ray, vec4(colour, T));
+    store_vec4_item(pc.state, pixel, vec4(colour, T));
 #endif
     if ((flags & RAY_DONE) != 0u) {
         atomicAdd(pc.counters.v[TRACE_COUNTER_WALKED], walked);
@@ -587,10 +767,16 @@ void main() {
     }
     // Still live: onto the next round's list, with its state (the node it was going on to
     // back on its stack).
+#ifdef TILED
+    pc.stacks.v[local] = pos;
+    pc.stacks.v[stride + local] = restart;
+    pc.stacks.v[2u * stride + local] = pass_first;
+#else
     if (node != NO_NODE) {
         pc.stacks.v[sp * stride + local] = node;
         ++sp;
     }
+#endif
     uint at = atomicAdd(pc.live.v[pc.round], 1u);
     pc.lists.v[(pc.round & 1u) * stride + at] = local;
     store_vec4(state_at, vec4(colour, T));
@@ -603,5 +789,6 @@ void main() {
                     uvec4(ki[4u * q], ki[4u * q + 1u], ki[4u * q + 2u], ki[4u * q + 3u]));
         store_uvec4(address_item(k_alpha, q, 16u),
                     floatBitsToUint(vec4(ka[4u * q], ka[4u * q + 1u], ka[4u * q + 2u], ka[4u * q + 3u])));
+
     }
 }

@@ -1168,4 +1168,148 @@ const VARIANTS: &[Variant] = &[
             "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
         ],
     },
+    Variant {
+        name: "trace_tiled_deg0",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 0, coefficients as 32-bit floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg0_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 0, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg0_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 0, coefficients as half floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg0_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 0", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 0, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg1",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 1, coefficients as 32-bit floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg1_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 1, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg1_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 1, coefficients as half floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg1_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 1", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 1, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg2",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 2, coefficients as 32-bit floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg2_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 2, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg2_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 2, coefficients as half floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg2_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 2", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 2, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg3",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 3, coefficients as 32-bit floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg3_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 3, coefficients as 32-bit floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg3_sh16",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 3, coefficients as half floats,",
+            "(GPUs; see trace_body.glsl).",
+        ],
+    },
+    Variant {
+        name: "trace_tiled_deg3_sh16_texels_k64",
+        body: "trace_body.glsl",
+        defines: &["SH_DEGREE 3", "SH_HALF 1", "SCENE_TEXELS", "TRACE_K 64", "TILED"],
+        about: &[
+            "The ray tracer's camera rays from tile lists (SPEC section 11) for scenes of SH degree 3, coefficients as half floats,",
+            "with a buffer of 64 hits per ray, reading through texel views (CPU drivers) (see trace_body.glsl).",
+        ],
+    },
 ];

@@ -64,6 +64,9 @@ pub struct FrameSlot {
     trace_rounds: u32,
     /// Rounds the last recorded frame had, when it was ray traced.
     recorded_trace: Option<u32>,
+    /// The pair capacity the last recorded frame had, when it was ray traced from tile lists
+    /// (SPEC section 11), which are the rasterizer's buffers.
+    recorded_tiles: Option<u64>,
     /// With several objects ([`crate::Renderer::record_objects`]): the merged scene the
     /// objects are transformed into, and their parameters.
     pub(crate) objects: Option<ObjectBuffers>,
@@ -242,6 +245,7 @@ impl FrameSlot {
             trace: None,
             trace_rounds: FIRST_TRACE_ROUNDS,
             recorded_trace: None,
+            recorded_tiles: None,
             objects: None,
             trace_depth_limit: None,
         })
@@ -306,21 +310,31 @@ impl FrameSlot {
     /// that holds the frame has completed (e.g. after waiting on its fence). `passes` and the
     /// times are left empty: they live in the caller's [`crate::timing::PassTimer`].
     pub fn stats(&mut self) -> Result<FrameStats> {
+        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(
+            &self.counters_readback.mapped()[..COUNTER_SLOTS as usize * 4],
+        );
         if let (Some(rounds), Some(t)) = (self.recorded_trace, &self.trace) {
             let trace = t.stats(rounds);
-            let complete = trace.unfinished == 0;
+            let mut complete = trace.unfinished == 0;
             if !complete {
                 self.trace_rounds = (rounds * 4).min(MAX_TRACE_ROUNDS);
+            }
+            let mut stats = FrameStats::default();
+            if let Some(capacity) = self.recorded_tiles {
+                // Camera rays from tile lists: the lists' pairs, which must have fit.
+                stats.intersections = counters[COUNTER_INTERSECTIONS as usize];
+                stats.visible = counters[COUNTER_VISIBLE as usize];
+                if stats.intersections as u64 > capacity {
+                    complete = false;
+                    self.reserve((stats.intersections as u64 * 5 / 4).next_power_of_two(), 0);
+                }
             }
             return Ok(FrameStats {
                 complete,
                 trace: Some(trace),
-                ..FrameStats::default()
+                ..stats
             });
         }
-        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(
-            &self.counters_readback.mapped()[..COUNTER_SLOTS as usize * 4],
-        );
         let intersections = counters[COUNTER_INTERSECTIONS as usize];
         let max_tile_len = counters[COUNTER_MAX_TILE_LEN as usize];
         let complete = match self.recorded {
@@ -360,6 +374,7 @@ impl FrameSlot {
         tracer: &RayTracer,
         size: (u32, u32),
         gaussians: u32,
+        tiled: bool,
     ) -> Result<(&mut TraceBuffers, u32)> {
         if self.recorded_trace.is_some() {
             // The previous frame has completed (the slot's contract): learn whether it needed
@@ -369,13 +384,16 @@ impl FrameSlot {
         if !self
             .trace
             .as_ref()
-            .is_some_and(|t| t.fits(size, gaussians, tracer.k()))
+            .is_some_and(|t| t.fits(size, gaussians, tracer.k(), tiled))
         {
             self.trace = None; // free the old buffers first
-            self.trace = Some(TraceBuffers::new(tracer, &self.ctx, size, gaussians)?);
+            self.trace = Some(TraceBuffers::new(
+                tracer, &self.ctx, size, gaussians, tiled,
+            )?);
         }
         self.recorded = None;
         self.recorded_trace = Some(self.trace_rounds);
+        self.recorded_tiles = None;
         Ok((self.trace.as_mut().expect("made above"), self.trace_rounds))
     }
 
@@ -503,7 +521,33 @@ impl FrameSlot {
         }
         self.recorded = Some((capacity, self.rounds));
         self.recorded_trace = None;
+        self.recorded_tiles = None;
         Ok((capacity, self.rounds))
+    }
+
+    /// Makes the slot fit a ray-traced frame whose camera rays come from tile lists (SPEC
+    /// section 11): the rasterizer's buffers for the lists (as [`FrameSlot::prepare`], no
+    /// cutoff records) and the tracer's (as [`FrameSlot::prepare_trace`]). Returns the pair
+    /// capacity and the tracer's rounds; the slot then counts as holding such a frame, whose
+    /// stats judge both.
+    pub(crate) fn prepare_tiled_trace(
+        &mut self,
+        tracer: &RayTracer,
+        (prefix_sum, sort): (&PrefixSum, &RadixSort),
+        size: (u32, u32),
+        gaussians: u32,
+        pair_limit: u64,
+    ) -> Result<(u64, u32)> {
+        if self.recorded.is_some() || self.recorded_trace.is_some() {
+            // The previous frame has completed (the slot's contract): learn what it needed.
+            self.stats()?;
+        }
+        self.recorded = None;
+        self.recorded_trace = None;
+        let (capacity, _) = self.prepare(prefix_sum, sort, size, gaussians, false, pair_limit)?;
+        let (_, rounds) = self.prepare_trace(tracer, size, gaussians, true)?;
+        self.recorded_tiles = Some(capacity);
+        Ok((capacity, rounds))
     }
 
     /// Makes room for the depth order of `gaussians` copied aside

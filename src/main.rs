@@ -195,8 +195,9 @@ struct RenderArgs {
     /// Render this many more times after the first and report median timings.
     #[arg(long, default_value_t = 0)]
     repeat: usize,
-    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7, a BVH built per
-    /// frame).
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7), camera rays from
+    /// tile lists (section 11); ray-bvh: the ray tracer with camera rays through a BVH built
+    /// per frame (the same image, for comparison).
     #[arg(long, value_enum, default_value_t = TracerArg::Raster)]
     tracer: TracerArg,
     /// Also write the splats' depth (SPEC section 9): OUT.exr (32-bit float view depth,
@@ -217,8 +218,10 @@ struct RenderArgs {
 pub enum TracerArg {
     /// The tile rasterizer.
     Raster,
-    /// The ray tracer.
+    /// The ray tracer, camera rays from tile lists.
     Ray,
+    /// The ray tracer, camera rays through a BVH.
+    RayBvh,
 }
 
 impl From<TracerArg> for rara::Tracer {
@@ -226,6 +229,7 @@ impl From<TracerArg> for rara::Tracer {
         match t {
             TracerArg::Raster => rara::Tracer::Raster,
             TracerArg::Ray => rara::Tracer::Ray,
+            TracerArg::RayBvh => rara::Tracer::RayBvh,
         }
     }
 }
@@ -476,14 +480,14 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
         tracer: args.tracer.into(),
         ..RenderOptions::default()
     };
-    if args.reference && options.tracer == rara::Tracer::Ray {
+    if args.reference && options.tracer.is_ray() {
         return Err(Error::InvalidInput(
             "--reference renders with the CPU rasterizer; the CPU ray tracer is the library's \
              rara::reference::raytrace::render"
                 .into(),
         ));
     }
-    if args.depth.is_some() && options.tracer == rara::Tracer::Ray {
+    if args.depth.is_some() && options.tracer.is_ray() {
         return Err(Error::InvalidInput(
             "--depth writes the rasterizer's depth, not the ray tracer's".into(),
         ));
@@ -594,10 +598,15 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
     };
     set.commit()?;
     if let Some(t) = &stats.trace {
+        let (visited, built) = if t.tiled {
+            ("list entries tested", "tile lists built")
+        } else {
+            ("nodes visited", "BVH build")
+        };
         println!(
             "wrote {} ({}x{}) on {}: ray traced, per ray {:.1} hits composited (p99 {}), {:.1} \
-             found, {:.2} passes, {:.0} nodes visited; {} capped at {}, {} rounds, {:.0} ms wall \
-             (BVH build included)",
+             found, {:.2} passes, {:.0} {visited}; {} capped at {}, {} rounds, {:.0} ms wall \
+             ({built} included)",
             args.output.display(),
             camera.width,
             camera.height,
@@ -612,6 +621,9 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             t.rounds,
             stats.wall_ms
         );
+        if t.tiled {
+            println!("{}", cli::describe_tiled(&stats, t));
+        }
     } else {
         print_raster_counts(&args.output, &camera, &ctx, &gpu_scene, &stats);
     }

@@ -29,6 +29,7 @@ use crate::stages::rasterize::{MassEnds, RasterLayout, Rasterize};
 use crate::stages::sort::{PairForm, RadixSort, SortForms, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
 use crate::stages::tile_ranges::TileRanges;
+use crate::stages::tiled::RayTiles;
 use crate::stages::trace::RayTracer;
 use crate::stages::write_target::WriteTarget;
 use crate::stages::{FrameAddresses, FrameRecording, FrameTexelsLayout};
@@ -72,9 +73,20 @@ pub enum Tracer {
     /// The tile rasterizer (SPEC sections 3-5).
     #[default]
     Raster,
-    /// The ray tracer (SPEC section 7): a BVH built per frame, k-closest hits per ray. So far
-    /// headless only ([`Renderer::render`]); [`Renderer::record`] refuses it.
+    /// The ray tracer (SPEC section 7), its camera rays composited from tile lists (SPEC
+    /// section 11, [`crate::stages::tiled`]): section 7's image, with no BVH.
     Ray,
+    /// The ray tracer with its camera rays through a BVH built per frame, k-closest hits per
+    /// ray: section 7's image as [`Tracer::Ray`]'s, the path of secondary rays, for
+    /// comparison.
+    RayBvh,
+}
+
+impl Tracer {
+    /// Whether frames are ray traced (SPEC section 7), whatever their camera rays come from.
+    pub fn is_ray(self) -> bool {
+        matches!(self, Tracer::Ray | Tracer::RayBvh)
+    }
 }
 
 /// The intermediate buffers of the last rendered frame, read back for tests and debugging.
@@ -133,6 +145,8 @@ pub struct Renderer {
     headless: Option<HeadlessFrame>,
     /// The ray tracer, made on the first frame that asks for it.
     ray_tracer: std::sync::OnceLock<RayTracer>,
+    /// The tile lists of its camera rays, made on the first frame that asks for them.
+    ray_tiles: std::sync::OnceLock<RayTiles>,
     /// The layout of the frame's texel views, for the kernels that read through them (with the
     /// strips rasterizer, i.e. on CPU drivers).
     _frame_texels_layout: Option<FrameTexelsLayout>,
@@ -207,6 +221,7 @@ impl Renderer {
             keep_depth_order: false,
             headless: None,
             ray_tracer: std::sync::OnceLock::new(),
+            ray_tiles: std::sync::OnceLock::new(),
             _frame_texels_layout: frame_texels_layout,
         })
     }
@@ -341,6 +356,15 @@ impl Renderer {
         }
         let tracer = RayTracer::new(&self.ctx)?;
         Ok(self.ray_tracer.get_or_init(|| tracer))
+    }
+
+    /// The tile lists' kernels, built now if they were not yet.
+    fn ray_tiles(&self) -> Result<&RayTiles> {
+        if let Some(t) = self.ray_tiles.get() {
+            return Ok(t);
+        }
+        let tiles = RayTiles::new(&self.ctx)?;
+        Ok(self.ray_tiles.get_or_init(|| tiles))
     }
 
     fn render_headless(
@@ -575,7 +599,7 @@ impl Renderer {
         if let Some(test) = &options.depth_test {
             test.projection.validate()?;
         }
-        if options.tracer == Tracer::Ray {
+        if options.tracer.is_ray() {
             if object_clips.is_some() {
                 return Err(Error::InvalidInput(
                     "objects with clip regions of their own are drawn by the rasterizer so far, \
@@ -1228,9 +1252,12 @@ impl Renderer {
         })
     }
 
-    /// [`Renderer::record`] of a ray-traced frame ([`Tracer::Ray`]): the BVH build and the
-    /// tracer's rounds ([`RayTracer::record`]) into the slot's trace buffers, then the
-    /// write-target pass, under the same synchronisation contract. A frame whose rays needed
+    /// [`Renderer::record`] of a ray-traced frame: with [`Tracer::Ray`] the tile lists of its
+    /// camera rays ([`RayTiles::record`], in the slot's rasterizer buffers), with
+    /// [`Tracer::RayBvh`] the BVH build, then the tracer's rounds ([`RayTracer::record`]) into
+    /// the slot's trace buffers, then the write-target pass, under the same synchronisation
+    /// contract. A frame whose tile pairs did not fit is reported incomplete as a rasterized
+    /// one is, and the slot grows for the next. A frame whose rays needed
     /// more rounds than the slot recorded shows what they composited so far and is reported
     /// with [`FrameStats::complete`] `== false`; the slot records more rounds from its next
     /// frame.
@@ -1268,7 +1295,18 @@ impl Renderer {
             }
             None => None,
         };
-        let (bufs, rounds) = slot.prepare_trace(tracer, (w, h), scene.len())?;
+        let tiled = options.tracer == Tracer::Ray;
+        let (capacity, rounds) = if tiled {
+            slot.prepare_tiled_trace(
+                tracer,
+                (&self.prefix_sum, &self.sort),
+                (w, h),
+                scene.count,
+                self.rasterize.pair_limit(&self.ctx),
+            )?
+        } else {
+            (0, slot.prepare_trace(tracer, (w, h), scene.count, false)?.1)
+        };
         let ctx = &self.ctx;
         let mut labels_only;
         let timer: &mut PassTimer = match timings {
@@ -1279,7 +1317,8 @@ impl Renderer {
             }
         };
         timer.begin_frame(cmd);
-        let at = FrameAddresses {
+        let state = slot.trace.as_ref().expect("prepared").state.address;
+        let mut at = FrameAddresses {
             params: 0,
             clip: 0,
             counters: 0,
@@ -1289,7 +1328,57 @@ impl Renderer {
             cutoffs: 0,
             cutoff_bounds: 0,
             ranges: 0,
-            state: bufs.state.address,
+            state,
+        };
+        let q = crate::reference::raytrace::RayTraceOptions::default().q as f32;
+        // On CPU drivers the tracer reads the lists through the frame's texel views.
+        let frame_texels = if tiled && tracer.reads_texels() {
+            let sorted = self.sort.passes_for(key_bits(w, h)) as usize % 2;
+            Some(slot.frame_texels_set(sorted, scene)?)
+        } else {
+            None
+        };
+        let bufs = slot.trace.as_mut().expect("prepared");
+        let tile_lists = match slot.resources.as_ref().filter(|_| tiled) {
+            Some(f) => {
+                // The tile lists (SPEC section 11) in the rasterizer's buffers, zeroed as its
+                // frames zero them.
+                let params = frame_params(camera, options, scene, capacity);
+                unsafe {
+                    let device = ctx.device();
+                    device.cmd_update_buffer(cmd, f.params.raw, 0, bytemuck::bytes_of(&params));
+                    device.cmd_fill_buffer(cmd, f.counters.raw, 0, vk::WHOLE_SIZE, 0);
+                    device.cmd_fill_buffer(cmd, f.ranges.raw, 0, vk::WHOLE_SIZE, 0);
+                }
+                compute_barrier(ctx, cmd);
+                at = FrameAddresses {
+                    params: f.params.address,
+                    counters: f.counters.address,
+                    splats: f.splats.address,
+                    tiles_touched: f.tiles_touched.address,
+                    slots: f.slots.address,
+                    ranges: f.ranges.address,
+                    ..at
+                };
+                let mut rec = FrameRecording {
+                    ctx,
+                    cmd,
+                    timer: &mut *timer,
+                    texels: frame_texels,
+                    at,
+                    size: (w, h),
+                    grid: tile_grid(w, h),
+                };
+                Some(self.ray_tiles()?.record(
+                    &mut rec,
+                    scene,
+                    q,
+                    (&self.prefix_sum, &f.slots_scan),
+                    &self.sort,
+                    &f.sort,
+                ))
+            }
+            None => None,
         };
         if let Some((projection, source, limit)) = &depth {
             let mut rec = FrameRecording {
@@ -1318,7 +1407,18 @@ impl Renderer {
             0..rounds,
             None,
             depth.map(|(_, _, limit)| limit),
+            tile_lists,
         )?;
+        if let Some(f) = slot.resources.as_ref().filter(|_| tiled) {
+            // The lists' counters, for FrameSlot::stats (their pairs must have fit).
+            copy_to_host(
+                ctx,
+                cmd,
+                &f.counters,
+                slot.counters_readback(),
+                COUNTER_SLOTS as u64 * 4,
+            );
+        }
         let mut rec = FrameRecording {
             ctx,
             cmd,

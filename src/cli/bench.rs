@@ -61,8 +61,9 @@ pub struct BenchArgs {
     /// Weight, band and fixed clip planes for the rara (and hard) modes.
     #[command(flatten)]
     clip: ClipArgs,
-    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7), each mode then also
-    /// drawn by the rasterizer, taking turns, for the ratio of their frame times in one run.
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7, camera rays from tile
+    /// lists, section 11), each mode then also drawn by the rasterizer, taking turns, for the
+    /// ratio of their frame times in one run; ray-bvh: also with camera rays through a BVH.
     #[arg(long, value_enum, default_value_t = crate::TracerArg::Raster)]
     tracer: crate::TracerArg,
 }
@@ -111,6 +112,7 @@ impl ModeResult {
         match self.tracer {
             rara::Tracer::Raster => self.mode.name().to_string(),
             rara::Tracer::Ray => format!("ray {}", self.mode.name()),
+            rara::Tracer::RayBvh => format!("ray-bvh {}", self.mode.name()),
         }
     }
 
@@ -285,6 +287,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let tracers: &[rara::Tracer] = match args.tracer {
         crate::TracerArg::Raster => &[rara::Tracer::Raster],
         crate::TracerArg::Ray => &[rara::Tracer::Raster, rara::Tracer::Ray],
+        // Both sources of camera rays beside the rasterizer, for ratios in one run.
+        crate::TracerArg::RayBvh => &[
+            rara::Tracer::Raster,
+            rara::Tracer::Ray,
+            rara::Tracer::RayBvh,
+        ],
     };
     let total = (args.frames + args.warmup) as u64
         * args.samples as u64
@@ -379,7 +387,7 @@ fn render_bench_frame(
     clip: Clip,
     depth_test: rara::DepthTest,
 ) -> Result<FrameStats> {
-    if result.mode == BenchMode::Depth && result.tracer == rara::Tracer::Ray {
+    if result.mode == BenchMode::Depth && result.tracer.is_ray() {
         return Err(Error::InvalidInput(
             "bench: the depth mode is the rasterizer's (--tracer raster)".into(),
         ));
@@ -577,7 +585,12 @@ fn print_table(
 
 /// The ray tracer's medians over a mode's frames (`bench --tracer ray`).
 struct TraceSummary {
+    /// What comes before the rays: the BVH build, or the tile lists' passes.
     bvh_ms: f64,
+    /// The k-buffer (with tile lists, the pending buffer K).
+    k: f64,
+    /// The tile lists' pairs (0 through the BVH).
+    pairs: f64,
     trace_ms: f64,
     rays_per_s: f64,
     walked: f64,
@@ -592,7 +605,7 @@ struct TraceSummary {
 impl ModeResult {
     /// The ray tracer's medians, for a ray-traced mode.
     fn trace_summary(&self) -> Option<TraceSummary> {
-        if self.tracer != rara::Tracer::Ray {
+        if !self.tracer.is_ray() {
             return None;
         }
         let pass = |name: &str| {
@@ -619,8 +632,17 @@ impl ModeResult {
             median(&mut v)
         };
         let trace_ms = pass("trace");
+        let frames = self.frames.len().max(1) as f64;
         Some(TraceSummary {
-            bvh_ms: pass("bvh build"),
+            // The BVH build, or the tile lists' passes: everything before the rays.
+            bvh_ms: median(&mut self.gpu()) - trace_ms - pass("write target"),
+            k: per(&|t| t.k as f64),
+            pairs: self
+                .frames
+                .iter()
+                .map(|f| f.intersections as f64)
+                .sum::<f64>()
+                / frames,
             trace_ms,
             rays_per_s: per(&|t| t.rays as f64) / (trace_ms / 1e3),
             walked: per(&|t| t.walked_per_ray()),
@@ -645,14 +667,14 @@ fn print_trace_table(results: &[ModeResult]) {
         return;
     }
     println!(
-        "| {:<12} | {:>9} | {:>9} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>9} | {:>6} | {:>10} |",
-        "ray tracer", "bvh ms", "trace ms", "Mrays/s", "hits/ray", "hits p99", "found", "passes", "pass p99", "nodes/ray", "rounds", "ray/raster"
+        "| {:<16} | {:>9} | {:>9} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>9} | {:>4} | {:>6} | {:>10} |",
+        "ray tracer", "build ms", "trace ms", "Mrays/s", "hits/ray", "hits p99", "found", "passes", "pass p99", "steps/ray", "K", "rounds", "ray/raster"
     );
-    println!("|{}|", ["---"; 12].join("|"));
+    println!("|{}|", ["---"; 13].join("|"));
     for (r, t) in rows {
-        let ratio = paired_tracer_ratio(results, r.mode);
+        let ratio = paired_tracer_ratio(results, r.mode, r.tracer);
         println!(
-            "| {:<12} | {:>9.1} | {:>9.1} | {:>9.3} | {:>8.1} | {:>8.0} | {:>8.1} | {:>8.2} | {:>8.0} | {:>9.0} | {:>6.0} | {:>10} |",
+            "| {:<16} | {:>9.1} | {:>9.1} | {:>9.3} | {:>8.1} | {:>8.0} | {:>8.1} | {:>8.2} | {:>8.0} | {:>9.0} | {:>4.0} | {:>6.0} | {:>10} |",
             r.name(),
             t.bvh_ms,
             t.trace_ms,
@@ -663,6 +685,7 @@ fn print_trace_table(results: &[ModeResult]) {
             t.passes,
             t.p99_passes,
             t.visits,
+            t.k,
             t.rounds,
             ratio.map_or("-".to_string(), |x| format!("{x:.2}"))
         );
@@ -671,13 +694,17 @@ fn print_trace_table(results: &[ModeResult]) {
 
 /// Median over the frames of the ray tracer's GPU time over the rasterizer's, same mode and
 /// plane position.
-fn paired_tracer_ratio(results: &[ModeResult], mode: BenchMode) -> Option<f64> {
+fn paired_tracer_ratio(
+    results: &[ModeResult],
+    mode: BenchMode,
+    tracer: rara::Tracer,
+) -> Option<f64> {
     let find = |tracer| {
         results
             .iter()
             .find(|r| r.mode == mode && r.tracer == tracer)
     };
-    let (ray, raster) = (find(rara::Tracer::Ray)?, find(rara::Tracer::Raster)?);
+    let (ray, raster) = (find(tracer)?, find(rara::Tracer::Raster)?);
     let mut ratios: Vec<f64> = ray
         .frames
         .iter()
@@ -760,8 +787,11 @@ fn json_report(
                 "passes_per_ray": t.passes,
                 "passes_per_ray_p99": t.p99_passes,
                 "node_visits_per_ray": t.visits,
+                "camera_rays": if r.tracer == rara::Tracer::Ray { "tiles" } else { "bvh" },
+                "k": t.k,
+                "tile_pairs": t.pairs,
                 "rounds": t.rounds,
-                "over_raster": paired_tracer_ratio(results, r.mode),
+                "over_raster": paired_tracer_ratio(results, r.mode, r.tracer),
             })
         });
         modes.insert(

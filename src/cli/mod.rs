@@ -28,6 +28,26 @@ fn mb(bytes: u64) -> String {
     format!("{:.1} MB", bytes as f64 / 1e6)
 }
 
+/// The line `render` and `bench` print about a frame whose camera rays came from tile lists
+/// (SPEC section 11): the lists' size and the pending buffer's capacity K, which forces no hit
+/// out of order (a pass that runs out of room leaves the rest to the next one).
+pub fn describe_tiled(
+    frame: &rara::FrameStats,
+    t: &rara::stages::trace::TraceFrameStats,
+) -> String {
+    format!(
+        "camera rays from tile lists (SPEC 11): {} Gaussians listed, {} (tile, Gaussian) pairs; \
+         pending buffer K = {}; no hit is forced out of order (a full buffer ends its pass and \
+         the next walks the list again from the first hit left out: {:.2} passes, {:.0} entries \
+         tested per ray)",
+        frame.visible,
+        frame.intersections,
+        t.k,
+        t.passes_per_ray(),
+        t.visits_per_ray()
+    )
+}
+
 /// Device memory of a scene and of the frame that drew it, by what it scales with.
 pub fn describe_memory(scene: &GpuScene, frame: &FrameMemory) -> String {
     let n = scene.len().max(1) as u64;

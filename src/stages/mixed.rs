@@ -371,7 +371,7 @@ impl MixedTracer {
         let device = ctx.device();
         let (w, h) = (camera.width, camera.height);
         let pixels = w as u64 * h as u64;
-        let mut bufs = TraceBuffers::new(&self.tracer, ctx, (w, h), scene.gaussians.len())?;
+        let mut bufs = TraceBuffers::new(&self.tracer, ctx, (w, h), scene.gaussians.len(), false)?;
         let tree = TreeBuffers::new(ctx, pixels, bufs.batches)?;
         let mut params = scene.params;
         let [a, b] = lo_hi(tree.rays.address);
@@ -489,6 +489,7 @@ impl MixedTracer {
                             batch..batch + 1,
                             end..next,
                             Some(mixed),
+                            None,
                             None,
                         )
                     })??;

@@ -112,6 +112,7 @@ pub mod rasterize;
 pub mod sort;
 pub mod tile_lists;
 pub mod tile_ranges;
+pub mod tiled;
 pub mod trace;
 pub mod write_target;
 

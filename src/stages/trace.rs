@@ -11,12 +11,14 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::bvh::{BvhBuffers, BvhBuild};
+use super::tiled::RayTileLists;
 use super::{linear_grid, LinearArgsPush};
+use crate::camera::tile_grid;
 use crate::camera::Camera;
 use crate::constants::{
-    TRACE_COUNTER_CAPPED, TRACE_COUNTER_FOUND, TRACE_COUNTER_OVERFLOW, TRACE_COUNTER_PASSES,
-    TRACE_COUNTER_VISITS_HI, TRACE_COUNTER_VISITS_LO, TRACE_COUNTER_WALKED, TRACE_COUNTER_WORDS,
-    TRACE_HIST_BINS, TRACE_STACK,
+    TILE_SIZE, TRACE_COUNTER_CAPPED, TRACE_COUNTER_FOUND, TRACE_COUNTER_OVERFLOW,
+    TRACE_COUNTER_PASSES, TRACE_COUNTER_VISITS_HI, TRACE_COUNTER_VISITS_LO, TRACE_COUNTER_WALKED,
+    TRACE_COUNTER_WORDS, TRACE_HIST_BINS, TRACE_STACK,
 };
 use crate::error::VkContext;
 use crate::error::{Error, Result};
@@ -64,6 +66,11 @@ struct GpuTraceParams {
     /// The mixed scene's parameters' address (lo, hi) for the MIXED kernels, else 0; then,
     /// without MIXED, the depth test's per-pixel view depth (lo, hi; 0: no depth test).
     mixed: [u32; 4],
+    /// The `TILED` kernels' tile lists ([`RayTileLists`]): the ranges' address (lo, hi), the
+    /// sorted Gaussians' address (lo, hi).
+    lists: [u32; 4],
+    /// The lists' records' address (lo, hi), the tiles across the image, unused.
+    list_keys: [u32; 4],
 }
 
 impl GpuTraceParams {
@@ -86,6 +93,8 @@ impl GpuTraceParams {
             ],
             options: [options.q as f32, options.max_hits as f32, 0.0, 0.0],
             mixed: [mixed as u32, (mixed >> 32) as u32, 0, 0],
+            lists: [0; 4],
+            list_keys: [0, 0, tile_grid(camera.width, camera.height).0, 0],
         }
     }
 }
@@ -155,7 +164,9 @@ pub struct TraceFrameStats {
     pub hits_walked: u64,
     /// Traversal passes (k-buffer fills) over all rays.
     pub passes: u64,
-    /// BVH nodes visited over all rays.
+    /// BVH nodes visited over all rays; with camera rays from tile lists
+    /// ([`TraceBuffers::tiled`]), the list entries tested (an entry a later pass tests again
+    /// counts again).
     pub node_visits: u64,
     /// The 99th percentile over the rays of hits walked, hits found and passes.
     pub p99_walked: u32,
@@ -169,6 +180,13 @@ pub struct TraceFrameStats {
     pub rounds: u32,
     /// Rays still live after the rounds the frame recorded (0 for a complete frame).
     pub unfinished: u64,
+    /// The hits a pass collects per ray (the k-buffer; with tile lists, SPEC section 11's
+    /// pending buffer K).
+    pub k: u32,
+    /// Whether the camera rays came from tile lists (SPEC section 11). Such a frame forces no
+    /// hit out of order, whatever K: a pass that runs out of room leaves the rest to the next,
+    /// which walks the list again from the first hit left out (the visits count it).
+    pub tiled: bool,
 }
 
 impl TraceFrameStats {
@@ -219,6 +237,9 @@ pub struct TraceBuffers {
     pub gaussians: u32,
     /// The k-buffer's hits per ray.
     pub k: u32,
+    /// Camera rays from tile lists (SPEC section 11): the rays run tile by tile, 256 per tile
+    /// (those past the image's edge do nothing).
+    pub tiled: bool,
     /// Rays per batch (the per-ray buffers' size) and batches per frame.
     pub batch_rays: u32,
     /// See `batch_rays`.
@@ -283,15 +304,23 @@ const READ_HIST: usize = COUNTER_WORDS;
 const READ_LIVE: usize = READ_HIST + 3 * HIST_BINS;
 
 impl TraceBuffers {
-    /// Buffers for frames of `width` x `height` over `gaussians` Gaussians.
+    /// Buffers for frames of `width` x `height` over `gaussians` Gaussians, their camera rays
+    /// from tile lists when `tiled`.
     pub fn new(
         tracer: &RayTracer,
         ctx: &Context,
         (width, height): (u32, u32),
         gaussians: u32,
+        tiled: bool,
     ) -> Result<Self> {
-        let rays = width as u64 * height as u64;
-        if rays == 0 || rays > u32::MAX as u64 {
+        let pixels = width as u64 * height as u64;
+        let (gx, gy) = tile_grid(width, height);
+        let rays = if tiled {
+            (gx * gy) as u64 * (TILE_SIZE * TILE_SIZE) as u64
+        } else {
+            pixels
+        };
+        if pixels == 0 || rays > u32::MAX as u64 {
             return Err(Error::InvalidInput(format!(
                 "{width}x{height}: the ray tracer takes at most {} rays a frame",
                 u32::MAX
@@ -308,6 +337,7 @@ impl TraceBuffers {
             height,
             gaussians,
             k: tracer.k,
+            tiled,
             batch_rays: batch as u32,
             batches: batches as u32,
             bvh: tracer.bvh.buffers(ctx, gaussians)?,
@@ -326,7 +356,7 @@ impl TraceBuffers {
             rays: Buffer::new(ctx, "trace ray states", batch * RAY_STATE_BYTES, gpu)?,
             stacks: Buffer::new(ctx, "trace stacks", batch * TRACE_STACK as u64 * 4, gpu)?,
             kbuf: Buffer::new(ctx, "trace k-buffers", 3 * batch * k * 4, gpu)?,
-            state: Buffer::new(ctx, "trace pixel state", rays * 16, gpu)?,
+            state: Buffer::new(ctx, "trace pixel state", pixels * 16, gpu)?,
             counters: Buffer::new(ctx, "trace counters", counters, gpu)?,
             lists: Buffer::new(ctx, "trace live rays", 2 * batch * 4, gpu)?,
             live: Buffer::new(ctx, "trace live counts", live, gpu)?,
@@ -342,9 +372,13 @@ impl TraceBuffers {
         })
     }
 
-    /// Whether they fit frames of this size, scene and k.
-    pub fn fits(&self, (width, height): (u32, u32), gaussians: u32, k: u32) -> bool {
-        self.width == width && self.height == height && self.gaussians == gaussians && self.k == k
+    /// Whether they fit frames of this size, scene, k and source of camera rays.
+    pub fn fits(&self, (width, height): (u32, u32), gaussians: u32, k: u32, tiled: bool) -> bool {
+        self.width == width
+            && self.height == height
+            && self.gaussians == gaussians
+            && self.k == k
+            && self.tiled == tiled
     }
 
     /// Device bytes of the BVH (which scale with the Gaussians).
@@ -411,6 +445,8 @@ impl TraceBuffers {
             p99_passes: p99(&hist[2 * b..]),
             rounds: used.min(rounds),
             unfinished,
+            k: self.k,
+            tiled: self.tiled,
         }
     }
 
@@ -552,6 +588,41 @@ fn trace_mixed_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> Option<&
     Some(table[degree][f16 as usize])
 }
 
+/// The SPIR-V of the tracer's kernel for camera rays from tile lists (SPEC section 11) for SH
+/// `degree` and half-float coefficients or not: with texel views and k = 64 (CPU drivers) or
+/// neither (GPUs); `None` for another pairing.
+fn trace_tiled_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> Option<&'static [u32]> {
+    use shaders::*;
+    let table: [[&'static [u32]; 2]; 4] = match (texels, k) {
+        (true, 64) => [
+            [
+                TRACE_TILED_DEG0_TEXELS_K64,
+                TRACE_TILED_DEG0_SH16_TEXELS_K64,
+            ],
+            [
+                TRACE_TILED_DEG1_TEXELS_K64,
+                TRACE_TILED_DEG1_SH16_TEXELS_K64,
+            ],
+            [
+                TRACE_TILED_DEG2_TEXELS_K64,
+                TRACE_TILED_DEG2_SH16_TEXELS_K64,
+            ],
+            [
+                TRACE_TILED_DEG3_TEXELS_K64,
+                TRACE_TILED_DEG3_SH16_TEXELS_K64,
+            ],
+        ],
+        (false, 16) => [
+            [TRACE_TILED_DEG0, TRACE_TILED_DEG0_SH16],
+            [TRACE_TILED_DEG1, TRACE_TILED_DEG1_SH16],
+            [TRACE_TILED_DEG2, TRACE_TILED_DEG2_SH16],
+            [TRACE_TILED_DEG3, TRACE_TILED_DEG3_SH16],
+        ],
+        _ => return None,
+    };
+    Some(table[degree][f16 as usize])
+}
+
 /// The SPIR-V of the tracer's kernel for SH `degree`, half-float coefficients or not, reading
 /// through texel views or not, with a `k`-hit buffer.
 fn trace_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> &'static [u32] {
@@ -603,11 +674,15 @@ fn trace_spirv(degree: usize, f16: bool, texels: bool, k: u32) -> &'static [u32]
 pub struct RayTracer {
     /// The k-buffer size, one of [`TRACE_KS`].
     k: u32,
-    /// Per (mixed scenes, texel views, SH degree, half-float coefficients): the kernel, once
-    /// built.
-    kernels: [[[[std::sync::OnceLock<ComputePipeline>; 2]; 4]; 2]; 2],
+    /// Per (what the rays are, texel views, SH degree, half-float coefficients): the kernel,
+    /// once built. The rays: camera rays through the BVH, a mixed scene's, camera rays from
+    /// tile lists ([`RayKind`]).
+    kernels: [[[[std::sync::OnceLock<ComputePipeline>; 2]; 4]; 2]; 3],
     /// On CPU drivers: the layout of the texel set ([`TraceTexels`]) of the texel kernels.
     texel_layout: Option<vk::DescriptorSetLayout>,
+    /// On CPU drivers: the frame's texel set layout, which the texel kernels of camera rays
+    /// from tile lists read through ([`RayTileLists::texels`]).
+    frame_texel_layout: Option<super::FrameTexelsLayout>,
     args: ComputePipeline,
     bvh: BvhBuild,
     ctx: Context,
@@ -625,6 +700,17 @@ impl Drop for RayTracer {
             };
         }
     }
+}
+
+/// What a tracer kernel's rays are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RayKind {
+    /// Camera rays through the BVH.
+    Camera = 0,
+    /// A mixed scene's generation of rays (`MIXED`).
+    Mixed = 1,
+    /// Camera rays from tile lists (`TILED`, SPEC section 11).
+    Tiled = 2,
 }
 
 /// The layout of the texel set: uniform texel buffers at [`TEXEL_BINDINGS`].
@@ -659,6 +745,12 @@ impl RayTracer {
                 "a k-buffer of {k} hits: the ray tracer is built for {TRACE_KS:?}"
             )));
         }
+        // (Made first: it frees itself if what follows fails.)
+        let frame_texel_layout = if cpu_driver(ctx) {
+            Some(super::FrameTexelsLayout::new(ctx)?)
+        } else {
+            None
+        };
         let texel_layout = if cpu_driver(ctx) {
             Some(texel_set_layout(ctx)?)
         } else {
@@ -680,10 +772,17 @@ impl RayTracer {
             k,
             kernels: Default::default(),
             texel_layout,
+            frame_texel_layout,
             args,
             bvh,
             ctx: ctx.clone(),
         })
+    }
+
+    /// Whether the kernels read through texel views (CPU drivers): camera rays from tile lists
+    /// then need the frame's texel set ([`RayTileLists::texels`]).
+    pub fn reads_texels(&self) -> bool {
+        self.texel_layout.is_some()
     }
 
     /// Hits a traversal pass collects per ray.
@@ -698,27 +797,38 @@ impl RayTracer {
         degree: usize,
         precision: ShPrecision,
         texels: bool,
-        mixed: bool,
+        rays: RayKind,
     ) -> Result<&ComputePipeline> {
         let f16 = precision == ShPrecision::F16;
-        let cell = &self.kernels[mixed as usize][texels as usize][degree][f16 as usize];
+        let cell = &self.kernels[rays as usize][texels as usize][degree][f16 as usize];
         if let Some(k) = cell.get() {
             return Ok(k);
         }
-        let spirv =
-            if mixed {
-                trace_mixed_spirv(degree, f16, texels, self.k).ok_or_else(|| {
-                    Error::InvalidInput(format!(
-                    "mixed scenes are traced with k = 64 through texel views on CPU drivers and \
-                     k = 16 by address on GPUs, not k = {} {}",
-                    self.k,
-                    if texels { "through texel views" } else { "by address" }
-                ))
-                })?
-            } else {
-                trace_spirv(degree, f16, texels, self.k)
-            };
-        let built = match (texels, self.texel_layout) {
+        let mismatch = |what: &str| {
+            Error::InvalidInput(format!(
+                "{what} traced with k = 64 through texel views on CPU drivers and k = 16 by \
+                 address on GPUs, not k = {} {}",
+                self.k,
+                if texels {
+                    "through texel views"
+                } else {
+                    "by address"
+                }
+            ))
+        };
+        let spirv = match rays {
+            RayKind::Camera => trace_spirv(degree, f16, texels, self.k),
+            RayKind::Mixed => trace_mixed_spirv(degree, f16, texels, self.k)
+                .ok_or_else(|| mismatch("mixed scenes are"))?,
+            RayKind::Tiled => trace_tiled_spirv(degree, f16, texels, self.k)
+                .ok_or_else(|| mismatch("camera rays from tile lists are"))?,
+        };
+        // Camera rays from tile lists read the rasterizer's frame set, the others the tracer's.
+        let layout = match rays {
+            RayKind::Tiled => self.frame_texel_layout.as_ref().map(|l| l.raw),
+            _ => self.texel_layout,
+        };
+        let built = match (texels, layout) {
             (true, Some(layout)) => ComputePipeline::with_set_layouts::<TracePush>(
                 &self.ctx,
                 c"trace",
@@ -740,7 +850,9 @@ impl RayTracer {
     /// `bufs.state` afterwards. With `mixed`, the rays are a mixed scene's generation
     /// ([`MixedRays`]; the camera then only culls). Else, with `depth_limit` (the address of
     /// one f32 view depth per pixel, the depth test's, [`crate::stages::depth`]), a ray takes
-    /// only the hits in front of its pixel's depth (SPEC section 9).
+    /// only the hits in front of its pixel's depth (SPEC section 9). With `tiles` (the
+    /// buffers must be [`TraceBuffers::tiled`]), the camera rays walk the frame's tile lists
+    /// (SPEC section 11, [`super::tiled::RayTiles`], recorded before) and no BVH is built.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -756,14 +868,27 @@ impl RayTracer {
         rounds: std::ops::Range<u32>,
         mixed: Option<MixedRays>,
         depth_limit: Option<u64>,
+        tiles: Option<RayTileLists>,
     ) -> Result<()> {
         let n = scene.len();
         let (w, h) = (camera.width, camera.height);
-        if !bufs.fits((w, h), n, self.k) {
+        if !bufs.fits((w, h), n, self.k, tiles.is_some()) {
             return Err(Error::InvalidInput(format!(
-                "trace buffers for {}x{}, {} Gaussians and k = {}, not {w}x{h}, {n} and {}",
-                bufs.width, bufs.height, bufs.gaussians, bufs.k, self.k
+                "trace buffers for {}x{}, {} Gaussians, k = {} and tiled {}, not {w}x{h}, {n}, \
+                 {} and {}",
+                bufs.width,
+                bufs.height,
+                bufs.gaussians,
+                bufs.k,
+                bufs.tiled,
+                self.k,
+                tiles.is_some()
             )));
+        }
+        if mixed.is_some() && tiles.is_some() {
+            return Err(Error::InvalidInput(
+                "a mixed scene's rays come from its ray tree, not from tile lists".into(),
+            ));
         }
         if rounds.end > MAX_TRACE_ROUNDS || rounds.start >= rounds.end {
             return Err(Error::InvalidInput(format!(
@@ -787,11 +912,22 @@ impl RayTracer {
             )));
         }
         let device = ctx.device();
-        let rays = w * h;
+        let rays = if tiles.is_some() {
+            let (gx, gy) = tile_grid(w, h);
+            gx * gy * TILE_SIZE * TILE_SIZE
+        } else {
+            w * h
+        };
         if rounds.start == 0 && batches.start == 0 {
             let mut p = GpuTraceParams::new(camera, scene, options, mixed.map_or(0, |m| m.params));
             if let Some(limit) = depth_limit {
                 p.mixed[2..].copy_from_slice(&[limit as u32, (limit >> 32) as u32]);
+            }
+            if let Some(t) = &tiles {
+                let words = |a: u64| [a as u32, (a >> 32) as u32];
+                p.lists[..2].copy_from_slice(&words(t.ranges));
+                p.lists[2..].copy_from_slice(&words(t.gaussians));
+                p.list_keys[..2].copy_from_slice(&words(t.records));
             }
             let clip_params = clip.to_gpu();
             unsafe {
@@ -802,7 +938,7 @@ impl RayTracer {
                 }
             }
             compute_barrier(ctx, cmd);
-            if mixed.map_or(true, |m| m.build_bvh) {
+            if tiles.is_none() && mixed.map_or(true, |m| m.build_bvh) {
                 timer.begin_pass(cmd, c"bvh build");
                 self.bvh.record(
                     ctx,
@@ -815,11 +951,17 @@ impl RayTracer {
             }
         }
         let degree = scene.sh_degree().min(3) as usize;
-        let set = match self.texel_layout {
-            Some(layout) => bufs.texel_set(layout, scene)?,
-            None => None,
+        let set = match (&tiles, self.texel_layout) {
+            (Some(t), _) => t.texels,
+            (None, Some(layout)) => bufs.texel_set(layout, scene)?,
+            (None, None) => None,
         };
-        let kernel = self.kernel(degree, scene.sh_precision(), set.is_some(), mixed.is_some())?;
+        let ray_kind = match (mixed, tiles) {
+            (Some(_), _) => RayKind::Mixed,
+            (None, Some(_)) => RayKind::Tiled,
+            (None, None) => RayKind::Camera,
+        };
+        let kernel = self.kernel(degree, scene.sh_precision(), set.is_some(), ray_kind)?;
         let sets: Vec<vk::DescriptorSet> = set.into_iter().collect();
         let (gaussians, sh, _) = scene.buffers();
         let mut push = TracePush {
@@ -897,7 +1039,7 @@ impl RayTracer {
         camera.validate()?;
         render.clip.validate()?;
         let (w, h) = (camera.width, camera.height);
-        let mut bufs = TraceBuffers::new(self, ctx, (w, h), scene.len())?;
+        let mut bufs = TraceBuffers::new(self, ctx, (w, h), scene.len(), false)?;
         let mut timer = PassTimer::labels_only(ctx);
         // Batch by batch: each runs its first rounds, then more (from the host) while it has
         // live rays, before the next batch takes over the per-ray buffers.
@@ -918,6 +1060,7 @@ impl RayTracer {
                         options,
                         batch..batch + 1,
                         end..next,
+                        None,
                         None,
                         None,
                     )

@@ -88,6 +88,15 @@ pub fn real_data_dir() -> Option<PathBuf> {
     dir.is_dir().then_some(dir)
 }
 
+/// The shared real scenes with orbit cameras (`../shared/data/real`), by file stem.
+pub const REAL_SCENES: [&str; 5] = [
+    "plant_capture_sh0",
+    "biker_capture_sh0",
+    "guitar_capture_sh0_anisotropic",
+    "skull_mesh2splat_100k_sh0",
+    "playbot_lod0_500k_sh2",
+];
+
 /// A real scene and its orbit cameras, or `None` (with a note) when they are not present.
 pub fn real_scene(stem: &str) -> Option<(PathBuf, Option<PathBuf>)> {
     let Some(dir) = real_data_dir() else {
