@@ -266,6 +266,24 @@ vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d, bool cull, float t_lo, 
     return vec2(t, min(0.99, o * exp(-0.5 * q)));
 }
 
+#ifndef MIXED
+// Composites hit g of `alpha` (its clip weight in) by SPEC section 4's rule: skipped below
+// 1/255; ends the ray where T would fall below 1e-4; else adds g's colour and lowers T.
+void add_hit(TraceParams f, uint g, float alpha, vec3 e, inout vec3 colour, inout float T,
+             inout uint flags) {
+    if (alpha >= 1.0 / 255.0) {
+        float next_t = T * (1.0 - alpha);
+        if (next_t < 1e-4) {
+            flags |= RAY_DONE | RAY_ENDED;
+        } else {
+            vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
+            colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
+            T = next_t;
+        }
+    }
+}
+#endif
+
 // (t, index) strictly before (t2, index2).
 bool before(float t, uint i, float t2, uint i2) {
     return t < t2 || (t == t2 && i < i2);
@@ -558,16 +576,7 @@ void main() {
                 last_index = g;
                 flags |= RAY_HAS_LAST;
                 ++k_pos;
-                if (alpha >= 1.0 / 255.0) {
-                    float next_t = T * (1.0 - alpha);
-                    if (next_t < 1e-4) {
-                        flags |= RAY_DONE | RAY_ENDED;
-                    } else {
-                        vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
-                        colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
-                        T = next_t;
-                    }
-                }
+                add_hit(f, g, alpha, e, colour, T, flags);
             }
             compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
         }
@@ -716,13 +725,13 @@ void main() {
                 last_index = g;
                 flags |= RAY_HAS_LAST;
                 ++k_pos;
+#ifdef MIXED
                 if (alpha >= 1.0 / 255.0) {
                     float next_t = T * (1.0 - alpha);
                     if (next_t < 1e-4) {
                         flags |= RAY_DONE | RAY_ENDED;
                     } else {
                         vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
-#ifdef MIXED
                         float factor = 1.0;
                         if (shade) {
                             uint mesh_visits = 0u;
@@ -730,12 +739,12 @@ void main() {
                             steps += mesh_visits;
                         }
                         colour += alpha * T * (factor * eval_sh(pc.sh, g * f.size.w, normalize(mu - e)));
-#else
-                        colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
-#endif
                         T = next_t;
                     }
                 }
+#else
+                add_hit(f, g, alpha, e, colour, T, flags);
+#endif
             }
             compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
         }

@@ -195,9 +195,9 @@ struct RenderArgs {
     /// Render this many more times after the first and report median timings.
     #[arg(long, default_value_t = 0)]
     repeat: usize,
-    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7), camera rays from
-    /// tile lists (section 11); ray-bvh: the ray tracer with camera rays through a BVH built
-    /// per frame (the same image, for comparison).
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7, a BVH built per
+    /// frame); ray-tiles: the ray tracer with camera rays from tile lists (section 11, the same
+    /// image).
     #[arg(long, value_enum, default_value_t = TracerArg::Raster)]
     tracer: TracerArg,
     /// Also write the splats' depth (SPEC section 9): OUT.exr (32-bit float view depth,
@@ -218,10 +218,10 @@ struct RenderArgs {
 pub enum TracerArg {
     /// The tile rasterizer.
     Raster,
-    /// The ray tracer, camera rays from tile lists.
+    /// The ray tracer.
     Ray,
-    /// The ray tracer, camera rays through a BVH.
-    RayBvh,
+    /// The ray tracer, camera rays from tile lists.
+    RayTiles,
 }
 
 impl From<TracerArg> for rara::Tracer {
@@ -229,7 +229,7 @@ impl From<TracerArg> for rara::Tracer {
         match t {
             TracerArg::Raster => rara::Tracer::Raster,
             TracerArg::Ray => rara::Tracer::Ray,
-            TracerArg::RayBvh => rara::Tracer::RayBvh,
+            TracerArg::RayTiles => rara::Tracer::RayTiles,
         }
     }
 }

@@ -73,19 +73,19 @@ pub enum Tracer {
     /// The tile rasterizer (SPEC sections 3-5).
     #[default]
     Raster,
-    /// The ray tracer (SPEC section 7), its camera rays composited from tile lists (SPEC
-    /// section 11, [`crate::stages::tiled`]): section 7's image, with no BVH.
+    /// The ray tracer (SPEC section 7): a BVH built per frame, k-closest hits per ray.
     Ray,
-    /// The ray tracer with its camera rays through a BVH built per frame, k-closest hits per
-    /// ray: section 7's image as [`Tracer::Ray`]'s, the path of secondary rays, for
-    /// comparison.
-    RayBvh,
+    /// The ray tracer with its camera rays composited from tile lists (SPEC section 11,
+    /// [`crate::stages::tiled`]) instead of the BVH: the same image to the bit. Not yet the
+    /// default: on lavapipe it is slower (docs/ARCHITECTURE.md, "Section 7 in tiles on the
+    /// GPU").
+    RayTiles,
 }
 
 impl Tracer {
     /// Whether frames are ray traced (SPEC section 7), whatever their camera rays come from.
     pub fn is_ray(self) -> bool {
-        matches!(self, Tracer::Ray | Tracer::RayBvh)
+        matches!(self, Tracer::Ray | Tracer::RayTiles)
     }
 }
 
@@ -1252,9 +1252,9 @@ impl Renderer {
         })
     }
 
-    /// [`Renderer::record`] of a ray-traced frame: with [`Tracer::Ray`] the tile lists of its
-    /// camera rays ([`RayTiles::record`], in the slot's rasterizer buffers), with
-    /// [`Tracer::RayBvh`] the BVH build, then the tracer's rounds ([`RayTracer::record`]) into
+    /// [`Renderer::record`] of a ray-traced frame: with [`Tracer::RayTiles`] the tile lists of
+    /// its camera rays ([`RayTiles::record`], in the slot's rasterizer buffers), with
+    /// [`Tracer::Ray`] the BVH build, then the tracer's rounds ([`RayTracer::record`]) into
     /// the slot's trace buffers, then the write-target pass, under the same synchronisation
     /// contract. A frame whose tile pairs did not fit is reported incomplete as a rasterized
     /// one is, and the slot grows for the next. A frame whose rays needed
@@ -1295,7 +1295,7 @@ impl Renderer {
             }
             None => None,
         };
-        let tiled = options.tracer == Tracer::Ray;
+        let tiled = options.tracer == Tracer::RayTiles;
         let (capacity, rounds) = if tiled {
             slot.prepare_tiled_trace(
                 tracer,

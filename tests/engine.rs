@@ -134,7 +134,7 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
                     [c[0] as f32, c[1] as f32, c[2] as f32]
                 })
             }
-            rara::Tracer::Ray | rara::Tracer::RayBvh => {
+            rara::Tracer::Ray | rara::Tracer::RayTiles => {
                 // The CPU ray tracer over the mesh pass's colour (the clear colour away from
                 // the cube), with and without the depth test against the cube's depth.
                 let under: Vec<Vec3> = mesh
@@ -214,7 +214,7 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
         let most_ties = compared * 3 / 100; // 1 % of the channels
         let most = match tracer {
             rara::Tracer::Raster => 1.999,
-            rara::Tracer::Ray | rara::Tracer::RayBvh => 8.0,
+            rara::Tracer::Ray | rara::Tracer::RayTiles => 8.0,
         };
         assert!(worst <= most, "frame {index} differs by {worst}/255");
         assert!(

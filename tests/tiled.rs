@@ -235,8 +235,8 @@ fn a_full_buffer_forces_hits_and_counts_them() {
 }
 
 /// One scene under one clip on the GPU: the frame whose camera rays walk tile lists
-/// (`Tracer::Ray`, SPEC section 11) against the one whose camera rays walk the BVH
-/// (`Tracer::RayBvh`): the same image to the bit (the hit, its clip weight and its
+/// (`Tracer::RayTiles`, SPEC section 11) against the one whose camera rays walk the BVH
+/// (`Tracer::Ray`): the same image to the bit (the hit, its clip weight and its
 /// compositing are the same kernel code, in the same order). Returns the tiled frame's stats.
 fn gpu_tiles_equal_bvh(
     renderer: &mut rara::Renderer,
@@ -253,12 +253,12 @@ fn gpu_tiles_equal_bvh(
     };
     let start = std::time::Instant::now();
     let (tiles, stats) = renderer
-        .render(scene, cam, &options(rara::Tracer::Ray))
+        .render(scene, cam, &options(rara::Tracer::RayTiles))
         .unwrap();
     let tiled_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = std::time::Instant::now();
     let (bvh, bvh_stats) = renderer
-        .render(scene, cam, &options(rara::Tracer::RayBvh))
+        .render(scene, cam, &options(rara::Tracer::Ray))
         .unwrap();
     let bvh_ms = start.elapsed().as_secs_f64() * 1e3;
     let t = stats.trace.as_ref().expect("a ray-traced frame");
@@ -338,16 +338,9 @@ fn gpu_tile_lists_give_the_bvh_tracers_image() {
     }
     let full = std::env::var("RARA_TILED_FULL").is_ok_and(|v| v == "1");
     for name in common::REAL_SCENES {
-        let Some((ply, Some(cams))) = common::real_scene(name) else {
-            eprintln!("real-scene case '{name}' SKIPPED (not found)");
+        let Some((scene, cam)) = common::real_scene_view(name, 320) else {
             continue;
         };
-        eprintln!("real-scene case '{name}' RAN");
-        let scene = rara::ply::load_ply(&ply).unwrap().0;
-        let cam = Camera::load_one(&cams, 0)
-            .unwrap()
-            .resized(320, None)
-            .unwrap();
         let (lo, hi) = common::percentile_box(&scene);
         for (flat, scene) in [(false, scene.clone()), (true, scene.flattened())] {
             let gpu_scene = renderer.upload(&scene).unwrap();

@@ -42,23 +42,10 @@ fn gpu_tracer_matches_the_cpu_reference() {
     ];
     // The real scenes at 320 px: each volumetric unclipped and flattened under a rara
     // cutaway, plant also the other way round (about 2-10 s of lavapipe a frame).
-    for name in [
-        "plant_capture_sh0",
-        "biker_capture_sh0",
-        "guitar_capture_sh0_anisotropic",
-        "skull_mesh2splat_100k_sh0",
-        "playbot_lod0_500k_sh2",
-    ] {
-        let Some((ply, Some(cams))) = common::real_scene(name) else {
-            eprintln!("real-scene case '{name}' SKIPPED (not found)");
+    for name in common::REAL_SCENES {
+        let Some((scene, cam)) = common::real_scene_view(name, 320) else {
             continue;
         };
-        eprintln!("real-scene case '{name}' RAN");
-        let scene = rara::ply::load_ply(&ply).unwrap().0;
-        let cam = Camera::load_one(&cams, 0)
-            .unwrap()
-            .resized(320, None)
-            .unwrap();
         let both = name.starts_with("plant");
         cases.push((
             format!("{name}_flat"),

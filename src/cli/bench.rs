@@ -61,9 +61,9 @@ pub struct BenchArgs {
     /// Weight, band and fixed clip planes for the rara (and hard) modes.
     #[command(flatten)]
     clip: ClipArgs,
-    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7, camera rays from tile
-    /// lists, section 11), each mode then also drawn by the rasterizer, taking turns, for the
-    /// ratio of their frame times in one run; ray-bvh: also with camera rays through a BVH.
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7), each mode then also
+    /// drawn by the rasterizer, taking turns, for the ratio of their frame times in one run;
+    /// ray-tiles: also with the tracer's camera rays from tile lists (section 11).
     #[arg(long, value_enum, default_value_t = crate::TracerArg::Raster)]
     tracer: crate::TracerArg,
 }
@@ -112,7 +112,7 @@ impl ModeResult {
         match self.tracer {
             rara::Tracer::Raster => self.mode.name().to_string(),
             rara::Tracer::Ray => format!("ray {}", self.mode.name()),
-            rara::Tracer::RayBvh => format!("ray-bvh {}", self.mode.name()),
+            rara::Tracer::RayTiles => format!("ray-tiles {}", self.mode.name()),
         }
     }
 
@@ -288,10 +288,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         crate::TracerArg::Raster => &[rara::Tracer::Raster],
         crate::TracerArg::Ray => &[rara::Tracer::Raster, rara::Tracer::Ray],
         // Both sources of camera rays beside the rasterizer, for ratios in one run.
-        crate::TracerArg::RayBvh => &[
+        crate::TracerArg::RayTiles => &[
             rara::Tracer::Raster,
             rara::Tracer::Ray,
-            rara::Tracer::RayBvh,
+            rara::Tracer::RayTiles,
         ],
     };
     let total = (args.frames + args.warmup) as u64
@@ -787,7 +787,7 @@ fn json_report(
                 "passes_per_ray": t.passes,
                 "passes_per_ray_p99": t.p99_passes,
                 "node_visits_per_ray": t.visits,
-                "camera_rays": if r.tracer == rara::Tracer::Ray { "tiles" } else { "bvh" },
+                "camera_rays": if r.tracer == rara::Tracer::RayTiles { "tiles" } else { "bvh" },
                 "k": t.k,
                 "tile_pairs": t.pairs,
                 "rounds": t.rounds,

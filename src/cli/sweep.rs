@@ -58,8 +58,8 @@ pub struct SweepArgs {
     /// Output directory: frame_NNNN.png, sweep.gif, sweep.json.
     #[arg(short, long)]
     output: PathBuf,
-    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7), camera rays from tile
-    /// lists (section 11); ray-bvh: camera rays through a BVH (the same image).
+    /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7); ray-tiles: its camera
+    /// rays from tile lists (section 11, the same image).
     #[arg(long, value_enum, default_value_t = crate::TracerArg::Raster)]
     tracer: crate::TracerArg,
 }

@@ -115,6 +115,22 @@ pub fn real_scene(stem: &str) -> Option<(PathBuf, Option<PathBuf>)> {
     Some((ply, cams.is_file().then_some(cams)))
 }
 
+/// A real scene with orbit cameras and its first camera at `width` pixels, saying whether the
+/// case ran (`None`, with the reason, when the files are not present).
+pub fn real_scene_view(stem: &str, width: u32) -> Option<(rara::Scene, rara::Camera)> {
+    let Some((ply, Some(cams))) = real_scene(stem) else {
+        eprintln!("real-scene case '{stem}' SKIPPED (not found)");
+        return None;
+    };
+    eprintln!("real-scene case '{stem}' RAN");
+    let scene = rara::ply::load_ply(&ply).unwrap().0;
+    let camera = rara::Camera::load_one(&cams, 0)
+        .unwrap()
+        .resized(width, None)
+        .unwrap();
+    Some((scene, camera))
+}
+
 /// The calling test process's folder `rara_test_{name}_{pid}` under the system's temp dir,
 /// `name` telling its tests (or test binaries) apart. A test binary has no hook at its exit,
 /// so a folder its tests share, or one a failed test left, stays behind: the first call of a
