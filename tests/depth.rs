@@ -632,13 +632,25 @@ fn several_views_equal_single_renders() {
 /// same per-pixel view depths (>= 45 dB), and hides what lies behind it.
 #[test]
 fn ray_tracer_takes_the_depth_test() {
+    let bvh = ray_traced_depth_test(rara::Tracer::Ray);
+    // Camera rays from tile lists (SPEC section 11): the same image, to the bit.
+    let tiles = ray_traced_depth_test(rara::Tracer::RayTiles);
+    assert_eq!(
+        rara::metrics::compare(&bvh, &tiles).differing_pixels,
+        0,
+        "tile lists against the BVH under the depth test"
+    );
+}
+
+/// [`ray_tracer_takes_the_depth_test`] with `tracer`; returns the half-covered image.
+fn ray_traced_depth_test(tracer: rara::Tracer) -> image::RgbaImage {
     let ctx = common::context();
     let mut renderer = Renderer::new(&ctx).unwrap();
     let (scene, cam) = scene_and_camera();
     let gpu = renderer.upload(&scene).unwrap();
     let (w, h) = (cam.width as usize, cam.height as usize);
     let traced = RenderOptions {
-        tracer: rara::Tracer::Ray,
+        tracer,
         ..RenderOptions::default()
     };
     let (plain, _) = renderer.render(&gpu, &cam, &traced).unwrap();
@@ -688,4 +700,5 @@ fn ray_tracer_takes_the_depth_test() {
         "a pixel right of the surface changed"
     );
     common::assert_no_validation_messages(&ctx);
+    image
 }
