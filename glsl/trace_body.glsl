@@ -116,6 +116,8 @@ struct TraceParams {
                         // per-pixel view depth (lo, hi; 0: no depth test)
     uvec4 lists;        // TILED: the tile ranges' address (lo, hi), the sorted pairs' Gaussians
     uvec4 list_keys;    // TILED: the records' address (lo, hi; tiled_bounds.comp), tiles across
+    uvec4 depth_out;    // the depth output's per-pixel (median, sum alpha T z, 0, 0) address
+                        // (lo, hi; 0: none), which write_depth turns into the caller's target
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer TraceParamsRef { TraceParams p; };
 
@@ -269,8 +271,10 @@ vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d, bool cull, float t_lo, 
 #ifndef MIXED
 // Composites hit g of `alpha` (its clip weight in) by SPEC section 4's rule: skipped below
 // 1/255; ends the ray where T would fall below 1e-4; else adds g's colour and lowers T.
-void add_hit(TraceParams f, uint g, float alpha, vec3 e, inout vec3 colour, inout float T,
-             inout uint flags) {
+// With the depth output, a composited hit of view depth z adds alpha T z to `depth.y`, and
+// sets `depth.x` (the median) where 1 - T first reaches 0.5 (SPEC sections 9 and 11).
+void add_hit(TraceParams f, uint g, float alpha, vec3 e, float z, inout vec3 colour,
+             inout float T, inout uint flags, inout vec2 depth) {
     if (alpha >= 1.0 / 255.0) {
         float next_t = T * (1.0 - alpha);
         if (next_t < 1e-4) {
@@ -278,6 +282,8 @@ void add_hit(TraceParams f, uint g, float alpha, vec3 e, inout vec3 colour, inou
         } else {
             vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
             colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
+            depth.y += alpha * T * z;
+            depth.x = next_t <= 0.5 && isinf(depth.x) ? z : depth.x;
             T = next_t;
         }
     }
@@ -395,7 +401,15 @@ void main() {
     if (!address_is_null(depth_limit)) {
         t_hi = F32s(depth_limit).v[pixel] / dot(d, f.forward.xyz);
     }
+    // The depth output's (median, sum alpha T z), carried between rounds in its buffer.
+    Address depth_out = address_of_words(f.depth_out.xy);
+    vec2 depth = vec2(uintBitsToFloat(0x7f800000u), 0.0);
+    if (!address_is_null(depth_out) && pc.round != 0u) {
+        depth = load_vec4_item(Vec4s(depth_out), pixel).xy;
+    }
 #endif
+    // A hit's view depth is t along.
+    float along = dot(d, f.forward.xyz);
     // No zero component: 0 * inf in the slab test would be NaN and lose the box.
     vec3 inv_d = 1.0 / (sign(d) * max(abs(d), vec3(1e-20)) + vec3(equal(d, vec3(0.0))) * 1e-20);
     // The ray's visible intervals, once (clip.glsl).
@@ -439,8 +453,6 @@ void main() {
     // The list position of this pass's first hit: a hit pushed out of the full buffer lies
     // at or after it.
     uint pass_first = pc.round == 0u ? NO_NODE : pc.stacks.v[2u * stride + local];
-    // A hit's view depth is t along.
-    float along = dot(d, f.forward.xyz);
 #endif
     if (pc.round != 0u) {
         [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
@@ -576,7 +588,7 @@ void main() {
                 last_index = g;
                 flags |= RAY_HAS_LAST;
                 ++k_pos;
-                add_hit(f, g, alpha, e, colour, T, flags);
+                add_hit(f, g, alpha, e, hit_t * along, colour, T, flags, depth);
             }
             compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
         }
@@ -743,7 +755,7 @@ void main() {
                     }
                 }
 #else
-                add_hit(f, g, alpha, e, colour, T, flags);
+                add_hit(f, g, alpha, e, hit_t * along, colour, T, flags, depth);
 #endif
             }
             compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
@@ -762,6 +774,9 @@ void main() {
     store_vec4_item(pc.state, ray, vec4(colour, (flags & RAY_ENDED) != 0u ? -T : T));
 #else
     store_vec4_item(pc.state, pixel, vec4(colour, T));
+    if (!address_is_null(depth_out)) {
+        store_vec4_item(Vec4s(depth_out), pixel, vec4(depth, 0.0, 0.0));
+    }
 #endif
     if ((flags & RAY_DONE) != 0u) {
         atomicAdd(pc.counters.v[TRACE_COUNTER_WALKED], walked);

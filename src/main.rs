@@ -202,7 +202,8 @@ struct RenderArgs {
     tracer: TracerArg,
     /// Also write the splats' depth (SPEC section 9): OUT.exr (32-bit float view depth,
     /// infinity where there is none) or OUT.png (16-bit grey, the depths' range spread over
-    /// 0..65534, 65535 where there is none; the range is printed). Rasterizer only.
+    /// 0..65534, 65535 where there is none; the range is printed). Ray traced, a hit's depth
+    /// is that of its point on the pixel's ray.
     #[arg(long, value_name = "OUT.{exr,png}")]
     depth: Option<PathBuf>,
     /// Which depth --depth writes: median (where the accumulated alpha reaches 0.5) or mean
@@ -485,11 +486,6 @@ fn cmd_render(args: &RenderArgs) -> Result<()> {
             "--reference renders with the CPU rasterizer; the CPU ray tracer is the library's \
              rara::reference::raytrace::render"
                 .into(),
-        ));
-    }
-    if args.depth.is_some() && options.tracer.is_ray() {
-        return Err(Error::InvalidInput(
-            "--depth writes the rasterizer's depth, not the ray tracer's".into(),
         ));
     }
     let output = Output::prepare(&args.output, &["png"])?;

@@ -50,7 +50,8 @@ pub struct RenderOptions {
     pub tracer: Tracer,
     /// A depth test against the engine's depth buffer (SPEC section 9; both tracers).
     pub depth_test: Option<DepthTest>,
-    /// The splats' depth written out (SPEC section 9; rasterizer only).
+    /// The splats' depth written out (SPEC section 9; both tracers, a ray-traced hit's view
+    /// depth that of its point on the ray, sections 7 and 11).
     pub depth_output: Option<DepthOutput>,
 }
 
@@ -605,11 +606,6 @@ impl Renderer {
                     "objects with clip regions of their own are drawn by the rasterizer so far, \
                      not the ray tracer"
                         .into(),
-                ));
-            }
-            if options.depth_output.is_some() {
-                return Err(Error::InvalidInput(
-                    "the depth output is the rasterizer's so far, not the ray tracer's".into(),
                 ));
             }
             return self.record_trace(
@@ -1307,6 +1303,22 @@ impl Renderer {
         } else {
             (0, slot.prepare_trace(tracer, (w, h), scene.count, false)?.1)
         };
+        // The depth output (SPEC sections 9 and 11): the rays' per-pixel depth sums, then the
+        // rasterizer's write pass into the caller's target.
+        let depth_output = match &options.depth_output {
+            Some(output) => {
+                let target = match output.target {
+                    DepthTarget::Image { view } => (0, Some(slot.depth_out_set(view)?)),
+                    DepthTarget::Buffer { buffer, offset } => (
+                        self.buffer_address(buffer, offset, "the depth output's buffer")?,
+                        None,
+                    ),
+                };
+                let sums = slot.trace.as_mut().expect("prepared").depth_sums()?;
+                Some((sums, output.mode, target))
+            }
+            None => None,
+        };
         let ctx = &self.ctx;
         let mut labels_only;
         let timer: &mut PassTimer = match timings {
@@ -1408,6 +1420,7 @@ impl Renderer {
             None,
             depth.map(|(_, _, limit)| limit),
             tile_lists,
+            depth_output.map(|(sums, _, _)| sums),
         )?;
         if let Some(f) = slot.resources.as_ref().filter(|_| tiled) {
             // The lists' counters, for FrameSlot::stats (their pairs must have fit).
@@ -1428,7 +1441,11 @@ impl Renderer {
             size: (w, h),
             grid: tile_grid(w, h),
         };
-        self.record_write_target(&mut rec, options, (target, image_set, buffer_target))
+        self.record_write_target(&mut rec, options, (target, image_set, buffer_target))?;
+        if let Some((sums, mode, output)) = depth_output {
+            self.depth.record_write(&mut rec, sums, mode, output)?;
+        }
+        Ok(())
     }
 
     /// Records the pass that writes the frame's per-pixel state into `target` (its image

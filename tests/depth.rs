@@ -702,3 +702,59 @@ fn ray_traced_depth_test(tracer: rara::Tracer) -> image::RgbaImage {
     common::assert_no_validation_messages(&ctx);
     image
 }
+
+/// The ray tracer's depth output (SPEC sections 9 and 11: a composited hit's view depth is
+/// `t (d . forward)`), through the BVH and through tile lists alike, against the CPU ray
+/// tracer's (`reference::raytrace::depths`), median and mean: finite at the same pixels and
+/// within 1e-4 relative but for a few pixels whose median sits at a hit where `1 - T` passes
+/// 0.5 within f32's rounding; the two GPU paths give the same depths to the bit.
+#[test]
+fn ray_tracer_writes_the_depth_output() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let (scene, cam) = scene_and_camera();
+    let gpu = renderer.upload(&scene).unwrap();
+    let rt = rara::reference::raytrace::RayTraceOptions::default();
+    for mode in [DepthMode::Median, DepthMode::Mean] {
+        let cpu = reference::raytrace::depths(&scene, &cam, &RenderOptions::default(), &rt, mode);
+        let mut paths = Vec::new();
+        for tracer in [rara::Tracer::Ray, rara::Tracer::RayTiles] {
+            let options = RenderOptions {
+                tracer,
+                ..RenderOptions::default()
+            };
+            let (_, depths, _) = renderer
+                .render_with_depth(&gpu, &cam, &options, mode)
+                .unwrap();
+            let (mut finite, mut off) = (0, 0);
+            for (g, c) in depths.iter().zip(&cpu) {
+                assert_eq!(
+                    g.is_finite(),
+                    c.is_finite(),
+                    "{tracer:?} {mode:?}: {g} vs {c}"
+                );
+                if c.is_finite() {
+                    finite += 1;
+                    if (g - c).abs() > 1e-4 * c.abs() {
+                        off += 1;
+                    }
+                }
+            }
+            eprintln!("{tracer:?} {mode:?}: {finite} pixels with a depth, {off} off by > 1e-4");
+            assert!(finite > depths.len() / 4, "{tracer:?} {mode:?}: {finite}");
+            assert!(
+                off * 200 <= finite,
+                "{tracer:?} {mode:?}: {off} of {finite}"
+            );
+            paths.push(depths);
+        }
+        assert!(
+            paths[0]
+                .iter()
+                .zip(&paths[1])
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{mode:?}: tile lists against the BVH"
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}

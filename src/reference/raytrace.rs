@@ -381,6 +381,12 @@ pub struct RayComposite {
     capped: bool,
     /// The ray stopped: `T_next < 1e-4`, or capped.
     done: bool,
+    /// The camera's forward axis when the ray keeps its depth (SPEC section 9), else zero.
+    forward: DVec3,
+    /// The view depth at which `1 - T` first reached 0.5 (`+inf` until then).
+    median: f32,
+    /// `sum(alpha T z)` over the composited hits.
+    zsum: f32,
 }
 
 impl Default for RayComposite {
@@ -391,6 +397,9 @@ impl Default for RayComposite {
             walked: 0,
             capped: false,
             done: false,
+            forward: DVec3::ZERO,
+            median: f32::INFINITY,
+            zsum: 0.0,
         }
     }
 }
@@ -429,8 +438,41 @@ impl RayComposite {
         let i = hit.index as usize;
         let dir = (scene.means[i].as_dvec3() - e).normalize().as_vec3();
         self.colour += alpha * self.transmittance * eval_sh(scene.sh_of(i), scene.sh_degree, dir);
+        if self.forward != DVec3::ZERO {
+            // A hit's view depth is t (d . forward) (SPEC sections 9 and 11).
+            let z = (hit.t * d.dot(self.forward)) as f32;
+            self.zsum += alpha * self.transmittance * z;
+            if next <= 0.5 && self.median.is_infinite() {
+                self.median = z;
+            }
+        }
         self.transmittance = next;
         true
+    }
+
+    /// A ray that keeps the depth of what it composites, the camera's `forward` axis giving a
+    /// hit's view depth ([`RayComposite::depth`]).
+    pub fn with_depth(forward: DVec3) -> Self {
+        RayComposite {
+            forward,
+            ..RayComposite::default()
+        }
+    }
+
+    /// The ray's depth of `mode` (SPEC section 9) so far: the median, or the alpha-weighted
+    /// mean over the composited hits, whose weights sum to `1 - T`; `+inf` where none.
+    pub fn depth(&self, mode: crate::depth::DepthMode) -> f32 {
+        match mode {
+            crate::depth::DepthMode::Median => self.median,
+            crate::depth::DepthMode::Mean => {
+                let weight = 1.0 - self.transmittance;
+                if weight > 0.0 {
+                    self.zsum / weight
+                } else {
+                    f32::INFINITY
+                }
+            }
+        }
     }
 
     /// Whether the ray takes no more hits.
@@ -509,6 +551,41 @@ impl Frame<'_> {
         stats.capped += capped as usize;
         c
     }
+}
+
+/// The view depth per pixel (rows top first) of `mode` of section 7's image of `scene` from
+/// `camera` (SPEC section 9: a hit's view depth is `t (d . forward)`), one thread.
+pub fn depths(
+    scene: &Scene,
+    camera: &Camera,
+    options: &RenderOptions,
+    rt: &RayTraceOptions,
+    mode: crate::depth::DepthMode,
+) -> Vec<f32> {
+    let bvh = Bvh::build(scene, rt.q);
+    let live = not_culled(scene, camera);
+    let forward = camera.rotation.col(2).as_dvec3();
+    let mut out = Vec::with_capacity((camera.width * camera.height) as usize);
+    for j in 0..camera.height {
+        for i in 0..camera.width {
+            let (e, d) = pixel_ray(camera, i, j);
+            let mut hits = Vec::new();
+            bvh.candidates(e, d, &mut |g: u32| {
+                if live[g as usize] {
+                    hits.extend(gaussian_hit(scene, g as usize, e, d, rt.q));
+                }
+            });
+            hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.index.cmp(&b.index)));
+            let mut ray = RayComposite::with_depth(forward);
+            for hit in &hits {
+                if !ray.take(scene, hit, e, d, &options.clip, rt.max_hits) {
+                    break;
+                }
+            }
+            out.push(ray.depth(mode));
+        }
+    }
+    out
 }
 
 /// Ray traces `scene` from `camera` (SPEC section 7), through a BVH, the rows shared among the

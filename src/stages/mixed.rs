@@ -491,6 +491,7 @@ impl MixedTracer {
                             Some(mixed),
                             None,
                             None,
+                            None,
                         )
                     })??;
                     add_times(&timer, &mut stats)?;

@@ -71,6 +71,8 @@ struct GpuTraceParams {
     lists: [u32; 4],
     /// The lists' records' address (lo, hi), the tiles across the image, unused.
     list_keys: [u32; 4],
+    /// The depth output's per-pixel sums' address (lo, hi; 0: none), unused.
+    depth_out: [u32; 4],
 }
 
 impl GpuTraceParams {
@@ -95,6 +97,7 @@ impl GpuTraceParams {
             mixed: [mixed as u32, (mixed >> 32) as u32, 0, 0],
             lists: [0; 4],
             list_keys: [0, 0, tile_grid(camera.width, camera.height).0, 0],
+            depth_out: [0; 4],
         }
     }
 }
@@ -254,6 +257,9 @@ pub struct TraceBuffers {
     kbuf: Buffer,
     /// Per pixel (premultiplied colour, transmittance), as the rasterizer's state.
     pub state: Buffer,
+    /// With a depth output, per pixel (median view depth, sum alpha T z, 0, 0), made by the
+    /// first frame that asks ([`TraceBuffers::depth_sums`]).
+    depth_sums: Option<Buffer>,
     /// The counters, then the histograms.
     counters: Buffer,
     lists: Buffer,
@@ -368,8 +374,24 @@ impl TraceBuffers {
                 MemoryLocation::GpuToCpu,
             )?,
             texels: None,
+            depth_sums: None,
             ctx: ctx.clone(),
         })
+    }
+
+    /// The address of the per-pixel depth sums of the depth output (SPEC section 9), made now
+    /// if they were not yet (16 bytes a pixel).
+    pub fn depth_sums(&mut self) -> Result<u64> {
+        if self.depth_sums.is_none() {
+            let bytes = self.width as u64 * self.height as u64 * 16;
+            self.depth_sums = Some(Buffer::new(
+                &self.ctx,
+                "trace depth sums",
+                bytes,
+                MemoryLocation::GpuOnly,
+            )?);
+        }
+        Ok(self.depth_sums.as_ref().expect("made above").address)
     }
 
     /// Whether they fit frames of this size, scene, k and source of camera rays.
@@ -398,7 +420,8 @@ impl TraceBuffers {
         ]
         .iter()
         .map(|b| b.size)
-        .sum()
+        .sum::<u64>()
+            + self.depth_sums.as_ref().map_or(0, |b| b.size)
     }
 
     /// Device bytes of the rest: parameters, counters and histograms, round counts and
@@ -853,6 +876,9 @@ impl RayTracer {
     /// only the hits in front of its pixel's depth (SPEC section 9). With `tiles` (the
     /// buffers must be [`TraceBuffers::tiled`]), the camera rays walk the frame's tile lists
     /// (SPEC section 11, [`super::tiled::RayTiles`], recorded before) and no BVH is built.
+    /// With `depth_sums` (not with `mixed`), each pixel's (median view depth, sum alpha T z) of
+    /// its composited hits goes there, 16 bytes a pixel, for the depth output's write pass
+    /// ([`crate::stages::depth::DepthStages::record_write`]).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -869,6 +895,7 @@ impl RayTracer {
         mixed: Option<MixedRays>,
         depth_limit: Option<u64>,
         tiles: Option<RayTileLists>,
+        depth_sums: Option<u64>,
     ) -> Result<()> {
         let n = scene.len();
         let (w, h) = (camera.width, camera.height);
@@ -895,9 +922,9 @@ impl RayTracer {
                 "ray tracer rounds {rounds:?}: at most {MAX_TRACE_ROUNDS}"
             )));
         }
-        if mixed.is_some() && depth_limit.is_some() {
+        if mixed.is_some() && (depth_limit.is_some() || depth_sums.is_some()) {
             return Err(Error::InvalidInput(
-                "a mixed scene's rays take no depth test".into(),
+                "a mixed scene's rays take no depth test and have no depth output".into(),
             ));
         }
         if mixed.is_some() && batches.len() != 1 {
@@ -923,8 +950,11 @@ impl RayTracer {
             if let Some(limit) = depth_limit {
                 p.mixed[2..].copy_from_slice(&[limit as u32, (limit >> 32) as u32]);
             }
+            let words = |a: u64| [a as u32, (a >> 32) as u32];
+            if let Some(sums) = depth_sums {
+                p.depth_out[..2].copy_from_slice(&words(sums));
+            }
             if let Some(t) = &tiles {
-                let words = |a: u64| [a as u32, (a >> 32) as u32];
                 p.lists[..2].copy_from_slice(&words(t.ranges));
                 p.lists[2..].copy_from_slice(&words(t.gaussians));
                 p.list_keys[..2].copy_from_slice(&words(t.records));
@@ -1060,6 +1090,7 @@ impl RayTracer {
                         options,
                         batch..batch + 1,
                         end..next,
+                        None,
                         None,
                         None,
                         None,
