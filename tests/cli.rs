@@ -1288,8 +1288,8 @@ fn render_with_the_ray_tracer() {
 }
 
 /// `render --depth`: an EXR of the view depths and a 16-bit PNG of the same depths spread over
-/// the printed range, from the GPU and from the CPU reference (which agree), and the errors of
-/// a bad name, the ray tracer and a scene file.
+/// the printed range, from the GPU and from the CPU reference (which agree), the error of a
+/// bad name, and the ray tracer's depths through the BVH and through tile lists (equal).
 #[test]
 fn render_writes_depth_as_exr_and_16_bit_png() {
     let (scene, cams) = good_scene();
@@ -1348,9 +1348,40 @@ fn render_writes_depth_as_exr_and_16_bit_png() {
     let mut args = render_args(scene, cams, png);
     args.extend(["--depth", "d.tiff"]);
     assert_error(&rara(&args), &["d.tiff"]);
-    let mut args = render_args(scene, cams, png);
-    args.extend(["--depth", "d.exr", "--tracer", "ray"]);
-    assert_error(&rara(&args), &["--depth", "ray tracer"]);
+    // Ray traced (SPEC section 9 with 7 and 11), through the BVH and through tile lists: the
+    // same depths, on the shell.
+    let mut traced = Vec::new();
+    for tracer in ["ray", "ray-tiles"] {
+        let exr = d.join(format!("depth_{tracer}.exr"));
+        let mut args = render_args(scene, cams, png);
+        args.extend(["--depth", exr.to_str().unwrap(), "--tracer", tracer]);
+        let o = rara(&args);
+        assert_success(&o);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains("median view depth of"), "{stdout}");
+        let z: Vec<f32> = image::open(&exr)
+            .unwrap()
+            .to_rgb32f()
+            .pixels()
+            .map(|p| p.0[0])
+            .collect();
+        let finite = z.iter().filter(|v| v.is_finite()).count();
+        assert!(finite > 100, "{tracer}: {finite} pixels with a depth");
+        assert!(
+            z.iter()
+                .filter(|v| v.is_finite())
+                .all(|v| (1.5..=4.5).contains(v)),
+            "{tracer}: {z:?}"
+        );
+        traced.push(z);
+    }
+    assert!(
+        traced[0]
+            .iter()
+            .zip(&traced[1])
+            .all(|(a, b)| a.to_bits() == b.to_bits()),
+        "the ray tracer's depths through the BVH and through tile lists"
+    );
 }
 
 /// `render --object` and `sweep --object`: several objects in one frame equal their merged,
