@@ -115,7 +115,7 @@ struct TraceParams {
     uvec4 mixed;        // MIXED: the MixedParams' address (lo, hi); else the depth test's
                         // per-pixel view depth (lo, hi; 0: no depth test)
     uvec4 lists;        // TILED: the tile ranges' address (lo, hi), the sorted pairs' Gaussians
-    uvec4 list_keys;    // TILED: the records' address (lo, hi; tiled_bounds.comp), tiles across
+    uvec4 records;      // TILED: the records' address (lo, hi; tiled_bounds.comp), tiles across
     uvec4 depth_out;    // the depth output's per-pixel (median, sum alpha T z, 0, 0) address
                         // (lo, hi; 0: none), which write_depth turns into the caller's target
 };
@@ -333,7 +333,7 @@ void main() {
 #ifdef TILED
     // Tile by tile: ray r is pixel r % 256 of tile r / 256 (the rays of tiles' pixels past the
     // image's edge do nothing).
-    uint tiles_across = f.list_keys.z;
+    uint tiles_across = f.records.z;
     uint tile = ray / (TILE_SIZE * TILE_SIZE);
     uint within = ray % (TILE_SIZE * TILE_SIZE);
     uvec2 px = uvec2((tile % tiles_across) * TILE_SIZE + within % TILE_SIZE,
@@ -447,7 +447,7 @@ void main() {
     // the list's end).
     uvec2 list = UVec2s(address_of_words(f.lists.xy)).v[tile];
     U32s list_gaussians = U32s(address_of_words(f.lists.zw));
-    Address records = address_of_words(f.list_keys.xy);
+    Address records = address_of_words(f.records.xy);
     uint pos = pc.round == 0u ? list.x : pc.stacks.v[local];
     uint restart = pc.round == 0u ? NO_NODE : pc.stacks.v[stride + local];
     // The list position of this pass's first hit: a hit pushed out of the full buffer lies
@@ -458,11 +458,15 @@ void main() {
         [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
             uvec4 t4 = load_uvec4(address_item(k_t, q, 16u));
             uvec4 i4 = load_uvec4(address_item(k_index, q, 16u));
+#ifndef TILED
             uvec4 a4 = load_uvec4(address_item(k_alpha, q, 16u));
+#endif
             [[unroll]] for (uint c = 0u; c < 4u; ++c) {
                 kt[4u * q + c] = uintBitsToFloat(t4[c]);
                 ki[4u * q + c] = i4[c];
+#ifndef TILED
                 ka[4u * q + c] = uintBitsToFloat(a4[c]);
+#endif
             }
         }
     } else {
@@ -811,8 +815,10 @@ void main() {
                     floatBitsToUint(vec4(kt[4u * q], kt[4u * q + 1u], kt[4u * q + 2u], kt[4u * q + 3u])));
         store_uvec4(address_item(k_index, q, 16u),
                     uvec4(ki[4u * q], ki[4u * q + 1u], ki[4u * q + 2u], ki[4u * q + 3u]));
+#ifndef TILED
         store_uvec4(address_item(k_alpha, q, 16u),
                     floatBitsToUint(vec4(ka[4u * q], ka[4u * q + 1u], ka[4u * q + 2u], ka[4u * q + 3u])));
+#endif
 
     }
 }

@@ -1342,7 +1342,7 @@ impl Renderer {
             ranges: 0,
             state,
         };
-        let q = crate::reference::raytrace::RayTraceOptions::default().q as f32;
+        let trace_options = crate::reference::raytrace::RayTraceOptions::default();
         // On CPU drivers the tracer reads the lists through the frame's texel views.
         let frame_texels = if tiled && tracer.reads_texels() {
             let sorted = self.sort.passes_for(key_bits(w, h)) as usize % 2;
@@ -1384,7 +1384,7 @@ impl Renderer {
                 Some(self.ray_tiles()?.record(
                     &mut rec,
                     scene,
-                    q,
+                    trace_options.q as f32,
                     (&self.prefix_sum, &f.slots_scan),
                     &self.sort,
                     &f.sort,
@@ -1405,7 +1405,6 @@ impl Renderer {
             self.depth
                 .record_prepare(&mut rec, *source, projection, *limit)?;
         }
-        let trace_options = crate::reference::raytrace::RayTraceOptions::default();
         tracer.record(
             ctx,
             cmd,

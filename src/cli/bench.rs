@@ -608,20 +608,16 @@ impl ModeResult {
         if !self.tracer.is_ray() {
             return None;
         }
-        let pass = |name: &str| {
+        // The median over the frames of the time of the passes `keep` names.
+        let passes = |keep: &dyn Fn(&str) -> bool| {
             let mut v: Vec<f64> = self
                 .frames
                 .iter()
-                .map(|f| {
-                    f.passes
-                        .iter()
-                        .filter(|p| p.name == name)
-                        .map(|p| p.ms)
-                        .sum()
-                })
+                .map(|f| f.passes.iter().filter(|p| keep(p.name)).map(|p| p.ms).sum())
                 .collect();
             median(&mut v)
         };
+        let pass = |name: &str| passes(&|n| n == name);
         let per = |f: &dyn Fn(&rara::stages::trace::TraceFrameStats) -> f64| {
             let mut v: Vec<f64> = self
                 .frames
@@ -635,7 +631,7 @@ impl ModeResult {
         let frames = self.frames.len().max(1) as f64;
         Some(TraceSummary {
             // The BVH build, or the tile lists' passes: everything before the rays.
-            bvh_ms: median(&mut self.gpu()) - trace_ms - pass("write target"),
+            bvh_ms: passes(&|n| n != "trace" && n != "write target"),
             k: per(&|t| t.k as f64),
             pairs: self
                 .frames

@@ -70,7 +70,7 @@ struct GpuTraceParams {
     /// sorted Gaussians' address (lo, hi).
     lists: [u32; 4],
     /// The lists' records' address (lo, hi), the tiles across the image, unused.
-    list_keys: [u32; 4],
+    records: [u32; 4],
     /// The depth output's per-pixel sums' address (lo, hi; 0: none), unused.
     depth_out: [u32; 4],
 }
@@ -96,7 +96,7 @@ impl GpuTraceParams {
             options: [options.q as f32, options.max_hits as f32, 0.0, 0.0],
             mixed: [mixed as u32, (mixed >> 32) as u32, 0, 0],
             lists: [0; 4],
-            list_keys: [0, 0, tile_grid(camera.width, camera.height).0, 0],
+            records: [0, 0, tile_grid(camera.width, camera.height).0, 0],
             depth_out: [0; 4],
         }
     }
@@ -957,7 +957,7 @@ impl RayTracer {
             if let Some(t) = &tiles {
                 p.lists[..2].copy_from_slice(&words(t.ranges));
                 p.lists[2..].copy_from_slice(&words(t.gaussians));
-                p.list_keys[..2].copy_from_slice(&words(t.records));
+                p.records[..2].copy_from_slice(&words(t.records));
             }
             let clip_params = clip.to_gpu();
             unsafe {
