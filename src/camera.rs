@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 
 use crate::error::{Error, Result};
 
@@ -265,6 +265,20 @@ pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
         width.div_ceil(crate::constants::TILE_SIZE),
         height.div_ceil(crate::constants::TILE_SIZE),
     )
+}
+
+/// The tiles (x0, y0, x1, y1), end exclusive, of the square of half side `radius` pixels
+/// around `uv` in a grid of `grid` tiles: clamp(int(v), 0, g) of SPEC section 3, clamped before
+/// the conversion as on the GPU (`splat_tile_rect` in common.glsl, the same operations).
+pub fn tile_rect(uv: Vec2, radius: f32, (gx, gy): (u32, u32)) -> [u32; 4] {
+    let tile = crate::constants::TILE_SIZE as f32;
+    let cell = |v: f32, g: u32| v.clamp(0.0, g as f32) as u32;
+    [
+        cell((uv.x - radius) / tile, gx),
+        cell((uv.y - radius) / tile, gy),
+        cell((uv.x + radius + tile - 1.0) / tile, gx),
+        cell((uv.y + radius + tile - 1.0) / tile, gy),
+    ]
 }
 
 /// Largest cameras.json [`Camera::load_all`] reads.

@@ -81,7 +81,7 @@ impl GpuProjectedSplat {
             return [0; 4];
         }
         let uv = glam::Vec2::from(self.uv);
-        crate::reference::project::tile_rect(uv, self.radius, grid)
+        crate::camera::tile_rect(uv, self.radius, grid)
     }
 }
 

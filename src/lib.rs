@@ -50,11 +50,13 @@ pub mod mesh;
 pub mod metrics;
 pub mod mixed;
 pub mod objects;
+pub mod options;
 pub mod ply;
 pub mod precision;
 pub mod reference;
 pub mod renderer;
 pub mod scene;
+pub mod sh;
 pub mod stages;
 pub mod synth;
 pub mod target;
@@ -72,10 +74,9 @@ pub use depth::{DepthMode, DepthOutput, DepthProjection, DepthSource, DepthTarge
 pub use error::{Error, Result};
 pub use frame::{FrameMemory, FrameSlot};
 pub use objects::ObjectTransform;
+pub use options::{RenderOptions, Tracer};
 pub use precision::ShPrecision;
-pub use renderer::{
-    FrameStats, GpuScene, Intermediates, RenderOptions, Renderer, SceneObject, Tracer, View,
-};
+pub use renderer::{FrameStats, GpuScene, Intermediates, Renderer, SceneObject, View};
 pub use scene::Scene;
 pub use target::{Composite, Target, TargetFormat};
 pub use timing::PassTimer;

@@ -274,8 +274,8 @@ mod tests {
         let r = glam::Mat3::from_quat(t.unit_rotation());
         for k in 0..20 {
             let d = rng.unit_vector();
-            let want = crate::reference::project::eval_sh(scene.sh_of(0), 3, r.transpose() * d);
-            let got = crate::reference::project::eval_sh(turned.sh_of(0), 3, d);
+            let want = crate::sh::eval_sh(scene.sh_of(0), 3, r.transpose() * d);
+            let got = crate::sh::eval_sh(turned.sh_of(0), 3, d);
             assert!((want - got).abs().max_element() < 1e-5, "{k}: {want} {got}");
         }
     }

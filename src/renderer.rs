@@ -5,7 +5,6 @@
 //! command buffer. [`Renderer::render`] is the headless one the CLI uses, built on `record`.
 
 use ash::vk;
-use glam::Vec3;
 
 use crate::camera::{tile_grid, Camera};
 use crate::clip::{Clip, ClipMode, ClipRegion};
@@ -17,6 +16,7 @@ use crate::frame::{FrameMemory, FrameSlot, ObjectBuffers};
 pub use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuClipParams, GpuFrameParams, CUTOFF_RECORD_BYTES};
 use crate::objects::ObjectTransform;
+use crate::options::{RenderOptions, Tracer};
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
 use crate::stages::depth::DepthStages;
@@ -26,7 +26,7 @@ use crate::stages::objects::{GpuObjectParams, ObjectTransformStage};
 use crate::stages::prefix_sum::PrefixSum;
 use crate::stages::project::{ObjectClipRanges, PlaneSlots, Project};
 use crate::stages::rasterize::{MassEnds, RasterLayout, Rasterize};
-use crate::stages::sort::{PairForm, RadixSort, SortForms, TILE_SORT_LABELS};
+use crate::stages::sort::{tile_key_bits, PairForm, RadixSort, SortForms, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
 use crate::stages::tile_ranges::TileRanges;
 use crate::stages::tiled::RayTiles;
@@ -35,60 +35,8 @@ use crate::stages::write_target::WriteTarget;
 use crate::stages::{FrameAddresses, FrameRecording, FrameTexelsLayout};
 use crate::target::{Composite, Target, TargetFormat};
 use crate::timing::PassTimer;
+use crate::vk::buffer::copy_to_host;
 use crate::vk::{compute_barrier, Buffer, Context, MemoryLocation};
-
-/// How to render a frame.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderOptions {
-    /// Colour behind the splats (with [`Composite::Background`]).
-    pub background: Vec3,
-    /// Over the background or over what the target holds ([`Renderer::record`]).
-    pub composite: Composite,
-    /// Clipping (SPEC section 5); the default clips nothing.
-    pub clip: Clip,
-    /// The tile rasterizer (SPEC sections 3-5) or the ray tracer (section 7).
-    pub tracer: Tracer,
-    /// A depth test against the engine's depth buffer (SPEC section 9; both tracers).
-    pub depth_test: Option<DepthTest>,
-    /// The splats' depth written out (SPEC section 9; both tracers, a ray-traced hit's view
-    /// depth that of its point on the ray, sections 7 and 11).
-    pub depth_output: Option<DepthOutput>,
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        RenderOptions {
-            background: Vec3::ZERO,
-            composite: Composite::Background,
-            clip: Clip::default(),
-            tracer: Tracer::Raster,
-            depth_test: None,
-            depth_output: None,
-        }
-    }
-}
-
-/// How a frame is drawn.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Tracer {
-    /// The tile rasterizer (SPEC sections 3-5).
-    #[default]
-    Raster,
-    /// The ray tracer (SPEC section 7): a BVH built per frame, k-closest hits per ray.
-    Ray,
-    /// The ray tracer with its camera rays composited from tile lists (SPEC section 11,
-    /// [`crate::stages::tiled`]) instead of the BVH: the same image to the bit. Not yet the
-    /// default: on lavapipe it is slower (docs/ARCHITECTURE.md, "Section 7 in tiles on the
-    /// GPU").
-    RayTiles,
-}
-
-impl Tracer {
-    /// Whether frames are ray traced (SPEC section 7), whatever their camera rays come from.
-    pub fn is_ray(self) -> bool {
-        matches!(self, Tracer::Ray | Tracer::RayTiles)
-    }
-}
 
 /// The intermediate buffers of the last rendered frame, read back for tests and debugging.
 #[derive(Clone, Debug, Default)]
@@ -167,14 +115,6 @@ struct HeadlessFrame {
     image: Option<(u32, u32, Buffer, Buffer)>,
     /// The depth output of [`Renderer::render_with_depth`] (f32 per pixel), and its copy.
     depth: Option<(u32, u32, Buffer, Buffer)>,
-}
-
-/// Sort key bits of the frame's pair sort: enough bits for the tile id and for the tile count,
-/// the key of pairs that add nothing (`cutoff_tiles`). The pairs are emitted in depth
-/// order, which the stable sort keeps within each tile.
-pub fn key_bits(width: u32, height: u32) -> u32 {
-    let (gx, gy) = tile_grid(width, height);
-    (gx * gy + 1).next_power_of_two().trailing_zeros()
 }
 
 impl Renderer {
@@ -640,7 +580,7 @@ impl Renderer {
             Target::Buffer { .. } => None,
         };
         let depth = self.depth_bindings(slot, options)?;
-        let sorted_index = self.sort.passes_for(key_bits(w, h)) as usize % 2;
+        let sorted_index = self.sort.passes_for(tile_key_bits(w, h)) as usize % 2;
         slot.resources.as_mut().unwrap().sorted = sorted_index;
         // The texel views that most kernels read through on CPU drivers (project, depth order,
         // emit, tile ranges, rasterize).
@@ -828,7 +768,7 @@ impl Renderer {
             cmd,
             &f.sort,
             rec.at.counter(COUNTER_INTERSECTIONS),
-            key_bits(w, h),
+            tile_key_bits(w, h),
             forms,
             &TILE_SORT_LABELS,
             Some(&mut *rec.timer),
@@ -1345,7 +1285,7 @@ impl Renderer {
         let trace_options = crate::reference::raytrace::RayTraceOptions::default();
         // On CPU drivers the tracer reads the lists through the frame's texel views.
         let frame_texels = if tiled && tracer.reads_texels() {
-            let sorted = self.sort.passes_for(key_bits(w, h)) as usize % 2;
+            let sorted = self.sort.passes_for(tile_key_bits(w, h)) as usize % 2;
             Some(slot.frame_texels_set(sorted, scene)?)
         } else {
             None
@@ -1494,61 +1434,4 @@ fn frame_params(
             capacity.min(u32::MAX as u64) as u32,
         ],
     }
-}
-
-/// Records a copy of the first `bytes` of `source`, written by earlier compute passes, into
-/// the host-visible `readback`, with the barriers that order the compute writes before the
-/// copy and the copy before host reads (after the fence). Only rara's own buffers are involved.
-fn copy_to_host(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
-    source: &Buffer,
-    readback: &Buffer,
-    bytes: u64,
-) {
-    copy_regions_to_host(ctx, cmd, &[(source, 0, bytes)], readback);
-}
-
-/// [`copy_to_host`] of several whole buffers, each to its offset in `readback`.
-pub(crate) fn copy_parts_to_host(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
-    parts: &[(&Buffer, u64)],
-    readback: &Buffer,
-) {
-    let regions: Vec<(&Buffer, u64, u64)> = parts.iter().map(|&(b, at)| (b, at, b.size)).collect();
-    copy_regions_to_host(ctx, cmd, &regions, readback);
-}
-
-/// Copies `(source, offset in readback, bytes)` regions, with the barriers of [`copy_to_host`].
-fn copy_regions_to_host(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
-    regions: &[(&Buffer, u64, u64)],
-    readback: &Buffer,
-) {
-    let device = ctx.device();
-    let to_transfer = vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-        .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
-    unsafe {
-        device.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::DependencyFlags::empty(),
-            &[to_transfer],
-            &[],
-            &[],
-        );
-        for &(source, at, bytes) in regions {
-            let region = [vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: at,
-                size: bytes,
-            }];
-            device.cmd_copy_buffer(cmd, source.raw, readback.raw, &region);
-        }
-    }
-    crate::vk::host_read_barrier(ctx, cmd);
 }

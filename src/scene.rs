@@ -153,5 +153,5 @@ pub fn sh_coeffs(degree: u32) -> usize {
 
 /// The SH DC coefficient that gives colour channel value `c` (inverse of `C0 * dc + 0.5`).
 pub fn rgb_to_sh_dc(c: f32) -> f32 {
-    (c - 0.5) / crate::reference::project::SH_C0
+    (c - 0.5) / crate::sh::SH_C0
 }

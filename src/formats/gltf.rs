@@ -35,12 +35,12 @@ use crate::error::{Error, Result};
 use crate::input::gltf::{bad, check_placed, Document};
 use crate::ply::LoadReport;
 use crate::scene::{sh_coeffs, Scene};
+use crate::sh::SH_C0;
 
 /// The extension's name and its attribute prefix.
 const EXT: &str = "KHR_gaussian_splatting";
 /// The SPZ compression extension.
 const EXT_SPZ: &str = "KHR_gaussian_splatting_compression_spz_2";
-const SH_C0: f32 = 0.282_094_8;
 /// glTF's LUF against rara's RDF: x and y point the other way.
 const GLTF_FLIPS: [bool; 3] = [true, true, false];
 /// One decoded splat primitive, in glTF's axes and the mesh's own frame.

@@ -18,12 +18,10 @@ use crate::error::{Error, Result};
 use crate::input::InputFile;
 use crate::ply::LoadReport;
 use crate::scene::Scene;
+use crate::sh::SH_C0;
 
 /// Bytes per Gaussian.
 pub const BYTES_PER_SPLAT: usize = 32;
-
-/// The SH degree-0 constant.
-const SH_C0: f32 = 0.282_094_8;
 
 /// Reads a `.splat` file. A record with a non-finite or negative value is dropped and counted,
 /// and a Gaussian far thinner along one axis is made flat, as every reader does

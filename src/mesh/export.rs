@@ -18,8 +18,8 @@ use glam::{DVec3, Vec3};
 
 use super::{octagon, octagon_radius, CORNERS, FAN_TRIANGLES};
 use crate::error::{Error, Result};
-use crate::reference::project::SH_C0;
 use crate::scene::{flat_axis, Scene};
+use crate::sh::SH_C0;
 
 /// The mesh file formats, by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -12,7 +12,7 @@ use std::sync::OnceLock;
 
 use glam::{DMat3, DVec3};
 
-use crate::reference::project::{SH_C1, SH_C2, SH_C3};
+use crate::sh::{SH_C1, SH_C2, SH_C3};
 
 /// Sample directions for the fit (more than the 7 unknowns of band 3, well spread).
 const SAMPLES: usize = 32;
@@ -174,7 +174,7 @@ impl ShRotation {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reference::project::eval_sh;
+    use crate::sh::eval_sh;
     use glam::DQuat;
 
     /// The rotated coefficients show towards d what the originals showed towards R^T d.

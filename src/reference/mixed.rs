@@ -26,13 +26,13 @@
 
 use glam::{DVec3, Vec3};
 
-use super::project::eval_sh;
 use super::rasterize::pixel_ray;
 use super::raytrace::{clip_weight, gaussian_hit, Bvh, Hit, RayTraceOptions};
 use super::Rgba8Image;
 use crate::camera::Camera;
 use crate::mixed::triangles::TriangleHit;
 use crate::mixed::{Light, Material, MixedScene};
+use crate::sh::eval_sh;
 
 /// Where a secondary ray's meshes start beyond its origin point.
 pub const SECONDARY_OFFSET: f64 = 1e-4;

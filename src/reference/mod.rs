@@ -10,7 +10,7 @@ pub mod raytrace;
 pub mod tiled;
 
 use crate::camera::Camera;
-use crate::renderer::RenderOptions;
+use crate::options::RenderOptions;
 use crate::scene::Scene;
 
 /// An 8-bit RGBA image, row-major, row 0 at the top.

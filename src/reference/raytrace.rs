@@ -10,14 +10,14 @@
 
 use glam::{DMat3, DVec3, Vec3};
 
-use super::project::eval_sh;
 use super::rasterize::pixel_ray;
 use super::Rgba8Image;
 use crate::camera::Camera;
 use crate::clip::{Classification, Clip, ClipMode, ClipRegion, CutoffRay, FLAT_PARALLEL_EPSILON};
 use crate::mesh::{octagon_radius, FlatFrame, DEFAULT_Q};
-use crate::renderer::RenderOptions;
+use crate::options::RenderOptions;
 use crate::scene::{flat_axis, Scene};
+use crate::sh::eval_sh;
 
 /// Hits composited per ray at most (REdiSplats' default); a ray that needed more is counted.
 pub const DEFAULT_MAX_HITS: usize = 512;

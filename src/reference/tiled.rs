@@ -20,7 +20,7 @@ use super::Rgba8Image;
 use crate::camera::{tile_grid, Camera};
 use crate::constants::TILE_SIZE;
 use crate::mesh::{octagon_radius, FlatFrame, CORNERS};
-use crate::renderer::RenderOptions;
+use crate::options::RenderOptions;
 use crate::scene::{flat_axis, Scene};
 
 /// The pending-buffer capacity of the reference's default: as many hits as a ray may hold

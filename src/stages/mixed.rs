@@ -435,7 +435,7 @@ impl MixedTracer {
                 timer.begin_pass(cmd, c"ray tree");
                 self.spawn.dispatch(cmd, &push, linear_grid(count_in));
                 timer.end_pass(cmd, c"ray tree");
-                crate::renderer::copy_parts_to_host(
+                crate::vk::buffer::copy_parts_to_host(
                     ctx,
                     cmd,
                     &[

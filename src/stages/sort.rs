@@ -565,6 +565,14 @@ pub const TILE_SORT_LABELS: SortLabels = SortLabels {
     ],
 };
 
+/// Sort key bits of the frame's pair sort: enough bits for the tile id and for the tile count,
+/// the key of pairs that add nothing (`cutoff_tiles`). The pairs are emitted in depth
+/// order, which the stable sort keeps within each tile.
+pub fn tile_key_bits(width: u32, height: u32) -> u32 {
+    let (gx, gy) = crate::camera::tile_grid(width, height);
+    (gx * gy + 1).next_power_of_two().trailing_zeros()
+}
+
 /// Labels of the frame's sort of the visible Gaussians by depth ("depth sort setup", ...).
 pub const DEPTH_SORT_LABELS: SortLabels = SortLabels {
     setup: c"depth sort setup",

@@ -158,7 +158,7 @@ impl RayTiles {
             f.cmd,
             bufs,
             f.at.counter(COUNTER_INTERSECTIONS),
-            crate::renderer::key_bits(w, h),
+            super::sort::tile_key_bits(w, h),
             &TILE_SORT_LABELS,
             Some(&mut *f.timer),
         );

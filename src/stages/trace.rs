@@ -1043,7 +1043,7 @@ impl RayTracer {
             }
         }
         timer.end_pass(cmd, c"trace");
-        crate::renderer::copy_parts_to_host(
+        crate::vk::buffer::copy_parts_to_host(
             ctx,
             cmd,
             &[

@@ -305,3 +305,60 @@ mod tests {
         assert!(matches!(other, Error::Allocation { .. }));
     }
 }
+
+/// Records a copy of the first `bytes` of `source`, written by earlier compute passes, into
+/// the host-visible `readback`, with the barriers that order the compute writes before the
+/// copy and the copy before host reads (after the fence). Only rara's own buffers are involved.
+pub(crate) fn copy_to_host(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    source: &Buffer,
+    readback: &Buffer,
+    bytes: u64,
+) {
+    copy_regions_to_host(ctx, cmd, &[(source, 0, bytes)], readback);
+}
+
+/// [`copy_to_host`] of several whole buffers, each to its offset in `readback`.
+pub(crate) fn copy_parts_to_host(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    parts: &[(&Buffer, u64)],
+    readback: &Buffer,
+) {
+    let regions: Vec<(&Buffer, u64, u64)> = parts.iter().map(|&(b, at)| (b, at, b.size)).collect();
+    copy_regions_to_host(ctx, cmd, &regions, readback);
+}
+
+/// Copies `(source, offset in readback, bytes)` regions, with the barriers of [`copy_to_host`].
+fn copy_regions_to_host(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    regions: &[(&Buffer, u64, u64)],
+    readback: &Buffer,
+) {
+    let device = ctx.device();
+    let to_transfer = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::DependencyFlags::empty(),
+            &[to_transfer],
+            &[],
+            &[],
+        );
+        for &(source, at, bytes) in regions {
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: at,
+                size: bytes,
+            }];
+            device.cmd_copy_buffer(cmd, source.raw, readback.raw, &region);
+        }
+    }
+    crate::vk::host_read_barrier(ctx, cmd);
+}
