@@ -1,5 +1,5 @@
 // The BVH of the ray tracer (SPEC section 7, issue 32), shared by its build kernels
-// (bvh_proxies, bvh_morton, bvh_tree, bvh_bounds). Host twin: src/stages/bvh.rs.
+// (bvh_proxies, bvh_morton, bvh_tree, bvh_bounds). Host twin: src/raytrace/bvh.rs.
 //
 // The tree is Karras' (2012) radix tree over the Gaussians sorted by the Morton code of their
 // proxy box's centre: n leaves and n - 1 inner nodes, node 0 the root, inner nodes

@@ -6,7 +6,7 @@
 // direction d where delta grows; its far end is found by an exponential then a binary search,
 // its split by a binary search for the last key sharing more than the range's prefix with i.
 // Both searches take at most 32 steps. Writes each node's children (left, right, with the
-// split's axis) and every child's parent. CPU twin: stages::bvh::karras_tree.
+// split's axis) and every child's parent. CPU twin: raytrace::bvh::karras_tree.
 #include "bvh_common.glsl"
 
 layout(local_size_x = LINEAR_WORKGROUP) in;

@@ -12,12 +12,12 @@ use crate::constants::{
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuClipParams, GpuFrameParams, GpuProjectedSplat, CUTOFF_RECORD_BYTES};
+use crate::raytrace::tracer::{RayTracer, TraceBuffers, FIRST_TRACE_ROUNDS, MAX_TRACE_ROUNDS};
 use crate::stages::cutoff_tiles::CUTOFF_PAIRS_OFFSET;
 use crate::stages::depth_order::DEPTH_ORDER_BUFFER;
 use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
 use crate::stages::sort::{RadixSort, SortBuffers};
 use crate::stages::tile_lists::TileListsLayout;
-use crate::stages::trace::{RayTracer, TraceBuffers, FIRST_TRACE_ROUNDS, MAX_TRACE_ROUNDS};
 use crate::stages::write_target::single_image_set_layout;
 use crate::stages::{frame_texels_set_layout, sh_texel, FRAME_TEXEL_BINDINGS};
 use crate::timing::PassTiming;
@@ -112,7 +112,7 @@ pub struct FrameMemory {
     /// per node its parent (4 B), per inner node an arrival count (4 B).
     pub bvh: u64,
     /// The ray tracer's per-ray buffers: per ray of a batch (at most
-    /// [`crate::stages::trace::TRACE_BATCH_RAYS`]) its state (48 B), stack (256 B), k-buffer
+    /// [`crate::raytrace::tracer::TRACE_BATCH_RAYS`]) its state (48 B), stack (256 B), k-buffer
     /// (12 B per entry: 192 B with k = 16, 768 B with k = 64) and live-list entries (8 B), and
     /// per pixel its state (16 B).
     pub trace_per_ray: u64,
@@ -847,7 +847,7 @@ pub struct FrameStats {
     /// Wall-clock milliseconds of the last render: recording, submission and wait.
     pub wall_ms: f64,
     /// The ray tracer's counts, on its frames ([`crate::Tracer::Ray`]).
-    pub trace: Option<crate::stages::trace::TraceFrameStats>,
+    pub trace: Option<crate::raytrace::tracer::TraceFrameStats>,
 }
 
 impl FrameStats {

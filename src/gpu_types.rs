@@ -74,7 +74,7 @@ impl GpuProjectedSplat {
 
     /// The tiles (x0, y0, x1, y1), end exclusive, of its 3-sigma square in a grid of `grid`
     /// tiles: `splat_tile_rect` in common.glsl through its CPU twin
-    /// [`crate::reference::project::tile_rect`], the same operations on the same floats (the
+    /// [`crate::camera::tile_rect`], the same operations on the same floats (the
     /// division by the tile size is exact). Empty for a skipped Gaussian.
     pub fn tile_rect(&self, grid: (u32, u32)) -> [u32; 4] {
         if !self.drawn() {

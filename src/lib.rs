@@ -53,6 +53,7 @@ pub mod objects;
 pub mod options;
 pub mod ply;
 pub mod precision;
+pub mod raytrace;
 pub mod reference;
 pub mod renderer;
 pub mod scene;
@@ -74,7 +75,7 @@ pub use depth::{DepthMode, DepthOutput, DepthProjection, DepthSource, DepthTarge
 pub use error::{Error, Result};
 pub use frame::{FrameMemory, FrameSlot};
 pub use objects::ObjectTransform;
-pub use options::{RenderOptions, Tracer};
+pub use options::{RayTraceOptions, RenderOptions, Tracer};
 pub use precision::ShPrecision;
 pub use renderer::{FrameStats, GpuScene, Intermediates, Renderer, SceneObject, View};
 pub use scene::Scene;

@@ -1,5 +1,5 @@
 //! What a frame is rendered with ([`RenderOptions`]): the background, the clip, which tracer
-//! and the depth test and output. One set of options for the GPU renderer
+//! and the depth test and output; [`RayTraceOptions`], the ray tracer's settings. One set of options for the GPU renderer
 //! ([`crate::Renderer`]) and the CPU reference ([`crate::reference`]), so that neither
 //! depends on the other.
 
@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use crate::clip::Clip;
 use crate::depth::{DepthOutput, DepthTest};
+use crate::mesh::DEFAULT_Q;
 use crate::target::Composite;
 
 /// How to render a frame.
@@ -49,7 +50,7 @@ pub enum Tracer {
     /// The ray tracer (SPEC section 7): a BVH built per frame, k-closest hits per ray.
     Ray,
     /// The ray tracer with its camera rays composited from tile lists (SPEC section 11,
-    /// [`crate::stages::tiled`]) instead of the BVH: the same image to the bit. Not yet the
+    /// [`crate::raytrace::tiles`]) instead of the BVH: the same image to the bit. Not yet the
     /// default: on lavapipe it is slower (docs/ARCHITECTURE.md, "Section 7 in tiles on the
     /// GPU").
     RayTiles,
@@ -59,5 +60,27 @@ impl Tracer {
     /// Whether frames are ray traced (SPEC section 7), whatever their camera rays come from.
     pub fn is_ray(self) -> bool {
         matches!(self, Tracer::Ray | Tracer::RayTiles)
+    }
+}
+
+/// Hits composited per ray at most (REdiSplats' default); a ray that needed more is counted.
+pub const DEFAULT_MAX_HITS: usize = 512;
+
+/// Settings of the ray tracer (SPEC section 7), the GPU's ([`crate::raytrace`]) and the CPU
+/// reference's alike.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayTraceOptions {
+    /// `Q` of the flat Gaussians' octagons (SPEC section 6).
+    pub q: f64,
+    /// Hits composited per ray at most.
+    pub max_hits: usize,
+}
+
+impl Default for RayTraceOptions {
+    fn default() -> Self {
+        RayTraceOptions {
+            q: DEFAULT_Q,
+            max_hits: DEFAULT_MAX_HITS,
+        }
     }
 }

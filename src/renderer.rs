@@ -17,6 +17,8 @@ pub use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{GpuClipParams, GpuFrameParams, CUTOFF_RECORD_BYTES};
 use crate::objects::ObjectTransform;
 use crate::options::{RenderOptions, Tracer};
+use crate::raytrace::tiles::RayTiles;
+use crate::raytrace::tracer::RayTracer;
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
 use crate::stages::depth::DepthStages;
@@ -29,8 +31,6 @@ use crate::stages::rasterize::{MassEnds, RasterLayout, Rasterize};
 use crate::stages::sort::{tile_key_bits, PairForm, RadixSort, SortForms, TILE_SORT_LABELS};
 use crate::stages::tile_lists::{TileLists, TileListsLayout};
 use crate::stages::tile_ranges::TileRanges;
-use crate::stages::tiled::RayTiles;
-use crate::stages::trace::RayTracer;
 use crate::stages::write_target::WriteTarget;
 use crate::stages::{FrameAddresses, FrameRecording, FrameTexelsLayout};
 use crate::target::{Composite, Target, TargetFormat};
@@ -283,7 +283,7 @@ impl Renderer {
     }
 
     /// Sets the ray tracer's k-buffer (hits collected per traversal pass, one of
-    /// [`crate::stages::trace::TRACE_KS`]; the default is [`crate::stages::trace::default_k`]).
+    /// [`crate::raytrace::tracer::TRACE_KS`]; the default is [`crate::raytrace::tracer::default_k`]).
     /// It changes no pixel, only speed and the per-ray memory.
     pub fn set_trace_k(&mut self, k: u32) -> Result<()> {
         self.ray_tracer = std::sync::OnceLock::from(RayTracer::with_k(&self.ctx, k)?);
@@ -1282,7 +1282,7 @@ impl Renderer {
             ranges: 0,
             state,
         };
-        let trace_options = crate::reference::raytrace::RayTraceOptions::default();
+        let trace_options = crate::options::RayTraceOptions::default();
         // On CPU drivers the tracer reads the lists through the frame's texel views.
         let frame_texels = if tiled && tracer.reads_texels() {
             let sorted = self.sort.passes_for(tile_key_bits(w, h)) as usize % 2;

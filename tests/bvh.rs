@@ -5,8 +5,8 @@
 mod common;
 
 use glam::Vec3;
+use rara::raytrace::bvh::{karras_tree, BvhBuild, BvhReadback};
 use rara::reference::raytrace::proxy_bounds;
-use rara::stages::bvh::{karras_tree, BvhBuild, BvhReadback};
 use rara::synth::Rng;
 use rara::{Renderer, Scene};
 

@@ -680,7 +680,7 @@ fn ray_traced_depth_test(tracer: rara::Tracer) -> image::RgbaImage {
         .collect();
     let image = render(&mut renderer, &half);
     let limits: Vec<f32> = half.iter().map(|&d| projection.view_depth(d)).collect();
-    let rt = rara::reference::raytrace::RayTraceOptions::default();
+    let rt = rara::RayTraceOptions::default();
     let (cpu, _) = reference::raytrace::render_depth_tested(
         &scene,
         &cam,
@@ -714,7 +714,7 @@ fn ray_tracer_writes_the_depth_output() {
     let mut renderer = Renderer::new(&ctx).unwrap();
     let (scene, cam) = scene_and_camera();
     let gpu = renderer.upload(&scene).unwrap();
-    let rt = rara::reference::raytrace::RayTraceOptions::default();
+    let rt = rara::RayTraceOptions::default();
     for mode in [DepthMode::Median, DepthMode::Mean] {
         let cpu = reference::raytrace::depths(&scene, &cam, &RenderOptions::default(), &rt, mode);
         let mut paths = Vec::new();

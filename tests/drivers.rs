@@ -7,10 +7,10 @@ mod common;
 use glam::Vec3;
 use rara::mixed::shapes::Shape;
 use rara::mixed::{Light, Material, MixedScene};
-use rara::reference::raytrace::RayTraceOptions;
-use rara::stages::mixed::{GpuMixedScene, MixedTracer};
+use rara::raytrace::mixed::{GpuMixedScene, MixedTracer};
 use rara::stages::rasterize::RasterLayout;
 use rara::vk::ContextDesc;
+use rara::RayTraceOptions;
 use rara::{Clip, ClipRegion, Context, Plane, RenderOptions, Renderer, ShPrecision, Tracer};
 
 /// What the run found; with `RARA_EXPECT_DEVICE` set (scripts/test.sh sets it for each driver

@@ -145,7 +145,7 @@ fn engine_example_matches(tracer: rara::Tracer, frames: usize) {
                     .iter()
                     .map(|&d| projection.view_depth(d))
                     .collect();
-                let rt = rara::reference::raytrace::RayTraceOptions::default();
+                let rt = rara::RayTraceOptions::default();
                 let trace = |limits: &[f32]| {
                     rara::reference::raytrace::render_depth_tested(
                         &cpu_scene,

@@ -117,10 +117,10 @@ fn gpu_struct_layouts_match_spirv() {
     ];
     assert_layout(shaders::CUTOFF_RECORDS, "CutoffRecord", &cutoff);
     let node = [
-        offset_of!(rara::stages::bvh::GpuBvhNode, lo),
-        offset_of!(rara::stages::bvh::GpuBvhNode, left),
-        offset_of!(rara::stages::bvh::GpuBvhNode, hi),
-        offset_of!(rara::stages::bvh::GpuBvhNode, right),
+        offset_of!(rara::raytrace::bvh::GpuBvhNode, lo),
+        offset_of!(rara::raytrace::bvh::GpuBvhNode, left),
+        offset_of!(rara::raytrace::bvh::GpuBvhNode, hi),
+        offset_of!(rara::raytrace::bvh::GpuBvhNode, right),
     ];
     for kernel in [shaders::BVH_BOUNDS, shaders::BVH_PROXIES] {
         assert_layout(kernel, "BvhNode", &node);

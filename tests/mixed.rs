@@ -6,8 +6,8 @@ mod common;
 use glam::{Quat, Vec3};
 use rara::mixed::shapes::Shape;
 use rara::mixed::{Light, Material, MixedScene};
-use rara::reference::raytrace::RayTraceOptions;
-use rara::stages::mixed::{GpuMixedScene, MixedTracer};
+use rara::raytrace::mixed::{GpuMixedScene, MixedTracer};
+use rara::RayTraceOptions;
 use rara::{Clip, ShPrecision};
 
 /// `shape` scaled by `s`, turned by `r` and moved to `t`.
@@ -116,7 +116,7 @@ fn differences(a: &image::RgbaImage, b: &image::RgbaImage) -> (usize, u8) {
 fn a_scene_without_meshes_is_section_7() {
     let ctx = common::context();
     let tracer = MixedTracer::new(&ctx).unwrap();
-    let ray = rara::stages::trace::RayTracer::with_k(&ctx, tracer.k()).unwrap();
+    let ray = rara::raytrace::tracer::RayTracer::with_k(&ctx, tracer.k()).unwrap();
     let splats = common::mixed_scene(800, 3);
     let camera = common::tracer_camera(160);
     let (lo, hi) = common::percentile_box(&splats);
@@ -158,7 +158,7 @@ fn a_scene_without_meshes_is_section_7() {
 fn a_scene_file_without_meshes_is_section_7() {
     let ctx = common::context();
     let tracer = MixedTracer::new(&ctx).unwrap();
-    let ray = rara::stages::trace::RayTracer::with_k(&ctx, tracer.k()).unwrap();
+    let ray = rara::raytrace::tracer::RayTracer::with_k(&ctx, tracer.k()).unwrap();
     let dir = common::tempdir("mixed_scene_file");
     let splats = common::mixed_scene(800, 5);
     let ply = dir.join("splats.ply");
@@ -838,7 +838,7 @@ fn the_cli_renders_and_benches_a_scene_file() {
 #[test]
 fn a_frame_of_two_batches_matches_the_cpu_reference() {
     let camera = common::tracer_camera(640);
-    assert!(camera.width * camera.height > rara::stages::trace::TRACE_BATCH_RAYS);
+    assert!(camera.width * camera.height > rara::raytrace::tracer::TRACE_BATCH_RAYS);
     let (gpu, cpu) = both(&showcase(Clip::default()), &camera);
     common::check_images("mixed showcase, two batches", &gpu, &cpu, 45.0, 255);
 }

@@ -6,8 +6,10 @@ mod common;
 
 use glam::{DVec3, Quat, Vec3};
 use rara::clip::{Clip, ClipRegion, ClipWeight, Plane};
-use rara::reference::raytrace::{self, gaussian_hit, RayTraceOptions};
+use rara::reference::ray_hits::gaussian_hit;
+use rara::reference::raytrace;
 use rara::synth::Rng;
+use rara::RayTraceOptions;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
 /// The BVH finds exactly the hits that testing every Gaussian on every ray finds: the same

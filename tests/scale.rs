@@ -218,7 +218,7 @@ fn six_million_sh3_gaussians_match_the_reference() {
         &scene,
         &camera,
         &options(),
-        &reference::raytrace::RayTraceOptions::default(),
+        &rara::RayTraceOptions::default(),
     );
     let referenced = t.elapsed();
     // 6M Gaussians on one shell put hits on a ray closer together than f32 resolves
@@ -231,7 +231,7 @@ fn six_million_sh3_gaussians_match_the_reference() {
         &scene,
         &camera,
         &ray.clip,
-        reference::raytrace::RayTraceOptions::default().q,
+        rara::RayTraceOptions::default().q,
         50.0,
         4,
     );

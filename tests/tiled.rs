@@ -6,10 +6,12 @@
 mod common;
 
 use glam::DVec3;
-use rara::reference::raytrace::{self, gaussian_hit, RayTraceOptions};
+use rara::reference::ray_hits::gaussian_hit;
+use rara::reference::raytrace;
 use rara::reference::tiled::{
     self, silhouette, Silhouette, TileKey, TiledOptions, DEFAULT_PENDING,
 };
+use rara::RayTraceOptions;
 use rara::{Camera, RenderOptions, Scene};
 
 /// The ray from `cam`'s eye through the image point `(u, v)`, in pixels (`pixel_ray` at

@@ -6,8 +6,9 @@ mod common;
 
 use glam::{Quat, Vec3};
 use rara::clip::{Clip, ClipRegion, ClipWeight, Plane};
-use rara::reference::raytrace::{self, RayTraceOptions};
-use rara::stages::trace::RayTracer;
+use rara::raytrace::tracer::RayTracer;
+use rara::reference::raytrace;
+use rara::RayTraceOptions;
 use rara::{Camera, RenderOptions, Renderer, Scene};
 
 /// GPU against CPU: generated scenes (flat and volumetric mixed, a solid and the solid
@@ -213,7 +214,7 @@ fn a_ray_past_the_loop_budget() {
     // Each ray took far more steps than one invocation may loop (65,535), over many rounds.
     assert!(stats.visits_per_ray() > 65_535.0, "{stats:?}");
     assert!(
-        stats.rounds as u64 * rara::stages::trace::TRACE_BUDGET as u64 > 2 * 65_535,
+        stats.rounds as u64 * rara::raytrace::tracer::TRACE_BUDGET as u64 > 2 * 65_535,
         "{stats:?}"
     );
     assert_eq!(stats.hits_walked, 16 * count as u64, "{stats:?}");

@@ -9,8 +9,8 @@ use rara::bake::{bake, BakeOpacity};
 use rara::{ClipMode, Error, Result};
 
 use super::clip_args::ClipArgs;
+use super::load::load_scene;
 use super::output::{Output, Outputs};
-use crate::load_scene;
 
 /// `--opacity`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -64,7 +64,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         .transpose()?;
     let output = Output::prepare(&args.output, &["ply", "spz", "glb", "splat"])?;
     let scene = load_scene(&args.scene)?;
-    eprintln!("{}", crate::describe(&clip));
+    eprintln!("{}", super::clip_args::describe(&clip));
     let start = std::time::Instant::now();
     let rule = match args.opacity {
         OpacityArg::Mass => BakeOpacity::Mass,

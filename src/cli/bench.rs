@@ -12,10 +12,12 @@ use rara::timing::{PassTimer, PassTiming};
 use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
 
+use super::args::{resolve_camera, CameraArgs};
 use super::clip_args::ClipArgs;
+use super::load::load_scene;
+use super::median;
 use super::output::Output;
 use super::sweep::{default_range, with_moving_plane};
-use crate::{load_scene, median, resolve_camera, CameraArgs};
 
 /// `rara bench` options.
 #[derive(Args)]
@@ -41,7 +43,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=99))]
     samples: u32,
     /// Normal of the sweeping plane (default: the camera's view direction).
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_vec3)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_vec3)]
     plane_normal: Option<glam::Vec3>,
     /// Modes to run, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "original,hard,rara")]
@@ -64,8 +66,8 @@ pub struct BenchArgs {
     /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7), each mode then also
     /// drawn by the rasterizer, taking turns, for the ratio of their frame times in one run;
     /// ray-tiles: also with the tracer's camera rays from tile lists (section 11).
-    #[arg(long, value_enum, default_value_t = crate::TracerArg::Raster)]
-    tracer: crate::TracerArg,
+    #[arg(long, value_enum, default_value_t = super::args::TracerArg::Raster)]
+    tracer: super::args::TracerArg,
 }
 
 /// A benchmark mode of the paper's Table 1.
@@ -285,10 +287,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         ..camera
     };
     let tracers: &[rara::Tracer] = match args.tracer {
-        crate::TracerArg::Raster => &[rara::Tracer::Raster],
-        crate::TracerArg::Ray => &[rara::Tracer::Raster, rara::Tracer::Ray],
+        super::args::TracerArg::Raster => &[rara::Tracer::Raster],
+        super::args::TracerArg::Ray => &[rara::Tracer::Raster, rara::Tracer::Ray],
         // Both sources of camera rays beside the rasterizer, for ratios in one run.
-        crate::TracerArg::RayTiles => &[
+        super::args::TracerArg::RayTiles => &[
             rara::Tracer::Raster,
             rara::Tracer::Ray,
             rara::Tracer::RayTiles,
@@ -618,7 +620,7 @@ impl ModeResult {
             median(&mut v)
         };
         let pass = |name: &str| passes(&|n| n == name);
-        let per = |f: &dyn Fn(&rara::stages::trace::TraceFrameStats) -> f64| {
+        let per = |f: &dyn Fn(&rara::raytrace::tracer::TraceFrameStats) -> f64| {
             let mut v: Vec<f64> = self
                 .frames
                 .iter()

@@ -9,8 +9,8 @@ use clap::{Args, ValueEnum};
 use rara::formats::spz::{SpzAxes, SpzVersion};
 use rara::{Error, Result};
 
+use super::load::load_scene;
 use super::output::{Output, Outputs};
-use crate::load_scene;
 
 /// The formats `convert` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -140,7 +140,7 @@ pub fn write(
             } else {
                 SpzVersion::V4
             };
-            let bytes = rara::formats::spz::encode(scene, version, crate::spz_axes())?;
+            let bytes = rara::formats::spz::encode(scene, version, super::load::spz_axes())?;
             w.write_all(&bytes).map_err(io)
         }
         Target::Glb => w
@@ -180,7 +180,7 @@ pub fn run(args: &ConvertArgs) -> Result<()> {
             format!(
                 " v{}, axes {}",
                 args.spz_version,
-                match crate::spz_axes() {
+                match super::load::spz_axes() {
                     SpzAxes::Rub => "RUB",
                     SpzAxes::AsStored => "as stored (rara's RDF)",
                 }

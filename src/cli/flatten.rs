@@ -133,7 +133,7 @@ pub fn run(args: &FlattenArgs) -> Result<()> {
         None => None,
     };
     let output = Output::prepare(&args.output, &["ply"])?;
-    let scene = crate::load_scene(&args.scene)?;
+    let scene = super::load::load_scene(&args.scene)?;
     let already = scene.flat_count();
     let flat = scene.flattened();
     eprintln!(
@@ -175,7 +175,7 @@ pub fn run(args: &FlattenArgs) -> Result<()> {
         println!("  view {k}: PSNR {p:.2} dB");
     }
     let min = psnr.iter().copied().fold(f64::INFINITY, f64::min);
-    let median = crate::median(&mut psnr);
+    let median = super::median(&mut psnr);
     println!(
         "flat against original over {} views from {source} at {} px wide: median PSNR {median:.2} dB, min {min:.2} dB",
         cameras.len(),

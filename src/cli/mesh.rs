@@ -101,9 +101,9 @@ pub struct RenderSequenceArgs {
     /// Folder of scenes (.ply), rendered in name order (what `rara mesh import FRAMES/` wrote).
     frames: PathBuf,
     #[command(flatten)]
-    camera: crate::CameraArgs,
+    camera: super::args::CameraArgs,
     /// Background colour R,G,B in [0, 1].
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_color, default_value = "0,0,0")]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_color, default_value = "0,0,0")]
     background: Vec3,
     /// Output folder: one PNG per frame (same stem) and sequence.gif.
     #[arg(short, long)]
@@ -172,7 +172,7 @@ fn run_export(args: &ExportArgs) -> Result<()> {
         ply_source = PlySource::open(&args.scene)?;
         &ply_source
     } else {
-        loaded = crate::load_scene(&args.scene)?;
+        loaded = super::load::load_scene(&args.scene)?;
         &loaded
     };
     let start = Instant::now();
@@ -289,7 +289,7 @@ fn run_import(args: &ImportArgs) -> Result<()> {
                 args.output.display()
             )));
         }
-        let original = crate::load_scene(&args.original)?;
+        let original = super::load::load_scene(&args.original)?;
         // Every frame is imported before any lands: a bad frame leaves no output at all.
         set.create_dir(&args.output)?;
         let progress = bar(frames.len() as u64, "import frames");
@@ -318,7 +318,7 @@ fn run_import(args: &ImportArgs) -> Result<()> {
         return Ok(());
     }
     let output = Output::prepare(&args.output, &["ply"])?;
-    let original = crate::load_scene(&args.original)?;
+    let original = super::load::load_scene(&args.original)?;
     let report = import_one(&mut set, &args.mesh, output, &original, args)?;
     set.commit()?;
     println!(
@@ -337,7 +337,7 @@ fn run_import(args: &ImportArgs) -> Result<()> {
 
 /// Runs `rara render-sequence`.
 pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
-    let camera = crate::resolve_camera(&args.camera)?;
+    let camera = super::args::resolve_camera(&args.camera)?;
     let entries = std::fs::read_dir(&args.frames).map_err(|source| Error::Io {
         path: args.frames.clone(),
         source,

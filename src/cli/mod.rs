@@ -1,19 +1,50 @@
-//! Subcommands of the `rara` tool that live in their own files.
+//! The `rara` tool's commands, one module each (`main.rs` lists them and dispatches), and what
+//! they share: arguments ([`args`]), loading ([`load`]), outputs ([`output`]), clip options
+//! ([`clip_args`]) and the reports below.
 
+pub mod args;
 pub mod bake;
 pub mod bench;
 pub mod clip_args;
+pub mod compare;
 pub mod convert;
 pub mod demo;
 pub mod depth;
 pub mod flatten;
+pub mod info;
+pub mod load;
 pub mod mesh;
 pub mod objects;
 pub mod output;
+pub mod render;
 pub mod scene;
 pub mod sweep;
+pub mod synth;
 
 use rara::{FrameMemory, GpuScene};
+
+/// Prints each pass's median milliseconds, a line per pass, the names padded to the longest
+/// so that the times line up (`render --repeat`).
+pub fn print_pass_medians(passes: Vec<(&str, Vec<f64>)>) {
+    let width = passes.iter().map(|(name, _)| name.len()).max().unwrap_or(0);
+    for (name, mut v) in passes {
+        println!("  {name:<width$} {:8.2} ms", median(&mut v));
+    }
+}
+
+/// The median of `values` (sorted in place); NaN when empty.
+pub fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
 
 /// `--sh-half`: how the SH coefficients are stored on the device.
 pub fn sh_precision(half: bool) -> rara::ShPrecision {
@@ -33,7 +64,7 @@ fn mb(bytes: u64) -> String {
 /// out of order (a pass that runs out of room leaves the rest to the next one).
 pub fn describe_tiled(
     frame: &rara::FrameStats,
-    t: &rara::stages::trace::TraceFrameStats,
+    t: &rara::raytrace::tracer::TraceFrameStats,
 ) -> String {
     format!(
         "camera rays from tile lists (SPEC 11): {} Gaussians listed, {} (tile, Gaussian) pairs; \

@@ -62,10 +62,10 @@ pub fn load(
 ) -> Result<Vec<(Scene, ObjectTransform)>> {
     let mut out = Vec::new();
     if let Some(path) = scene {
-        out.push((crate::load_scene(path)?, ObjectTransform::default()));
+        out.push((super::load::load_scene(path)?, ObjectTransform::default()));
     }
     for o in objects {
-        out.push((crate::load_scene(&o.path)?, o.transform));
+        out.push((super::load::load_scene(&o.path)?, o.transform));
     }
     if out.iter().all(|(s, _)| s.is_empty()) {
         return Err(Error::InvalidInput("the objects hold no Gaussians".into()));

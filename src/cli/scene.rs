@@ -6,11 +6,12 @@ use std::path::Path;
 use indicatif::ProgressBar;
 
 use rara::mixed::MixedScene;
-use rara::reference::raytrace::RayTraceOptions;
-use rara::stages::mixed::{GpuMixedScene, MixedFrameStats, MixedTracer};
+use rara::raytrace::mixed::{GpuMixedScene, MixedFrameStats, MixedTracer};
+use rara::RayTraceOptions;
 use rara::{Camera, Context, Error, Result};
 
-use crate::{load_scene, median, print_pass_medians};
+use super::load::load_scene;
+use super::{median, print_pass_medians};
 
 /// Loads a scene file, each splat scene through the CLI's loader (its progress and warnings),
 /// and says what it holds. `background` overrides the file's.

@@ -11,9 +11,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rara::clip::{Clip, ClipMode, Plane};
 use rara::{Context, Error, RenderOptions, Renderer, Result, Scene};
 
+use super::args::{resolve_camera, CameraArgs};
 use super::clip_args::{describe, ClipArgs};
+use super::load::load_scene;
 use super::output::{Output, Outputs};
-use crate::{load_scene, resolve_camera, CameraArgs};
 
 /// `rara sweep` options.
 #[derive(Args)]
@@ -33,7 +34,7 @@ pub struct SweepArgs {
     #[command(flatten)]
     camera: CameraArgs,
     /// Normal NX,NY,NZ of the moving plane; visible where n.x + d >= 0.
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_vec3)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_vec3)]
     plane_normal: Vec3,
     /// Plane offset d of the first frame (default: the whole scene visible).
     #[arg(long, allow_hyphen_values = true)]
@@ -48,7 +49,7 @@ pub struct SweepArgs {
     #[arg(long)]
     side_by_side: bool,
     /// Background colour R,G,B in [0, 1].
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse_color, default_value = "0,0,0")]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_color, default_value = "0,0,0")]
     background: Vec3,
     /// GIF frame delay in milliseconds.
     #[arg(long, default_value_t = 100)]
@@ -60,8 +61,8 @@ pub struct SweepArgs {
     output: PathBuf,
     /// raster: the tile rasterizer; ray: the ray tracer (SPEC section 7); ray-tiles: its camera
     /// rays from tile lists (section 11, the same image).
-    #[arg(long, value_enum, default_value_t = crate::TracerArg::Raster)]
-    tracer: crate::TracerArg,
+    #[arg(long, value_enum, default_value_t = super::args::TracerArg::Raster)]
+    tracer: super::args::TracerArg,
 }
 
 /// Frame-to-frame change and cutoff counts of one clip configuration over a sweep.
@@ -262,7 +263,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         let (mean, p999, max) = s.change_summary();
         let mean_cutoff = s.cutoff_per_frame.iter().map(|&c| c as f64).sum::<f64>()
             / s.cutoff_per_frame.len() as f64;
-        let median_ms = crate::median(&mut s.gpu_ms.clone());
+        let median_ms = super::median(&mut s.gpu_ms.clone());
         println!(
             "{:<60} {:>12.4} {:>12.0} {:>10.0} {:>14.0} {:>9.1} ms",
             s.label, mean, p999, max, mean_cutoff, median_ms

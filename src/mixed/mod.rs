@@ -4,7 +4,7 @@
 //! - [`file`](mod@file): the JSON scene file;
 //! - [`triangles`]: the triangles, their BVH and the watertight ray-triangle test;
 //! - [`MixedScene`]: everything in world space, ready for the CPU reference
-//!   ([`crate::reference::mixed`]) and the GPU ([`crate::stages::mixed`]).
+//!   ([`crate::reference::mixed`]) and the GPU ([`crate::raytrace::mixed`]).
 
 pub mod file;
 pub mod shapes;

@@ -1,5 +1,5 @@
 //! The CPU reference of mixed scenes (SPEC section 8), the oracle of the GPU's
-//! ([`crate::stages::mixed`]): per pixel a ray tree, each ray compositing the Gaussians
+//! ([`crate::raytrace::mixed`]): per pixel a ray tree, each ray compositing the Gaussians
 //! (section 7) up to its nearest mesh hit, which ends it (diffuse, with shadow rays toward the
 //! lights) or spawns rays (mirror, glass).
 //!
@@ -27,11 +27,13 @@
 use glam::{DVec3, Vec3};
 
 use super::rasterize::pixel_ray;
-use super::raytrace::{clip_weight, gaussian_hit, Bvh, Hit, RayTraceOptions};
+use super::ray_hits::{clip_weight, gaussian_hit, render_rows, Hit};
+use super::raytrace::Bvh;
 use super::Rgba8Image;
 use crate::camera::Camera;
 use crate::mixed::triangles::TriangleHit;
 use crate::mixed::{Light, Material, MixedScene};
+use crate::options::RayTraceOptions;
 use crate::sh::eval_sh;
 
 /// Where a secondary ray's meshes start beyond its origin point.
@@ -342,7 +344,7 @@ pub fn render(
         camera,
         rt,
     };
-    super::raytrace::render_rows(
+    render_rows(
         camera,
         |i, j, s| frame.pixel(i, j, s),
         |total: &mut MixedStats, s| {

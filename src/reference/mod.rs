@@ -6,6 +6,7 @@
 pub mod mixed;
 pub mod project;
 pub mod rasterize;
+pub mod ray_hits;
 pub mod raytrace;
 pub mod tiled;
 

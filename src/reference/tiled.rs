@@ -13,13 +13,12 @@
 use glam::{DMat3, DVec3, Vec3};
 
 use super::rasterize::pixel_ray;
-use super::raytrace::{
-    gaussian_hit, not_culled, proxy_q_max, render_rows, Hit, RayComposite, RayTraceOptions,
-};
+use super::ray_hits::{gaussian_hit, not_culled, proxy_q_max, render_rows, Hit, RayComposite};
 use super::Rgba8Image;
 use crate::camera::{tile_grid, Camera};
 use crate::constants::TILE_SIZE;
 use crate::mesh::{octagon_radius, FlatFrame, CORNERS};
+use crate::options::RayTraceOptions;
 use crate::options::RenderOptions;
 use crate::scene::{flat_axis, Scene};
 

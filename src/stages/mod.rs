@@ -99,12 +99,10 @@ impl FrameRecording<'_> {
     }
 }
 
-pub mod bvh;
 pub mod cutoff_tiles;
 pub mod depth;
 pub mod depth_order;
 pub mod emit;
-pub mod mixed;
 pub mod objects;
 pub mod prefix_sum;
 pub mod project;
@@ -112,8 +110,6 @@ pub mod rasterize;
 pub mod sort;
 pub mod tile_lists;
 pub mod tile_ranges;
-pub mod tiled;
-pub mod trace;
 pub mod write_target;
 
 /// Rounds (dispatches) in which project and emit walk the splats' tile rectangles on an image

@@ -274,38 +274,6 @@ impl Drop for Buffer {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn an_exhausted_heap_is_out_of_device_memory() {
-        let e = allocation_error(
-            "sort keys A",
-            1 << 33,
-            1 << 32,
-            gpu_allocator::AllocationError::OutOfMemory,
-        );
-        assert!(
-            matches!(e, Error::OutOfDeviceMemory { bytes, .. } if bytes == 1 << 33),
-            "{e:?}"
-        );
-        let text = e.to_string();
-        assert!(text.starts_with("out of GPU memory: buffer 'sort keys A' needs 8589934592 bytes"));
-        assert!(
-            text.contains("device-local heap is 4294967296 bytes"),
-            "{text}"
-        );
-        let other = allocation_error(
-            "x",
-            4,
-            0,
-            gpu_allocator::AllocationError::InvalidAllocationCreateDesc,
-        );
-        assert!(matches!(other, Error::Allocation { .. }));
-    }
-}
-
 /// Records a copy of the first `bytes` of `source`, written by earlier compute passes, into
 /// the host-visible `readback`, with the barriers that order the compute writes before the
 /// copy and the copy before host reads (after the fence). Only rara's own buffers are involved.
@@ -361,4 +329,36 @@ fn copy_regions_to_host(
         }
     }
     crate::vk::host_read_barrier(ctx, cmd);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_exhausted_heap_is_out_of_device_memory() {
+        let e = allocation_error(
+            "sort keys A",
+            1 << 33,
+            1 << 32,
+            gpu_allocator::AllocationError::OutOfMemory,
+        );
+        assert!(
+            matches!(e, Error::OutOfDeviceMemory { bytes, .. } if bytes == 1 << 33),
+            "{e:?}"
+        );
+        let text = e.to_string();
+        assert!(text.starts_with("out of GPU memory: buffer 'sort keys A' needs 8589934592 bytes"));
+        assert!(
+            text.contains("device-local heap is 4294967296 bytes"),
+            "{text}"
+        );
+        let other = allocation_error(
+            "x",
+            4,
+            0,
+            gpu_allocator::AllocationError::InvalidAllocationCreateDesc,
+        );
+        assert!(matches!(other, Error::Allocation { .. }));
+    }
 }

@@ -330,7 +330,7 @@ pub fn check_traced(
     min_psnr: f64,
     max_diff: u8,
 ) -> ImageDiff {
-    use rara::reference::raytrace;
+    use rara::reference::ray_hits;
     let d = check_images(name, gpu, cpu, min_psnr, 255);
     let mut undecidable = 0;
     for (x, y, p) in gpu.enumerate_pixels() {
@@ -340,8 +340,8 @@ pub fn check_traced(
             continue;
         }
         let (o, dir) = rara::reference::rasterize::pixel_ray(camera, x, y);
-        let mut hits: Vec<raytrace::Hit> = (0..scene.len())
-            .filter_map(|i| raytrace::gaussian_hit(scene, i, o, dir, q))
+        let mut hits: Vec<ray_hits::Hit> = (0..scene.len())
+            .filter_map(|i| ray_hits::gaussian_hit(scene, i, o, dir, q))
             .collect();
         hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.index.cmp(&b.index)));
         // Only the hits the ray reaches count: up to where its transmittance falls under
@@ -350,7 +350,7 @@ pub fn check_traced(
         let reached = hits
             .iter()
             .position(|h| {
-                let alpha = h.alpha * raytrace::clip_weight(scene, h, o, dir, clip);
+                let alpha = h.alpha * ray_hits::clip_weight(scene, h, o, dir, clip);
                 if alpha >= 1.0 / 255.0 {
                     transmittance *= 1.0 - alpha;
                 }

@@ -1,7 +1,7 @@
 //! Mixed scenes on the GPU (SPEC section 8, issue 33): per pixel a ray tree, walked one ray
 //! per generation. A generation is `glsl/mixed_spawn.comp` (take in the last ray's result,
 //! shade its mesh hit, pop the next ray, find its mesh hit) then the ray tracer's MIXED kernels
-//! ([`super::trace`]) over every pixel's ray, compositing its Gaussians up to the mesh. The
+//! ([`super::tracer`]) over every pixel's ray, compositing its Gaussians up to the mesh. The
 //! host runs generations until no pixel has a ray left (one wait per generation: this path is
 //! headless, [`MixedTracer::render`]). The Gaussians' BVH is built once per frame, in the
 //! first generation; the triangles' BVH is built on the host when the scene is uploaded
@@ -10,8 +10,7 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::linear_grid;
-use super::trace::{MixedRays, RayTracer, TraceBuffers, MAX_TRACE_ROUNDS, TRACE_PARAMS_BYTES};
+use super::tracer::{MixedRays, RayTracer, TraceBuffers, MAX_TRACE_ROUNDS, TRACE_PARAMS_BYTES};
 use crate::camera::Camera;
 use crate::constants::{
     MIXED_COUNTER_CUT, MIXED_COUNTER_LIVE, MIXED_COUNTER_OVERFLOW, MIXED_COUNTER_PRIMARY,
@@ -23,9 +22,10 @@ use crate::gpu_scene::GpuScene;
 use crate::gpu_types::GpuClipParams;
 use crate::mixed::triangles::GpuTriangle;
 use crate::mixed::{Light, Material, MixedScene};
+use crate::options::RayTraceOptions;
 use crate::precision::ShPrecision;
-use crate::reference::raytrace::RayTraceOptions;
 use crate::shaders;
+use crate::stages::linear_grid;
 use crate::timing::PassTimer;
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
@@ -390,7 +390,7 @@ impl MixedTracer {
             }
             Ok(())
         };
-        let camera_params = super::trace::camera_params(camera, &scene.gaussians, options);
+        let camera_params = super::tracer::camera_params(camera, &scene.gaussians, options);
         let list = |k: u32| tree.lists.address + (k as u64 & 1) * pixels * 4;
         let mut count_in = pixels as u32;
         for generation in 0..MAX_GENERATIONS {

@@ -5,26 +5,26 @@
 //! 1. bounds (`glsl/tiled_bounds.comp`): per Gaussian its key (the least view depth of any hit
 //!    of it) and the tiles under its proxy's silhouette rectangle;
 //! 2. the listed Gaussians in key order: the depth order's scan and sort
-//!    ([`super::depth_order::DepthOrder`], over the keys where project leaves depths), and the
+//!    ([`crate::stages::depth_order::DepthOrder`], over the keys where project leaves depths), and the
 //!    prefix sum of their tiles touched in that order;
 //! 3. emit (`glsl/tiled_emit.comp`): the (tile, Gaussian) pairs, in key order;
-//! 4. the stable pair sort by tile ([`super::sort::RadixSort`]) and the tile ranges
-//!    ([`super::tile_ranges::TileRanges`]): each tile's list in (key, index) order.
+//! 4. the stable pair sort by tile ([`crate::stages::sort::RadixSort`]) and the tile ranges
+//!    ([`crate::stages::tile_ranges::TileRanges`]): each tile's list in (key, index) order.
 //!
 //! The ray tracer's `TILED` kernels (`glsl/trace_body.glsl`) then walk them ([`RayTileLists`]).
 //! CPU twin: [`crate::reference::tiled`].
 
 use bytemuck::{Pod, Zeroable};
 
-use super::depth_order::{DepthOrder, DEPTH_ORDER_BUFFER};
-use super::prefix_sum::{PrefixSum, PrefixSumScratch};
-use super::sort::{RadixSort, SortBuffers, TILE_SORT_LABELS};
-use super::tile_ranges::TileRanges;
-use super::{linear_grid, FrameRecording};
 use crate::constants::{COUNTER_INTERSECTIONS, COUNTER_VISIBLE};
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::shaders;
+use crate::stages::depth_order::{DepthOrder, DEPTH_ORDER_BUFFER};
+use crate::stages::prefix_sum::{PrefixSum, PrefixSumScratch};
+use crate::stages::sort::{RadixSort, SortBuffers, TILE_SORT_LABELS};
+use crate::stages::tile_ranges::TileRanges;
+use crate::stages::{linear_grid, FrameRecording};
 use crate::vk::{ComputePipeline, Context};
 
 #[repr(C)]
@@ -144,7 +144,7 @@ impl RayTiles {
             round_index: 0,
             pad: 0,
         };
-        let rounds = super::tile_rect_rounds(f.tile_count());
+        let rounds = crate::stages::tile_rect_rounds(f.tile_count());
         f.pass(c"tiled emit", |f| {
             for round_index in 0..rounds {
                 push.round_index = round_index;
@@ -158,7 +158,7 @@ impl RayTiles {
             f.cmd,
             bufs,
             f.at.counter(COUNTER_INTERSECTIONS),
-            super::sort::tile_key_bits(w, h),
+            crate::stages::sort::tile_key_bits(w, h),
             &TILE_SORT_LABELS,
             Some(&mut *f.timer),
         );

@@ -11,11 +11,11 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::linear_grid;
-use super::sort::{RadixSort, SortBuffers, SortLabels};
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::shaders;
+use crate::stages::linear_grid;
+use crate::stages::sort::{RadixSort, SortBuffers, SortLabels};
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
 
 /// The bits of [`GpuBvhNode::right`] that hold the child (the top two hold the split axis).

@@ -11,8 +11,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::bvh::{BvhBuffers, BvhBuild};
-use super::tiled::RayTileLists;
-use super::{linear_grid, LinearArgsPush};
+use super::tiles::RayTileLists;
 use crate::camera::tile_grid;
 use crate::camera::Camera;
 use crate::constants::{
@@ -23,9 +22,10 @@ use crate::constants::{
 use crate::error::VkContext;
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
+use crate::options::RayTraceOptions;
 use crate::precision::ShPrecision;
-use crate::reference::raytrace::RayTraceOptions;
 use crate::shaders;
+use crate::stages::{linear_grid, LinearArgsPush};
 use crate::timing::PassTimer;
 use crate::vk::descriptors::{allocate_sets, write_texel_view};
 use crate::vk::{compute_barrier, Buffer, ComputePipeline, Context, MemoryLocation};
@@ -495,7 +495,7 @@ impl TraceBuffers {
         scene: &GpuScene,
     ) -> Result<Option<vk::DescriptorSet>> {
         let (gaussians, sh, scene_id) = scene.buffers();
-        let (sh_format, sh_bytes) = super::sh_texel(scene.sh_precision());
+        let (sh_format, sh_bytes) = crate::stages::sh_texel(scene.sh_precision());
         let rgba32 = vk::Format::R32G32B32A32_UINT;
         let viewed = [
             (&self.bvh.nodes, rgba32, 16u64),
@@ -705,7 +705,7 @@ pub struct RayTracer {
     texel_layout: Option<vk::DescriptorSetLayout>,
     /// On CPU drivers: the frame's texel set layout, which the texel kernels of camera rays
     /// from tile lists read through ([`RayTileLists::texels`]).
-    frame_texel_layout: Option<super::FrameTexelsLayout>,
+    frame_texel_layout: Option<crate::stages::FrameTexelsLayout>,
     args: ComputePipeline,
     bvh: BvhBuild,
     ctx: Context,
@@ -770,7 +770,7 @@ impl RayTracer {
         }
         // (Made first: it frees itself if what follows fails.)
         let frame_texel_layout = if cpu_driver(ctx) {
-            Some(super::FrameTexelsLayout::new(ctx)?)
+            Some(crate::stages::FrameTexelsLayout::new(ctx)?)
         } else {
             None
         };
@@ -875,7 +875,7 @@ impl RayTracer {
     /// one f32 view depth per pixel, the depth test's, [`crate::stages::depth`]), a ray takes
     /// only the hits in front of its pixel's depth (SPEC section 9). With `tiles` (the
     /// buffers must be [`TraceBuffers::tiled`]), the camera rays walk the frame's tile lists
-    /// (SPEC section 11, [`super::tiled::RayTiles`], recorded before) and no BVH is built.
+    /// (SPEC section 11, [`super::tiles::RayTiles`], recorded before) and no BVH is built.
     /// With `depth_sums` (not with `mixed`), each pixel's (median view depth, sum alpha T z) of
     /// its composited hits goes there, 16 bytes a pixel, for the depth output's write pass
     /// ([`crate::stages::depth::DepthStages::record_write`]).

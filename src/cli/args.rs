@@ -1,0 +1,111 @@
+//! Arguments and parsers several commands share: the camera, the tracer, vectors and colours.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use glam::Vec3;
+use rara::{Camera, Error, Result};
+
+/// Where the camera comes from and the image size.
+#[derive(Args, Clone)]
+pub struct CameraArgs {
+    /// INRIA cameras.json file.
+    #[arg(long, conflicts_with_all = ["eye", "target"])]
+    cameras: Option<PathBuf>,
+    /// Index of the camera in --cameras.
+    #[arg(long, default_value_t = 0, requires = "cameras")]
+    camera: usize,
+    /// Camera centre X,Y,Z (with --target).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, requires = "target")]
+    eye: Option<Vec3>,
+    /// Point looked at X,Y,Z (with --eye).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, requires = "eye")]
+    target: Option<Vec3>,
+    /// Up direction X,Y,Z (default -Y, the INRIA/COLMAP convention).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_vec3, default_value = "0,-1,0")]
+    up: Vec3,
+    /// Vertical field of view in degrees (with --eye).
+    #[arg(long, default_value_t = 50.0)]
+    fov_y: f32,
+    /// Image width (default: the camera's, or 640 with --eye).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (default: keeps the camera's aspect ratio, or 480 with --eye).
+    #[arg(long)]
+    height: Option<u32>,
+}
+
+/// `--tracer`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TracerArg {
+    /// The tile rasterizer.
+    Raster,
+    /// The ray tracer.
+    Ray,
+    /// The ray tracer, camera rays from tile lists.
+    RayTiles,
+}
+
+impl From<TracerArg> for rara::Tracer {
+    fn from(t: TracerArg) -> rara::Tracer {
+        match t {
+            TracerArg::Raster => rara::Tracer::Raster,
+            TracerArg::Ray => rara::Tracer::Ray,
+            TracerArg::RayTiles => rara::Tracer::RayTiles,
+        }
+    }
+}
+
+/// X,Y,Z: three comma-separated finite numbers (`--eye`, `--target`, `--up`, ...).
+pub fn parse_vec3(s: &str) -> std::result::Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!(
+            "expected X,Y,Z (three comma-separated numbers), got '{s}'"
+        ));
+    }
+    let mut v = [0f32; 3];
+    for (slot, p) in v.iter_mut().zip(&parts) {
+        *slot = p.parse().map_err(|_| format!("'{p}' is not a number"))?;
+        if !slot.is_finite() {
+            return Err(format!("'{p}' is not finite"));
+        }
+    }
+    Ok(Vec3::from_array(v))
+}
+
+/// R,G,B with every channel in [0, 1].
+pub fn parse_color(s: &str) -> std::result::Result<Vec3, String> {
+    let c = parse_vec3(s)?;
+    if c.min_element() < 0.0 || c.max_element() > 1.0 {
+        return Err(format!(
+            "'{s}': each of R,G,B must lie in [0, 1] (0,0,0 is black, 1,1,1 white)"
+        ));
+    }
+    Ok(c)
+}
+
+/// The camera `args` describe: a view of a cameras.json file (resized when told), or a
+/// look-at camera; an error naming both ways when neither is given.
+pub fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
+    if let Some(path) = &args.cameras {
+        let cam = Camera::load_one(path, args.camera)?;
+        return match args.width {
+            Some(w) => cam.resized(w, args.height),
+            None if args.height.is_some() => cam.resized(cam.width, args.height),
+            None => Ok(cam),
+        };
+    }
+    match (args.eye, args.target) {
+        (Some(eye), Some(target)) => {
+            let width = args.width.unwrap_or(640);
+            let height = args
+                .height
+                .unwrap_or_else(|| (width as f32 * 0.75).round().max(1.0) as u32);
+            Camera::look_at(eye, target, args.up, args.fov_y, width, height)
+        }
+        _ => Err(Error::InvalidInput(
+            "give a camera: --cameras FILE [--camera N], or --eye X,Y,Z --target X,Y,Z".into(),
+        )),
+    }
+}
