@@ -1,7 +1,8 @@
 // Section 7's hit model, shared by every way the ray tracer finds hits (the BVH walk and the
 // tile lists of SPEC section 11, trace_body.glsl; the mixed scenes' rays): a Gaussian's hit on
 // a ray (gaussian_hit: the octagon crossing, or 3DGRT's maximum response), its clip weight
-// (clip_weight, over the ray's visible spans from ray_spans) and the composite of one hit
+// (clip_weight, over the ray's visible spans from ray_spans; hit_clip_weight picks the clip:
+// the frame's, or the hit's object's) and the composite of one hit
 // (add_hit, SPEC section 4's rule). CPU twin: src/reference/ray_hits.rs, the same functions;
 // sharing them is what makes the paths agree to the bit.
 //
@@ -131,6 +132,24 @@ vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d, bool cull, float t_lo, 
     }
     return vec2(t, min(0.99, o * exp(-0.5 * q)));
 }
+
+#ifndef MIXED
+// The clip weight of hit (t, Gaussian g): under the frame's clip (`clip`, whose visible
+// intervals on this ray are `spans`), or, in a frame of objects with clip regions of their own
+// (Renderer::record_objects; TraceParams.objects), under the region of g's object, whose
+// spans are found here (a few planes or a sphere; once per composited hit).
+float hit_clip_weight(TraceParams f, ClipParams clip, vec4 spans, uint g, float t, vec3 e,
+                      vec3 d) {
+    Address regions = address_of_words(f.objects.xy);
+    if (address_is_null(regions)) {
+        return clip_weight(clip, spans, g, t, e, d);
+    }
+    uint region = U32s(address_of_words(f.objects.zw)).v[g];
+    ClipParams own = load_clip_params(ClipParamsRef(address_item(regions, region,
+                                                                  CLIP_PARAMS_BYTES)));
+    return clip_weight(own, ray_spans(own, e, d), g, t, e, d);
+}
+#endif
 
 #ifndef MIXED
 // Composites hit g of `alpha` (its clip weight in) by SPEC section 4's rule: skipped below

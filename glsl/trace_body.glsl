@@ -119,6 +119,9 @@ struct TraceParams {
     uvec4 records;      // TILED: the records' address (lo, hi; tiled_bounds.comp), tiles across
     uvec4 depth_out;    // the depth output's per-pixel (median, sum alpha T z, 0, 0) address
                         // (lo, hi; 0: none), which write_depth turns into the caller's target
+    uvec4 objects;      // without MIXED, objects with clip regions of their own: the regions'
+                        // address (lo, hi; ClipParams each; 0: the frame's one clip), each
+                        // Gaussian's region index's address (lo, hi)
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer TraceParamsRef { TraceParams p; };
 
@@ -445,7 +448,7 @@ void main() {
                     hit_t = at ? kt[k] : hit_t;
                 }
                 float alpha = gaussian_hit(f, g, e, d, cull, t_lo, t_hi).y
-                            * clip_weight(clip, spans, g, hit_t, e, d);
+                            * hit_clip_weight(f, clip, spans, g, hit_t, e, d);
                 last_t = hit_t;
                 last_index = g;
                 flags |= RAY_HAS_LAST;
@@ -593,7 +596,7 @@ void main() {
                 }
                 float alpha = hit_alpha * weight;
 #else
-                float alpha = hit_alpha * clip_weight(clip, spans, g, hit_t, e, d);
+                float alpha = hit_alpha * hit_clip_weight(f, clip, spans, g, hit_t, e, d);
 #endif
                 last_t = hit_t;
                 last_index = g;

@@ -81,7 +81,8 @@ pub(crate) struct ObjectBuffers {
     /// The objects' transforms (`GpuObjectParams`).
     pub params: Buffer,
     /// With clip regions of the objects' own: the regions in world space (`GpuClipParams`
-    /// per object) and each cutoff record's region index (u32 per Gaussian).
+    /// per object), and a u32 per Gaussian: each cutoff record's region index (rasterized
+    /// frames, written by project) or each Gaussian's object's (ray-traced frames).
     pub clips: Option<(Buffer, Buffer)>,
 }
 

@@ -18,7 +18,7 @@ use crate::gpu_types::{GpuClipParams, GpuFrameParams, CUTOFF_RECORD_BYTES};
 use crate::objects::ObjectTransform;
 use crate::options::{RenderOptions, Tracer};
 use crate::raytrace::tiles::RayTiles;
-use crate::raytrace::tracer::RayTracer;
+use crate::raytrace::tracer::{ObjectRegions, RayTracer};
 use crate::scene::Scene;
 use crate::stages::cutoff_tiles::CutoffTiles;
 use crate::stages::depth::DepthStages;
@@ -541,13 +541,6 @@ impl Renderer {
             test.projection.validate()?;
         }
         if options.tracer.is_ray() {
-            if object_clips.is_some() {
-                return Err(Error::InvalidInput(
-                    "objects with clip regions of their own are drawn by the rasterizer so far, \
-                     not the ray tracer"
-                        .into(),
-                ));
-            }
             return self.record_trace(
                 cmd,
                 slot,
@@ -556,6 +549,7 @@ impl Renderer {
                 options,
                 (target, buffer_target),
                 timings,
+                object_clips,
             );
         }
         let (gx, gy) = tile_grid(w, h);
@@ -931,8 +925,9 @@ impl Renderer {
     /// ([`SceneObject::clip`], in its own frame) is clipped by that region carried into the world
     /// by its transform ([`ObjectTransform::region_to_world`]), the others by
     /// `options.clip`'s region; `options.clip` gives every region's mode, weight and band.
-    /// Regions of the objects' own are the rasterizer's so far (not [`Tracer::Ray`]'s), and their
-    /// frames do not classify cutoff pairs by tile. The objects' scenes must stay alive until
+    /// Ray traced ([`Tracer::Ray`], [`Tracer::RayTiles`]), each hit is weighed by its
+    /// Gaussian's object's region (SPEC section 7's clip weight under that region). Frames with
+    /// regions of the objects' own do not classify cutoff pairs by tile. The objects' scenes must stay alive until
     /// the frame completed; the synchronisation contract is `record`'s.
     #[allow(clippy::too_many_arguments)]
     pub fn record_objects(
@@ -1022,7 +1017,27 @@ impl Renderer {
             .record(&self.ctx, cmd, &list, &buffers.merged, &buffers.params)?;
         let frame_clips = match (&buffers.clips, own_clips) {
             (Some((regions, cutoff_regions)), true) => {
-                Some(self.record_object_regions(cmd, objects, options, regions, cutoff_regions))
+                let frame =
+                    self.record_object_regions(cmd, objects, options, regions, cutoff_regions);
+                if options.tracer.is_ray() {
+                    // The ray tracer weighs each hit by its Gaussian's object's region: the
+                    // cutoff records' region indices (which project writes in rasterized
+                    // frames) become per Gaussian its object's, one fill per object.
+                    for (k, &(first, end, _)) in frame.project.objects.iter().enumerate() {
+                        if end > first {
+                            unsafe {
+                                self.ctx.device().cmd_fill_buffer(
+                                    cmd,
+                                    cutoff_regions.raw,
+                                    first as u64 * 4,
+                                    (end - first) as u64 * 4,
+                                    k as u32,
+                                );
+                            }
+                        }
+                    }
+                }
+                Some(frame)
             }
             _ => None,
         };
@@ -1207,6 +1222,7 @@ impl Renderer {
         options: &RenderOptions,
         (target, buffer_target): (&Target, u64),
         timings: Option<&mut PassTimer>,
+        object_clips: Option<&ObjectClipsFrame>,
     ) -> Result<()> {
         let tracer = self.ray_tracer()?;
         let (w, h) = (camera.width, camera.height);
@@ -1360,6 +1376,10 @@ impl Renderer {
             depth.map(|(_, _, limit)| limit),
             tile_lists,
             depth_output.map(|(sums, _, _)| sums),
+            object_clips.map(|o| ObjectRegions {
+                regions: o.regions,
+                of_gaussian: o.project.cutoff_regions,
+            }),
         )?;
         if let Some(f) = slot.resources.as_ref().filter(|_| tiled) {
             // The lists' counters, for FrameSlot::stats (their pairs must have fit).

@@ -1453,7 +1453,7 @@ fn objects_render_as_their_merged_scene() {
         objects_png.to_str().unwrap(),
     ]);
     assert_success(&o);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("3 objects, 2000 Gaussians in one sort"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("3 objects, 2000 Gaussians in one frame"));
     assert_success(&rara(&render_args(
         merged_path.to_str().unwrap(),
         cams_s,
@@ -1464,6 +1464,39 @@ fn objects_render_as_their_merged_scene() {
         image::open(&merged_png).unwrap().to_rgba8(),
     );
     assert_eq!(a, b, "render --object differs from the merged scene");
+    // Ray traced, through the BVH: the same as the merged scene's ray-traced frame.
+    let (objects_ray, merged_ray) = (d.join("objects_ray.png"), d.join("merged_ray.png"));
+    let o = rara(&[
+        "render",
+        shell_s,
+        "--object",
+        &first,
+        "--object",
+        &second,
+        "--cameras",
+        cams_s,
+        "--tracer",
+        "ray",
+        "-o",
+        objects_ray.to_str().unwrap(),
+    ]);
+    assert_success(&o);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ray traced, per ray"));
+    let mut args = render_args(
+        merged_path.to_str().unwrap(),
+        cams_s,
+        merged_ray.to_str().unwrap(),
+    );
+    args.extend(["--tracer", "ray"]);
+    assert_success(&rara(&args));
+    let (a, b) = (
+        image::open(&objects_ray).unwrap().to_rgba8(),
+        image::open(&merged_ray).unwrap().to_rgba8(),
+    );
+    assert_eq!(
+        a, b,
+        "render --object --tracer ray differs from the merged scene"
+    );
 
     // sweep: the same frames as the merged scene's sweep.
     let (so, sm) = (d.join("sweep_objects"), d.join("sweep_merged"));

@@ -67,15 +67,15 @@ pub struct RenderArgs {
 
 /// `render --object ...`: several objects in one frame.
 fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
-    if args.tracer != TracerArg::Raster || args.depth.is_some() || args.repeat > 0 || args.sh_half {
+    if args.depth.is_some() || args.repeat > 0 || args.sh_half {
         return Err(Error::InvalidInput(
-            "--object draws with the rasterizer, without --depth, --repeat or --sh-half so far"
-                .into(),
+            "--object draws without --depth, --repeat or --sh-half so far".into(),
         ));
     }
     let options = RenderOptions {
         background: args.background.unwrap_or(Vec3::ZERO),
         clip: args.clip.build(&[])?,
+        tracer: args.tracer.into(),
         ..RenderOptions::default()
     };
     let output = Output::prepare(&args.output, &["png"])?;
@@ -91,7 +91,12 @@ fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
         let start = std::time::Instant::now();
         let list: Vec<_> = loaded.iter().map(|(s, t)| (s, *t)).collect();
         let merged = rara::objects::merge(&list);
-        let img = rara::reference::render(&merged, camera, &options);
+        let img = if options.tracer.is_ray() {
+            let rt = rara::RayTraceOptions::default();
+            rara::reference::raytrace::render(&merged, camera, &options, &rt).0
+        } else {
+            rara::reference::render(&merged, camera, &options)
+        };
         output.write_png(&img)?;
         println!(
             "wrote {} ({}x{}, CPU reference, {} objects, {count} Gaussians merged, {:.0} ms)",
@@ -109,17 +114,29 @@ fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
     let objects = super::objects::scene_objects(&uploaded, &loaded);
     let (img, stats) = renderer.render_objects(&objects, camera, &options)?;
     output.write_png(&img)?;
+    let what = match &stats.trace {
+        Some(t) => format!(
+            "ray traced, per ray {:.1} hits composited, {:.0} {}",
+            t.walked_per_ray(),
+            t.visits_per_ray(),
+            if t.tiled {
+                "list entries tested"
+            } else {
+                "nodes visited"
+            }
+        ),
+        None => format!(
+            "{} visible ({} cutoff), {} tile intersections",
+            stats.visible, stats.cutoff, stats.intersections
+        ),
+    };
     println!(
-        "wrote {} ({}x{}) on {}: {} objects, {count} Gaussians in one sort, {} visible ({} \
-         cutoff), {} tile intersections",
+        "wrote {} ({}x{}) on {}: {} objects, {count} Gaussians in one frame, {what}",
         args.output.display(),
         camera.width,
         camera.height,
         ctx.info().name,
         objects.len(),
-        stats.visible,
-        stats.cutoff,
-        stats.intersections
     );
     Ok(())
 }

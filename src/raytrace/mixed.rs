@@ -492,6 +492,7 @@ impl MixedTracer {
                             None,
                             None,
                             None,
+                            None,
                         )
                     })??;
                     add_times(&timer, &mut stats)?;

@@ -73,6 +73,9 @@ struct GpuTraceParams {
     records: [u32; 4],
     /// The depth output's per-pixel sums' address (lo, hi; 0: none), unused.
     depth_out: [u32; 4],
+    /// Without MIXED, the objects' own clip regions ([`ObjectRegions`]): the regions' address
+    /// (lo, hi; 0: the frame's one clip), the per-Gaussian region indices' address (lo, hi).
+    objects: [u32; 4],
 }
 
 impl GpuTraceParams {
@@ -98,6 +101,7 @@ impl GpuTraceParams {
             lists: [0; 4],
             records: [0, 0, tile_grid(camera.width, camera.height).0, 0],
             depth_out: [0; 4],
+            objects: [0; 4],
         }
     }
 }
@@ -115,6 +119,16 @@ pub(crate) fn camera_params(
 /// Bytes of the tracer's per-frame parameters (the camera first: `glsl/mixed_spawn.comp` reads
 /// the same buffer's first words).
 pub const TRACE_PARAMS_BYTES: u64 = std::mem::size_of::<GpuTraceParams>() as u64;
+
+/// A frame of several objects with clip regions of their own ([`crate::Renderer::record_objects`]):
+/// each hit is weighed by its Gaussian's object's region instead of the frame's clip.
+#[derive(Clone, Copy, Debug)]
+pub struct ObjectRegions {
+    /// The regions, one `GpuClipParams` per object (world space, the frame's mode and band).
+    pub regions: u64,
+    /// Per Gaussian of the merged scene, the index of its object's region (u32).
+    pub of_gaussian: u64,
+}
 
 /// What a mixed scene's generation hands the tracer ([`RayTracer::record`]): the MIXED
 /// kernels' parameters (whose rays replace the camera's) and the splat objects' clips, and
@@ -896,6 +910,7 @@ impl RayTracer {
         depth_limit: Option<u64>,
         tiles: Option<RayTileLists>,
         depth_sums: Option<u64>,
+        object_regions: Option<ObjectRegions>,
     ) -> Result<()> {
         let n = scene.len();
         let (w, h) = (camera.width, camera.height);
@@ -921,6 +936,11 @@ impl RayTracer {
             return Err(Error::InvalidInput(format!(
                 "ray tracer rounds {rounds:?}: at most {MAX_TRACE_ROUNDS}"
             )));
+        }
+        if mixed.is_some() && object_regions.is_some() {
+            return Err(Error::InvalidInput(
+                "a mixed scene's objects carry their clips in the mixed parameters".into(),
+            ));
         }
         if mixed.is_some() && (depth_limit.is_some() || depth_sums.is_some()) {
             return Err(Error::InvalidInput(
@@ -953,6 +973,10 @@ impl RayTracer {
             let words = |a: u64| [a as u32, (a >> 32) as u32];
             if let Some(sums) = depth_sums {
                 p.depth_out[..2].copy_from_slice(&words(sums));
+            }
+            if let Some(o) = object_regions {
+                p.objects[..2].copy_from_slice(&words(o.regions));
+                p.objects[2..].copy_from_slice(&words(o.of_gaussian));
             }
             if let Some(t) = &tiles {
                 p.lists[..2].copy_from_slice(&words(t.ranges));
@@ -1090,6 +1114,7 @@ impl RayTracer {
                         options,
                         batch..batch + 1,
                         end..next,
+                        None,
                         None,
                         None,
                         None,
