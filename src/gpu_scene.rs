@@ -52,6 +52,10 @@ pub struct GpuScene {
     /// Unique per upload into new buffers: frame slots key their texel views of the scene by
     /// it (a freed buffer's handle may come back).
     pub(crate) id: u64,
+    /// A BVH built once for the ray tracer ([`crate::Renderer::build_still_bvh`]), with the
+    /// octagons' `Q` it was built for: frames with that `Q` copy it in instead of building
+    /// one. Dropped whenever the Gaussians change.
+    pub(crate) still_bvh: Option<(Buffer, f32)>,
 }
 
 /// The next [`GpuScene`] id.
@@ -88,6 +92,7 @@ impl GpuScene {
             sh_precision: precision,
             may_be_flat: false,
             id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            still_bvh: None,
         };
         gpu_scene.upload(scene)?;
         Ok(gpu_scene)
@@ -151,6 +156,7 @@ impl GpuScene {
                         sh_precision: precision,
                         may_be_flat: false,
                         id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+                        still_bvh: None,
                     })
                 }
             };
@@ -240,6 +246,7 @@ impl GpuScene {
             // The objects' transforms scale the scales: a tiny one may come out as 0.
             may_be_flat: true,
             id: NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            still_bvh: None,
         })
     }
 
@@ -262,6 +269,7 @@ impl GpuScene {
         )?;
         self.write_chunk(&mut staging, scene, 0)?;
         self.sh_degree = scene.sh_degree;
+        self.still_bvh = None; // built for the Gaussians that were
         Ok(())
     }
 
@@ -275,6 +283,19 @@ impl GpuScene {
             return Ok(());
         }
         self.upload(scene)
+    }
+
+    /// The nodes of the still BVH built for octagons of `q`, if any.
+    pub(crate) fn still_bvh(&self, q: f32) -> Option<&Buffer> {
+        self.still_bvh
+            .as_ref()
+            .filter(|(_, built)| *built == q)
+            .map(|(b, _)| b)
+    }
+
+    /// Whether a still BVH was built for the scene ([`crate::Renderer::build_still_bvh`]).
+    pub fn has_still_bvh(&self) -> bool {
+        self.still_bvh.is_some()
     }
 
     /// The Gaussians' and the SH coefficients' buffers, and the scene's id.

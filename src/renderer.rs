@@ -290,6 +290,18 @@ impl Renderer {
         Ok(())
     }
 
+    /// Builds the ray tracer's BVH of `scene` once, on the host, for a scene that does not
+    /// move ([`crate::raytrace::still_bvh`]): ray-traced frames of it then copy that tree in
+    /// instead of building an LBVH on the GPU, the same image with fewer nodes per ray. The
+    /// scene drops it when its Gaussians are replaced.
+    pub fn build_still_bvh(
+        &self,
+        scene: &mut GpuScene,
+    ) -> Result<crate::raytrace::still_bvh::StillBvhStats> {
+        let q = crate::options::RayTraceOptions::default().q as f32;
+        self.ray_tracer()?.build_still_bvh(&self.ctx, scene, q)
+    }
+
     /// The ray tracer's kernels, built by the first frame that asks for them.
     fn ray_tracer(&self) -> Result<&RayTracer> {
         if let Some(t) = self.ray_tracer.get() {

@@ -252,3 +252,159 @@ fn tracer_option_in_the_renderer() {
     assert_eq!(rara::metrics::compare(&img, &direct).differing_pixels, 0);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// A still BVH (issue 72: built once on the host by obvhs over the GPU's own proxy boxes)
+/// is a valid tree in the GPU's layout, of lower SAH cost than the LBVH, and gives the LBVH's
+/// image bit for bit: generated scenes (flat and volumetric mixed, a solid) unclipped and
+/// under a rara cutaway, and, when present, plant at 320 px.
+#[test]
+fn a_still_bvh_gives_the_lbvhs_image() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(&ctx).unwrap();
+    let mut cases: Vec<(String, Scene, Camera)> = vec![
+        (
+            "mixed".into(),
+            common::mixed_scene(3000, 1),
+            common::tracer_camera(96),
+        ),
+        (
+            "solid".into(),
+            rara::synth::solid(20000, 2, 2),
+            common::tracer_camera(128),
+        ),
+    ];
+    if let Some((scene, camera)) = common::real_scene_view("plant_capture_sh0", 320) {
+        cases.push(("plant".into(), scene, camera));
+    }
+    let cutaway = Clip {
+        region: Some(
+            ClipRegion::planes(vec![Plane::new(Vec3::new(0.3, -0.2, 0.9), 0.05).unwrap()]).unwrap(),
+        ),
+        mode: rara::ClipMode::Rara,
+        weight: ClipWeight::Mass,
+        ..Clip::default()
+    };
+    for (name, scene, camera) in cases {
+        let mut gpu = renderer.upload(&scene).unwrap();
+        let clips = [
+            ("unclipped", Clip::default()),
+            ("rara cutaway", cutaway.clone()),
+        ];
+        let options = |clip: &Clip| RenderOptions {
+            clip: clip.clone(),
+            tracer: rara::Tracer::Ray,
+            ..RenderOptions::default()
+        };
+        let lbvh: Vec<(image::RgbaImage, u64)> = clips
+            .iter()
+            .map(|(_, clip)| {
+                let (img, stats) = renderer.render(&gpu, &camera, &options(clip)).unwrap();
+                (img, stats.trace.unwrap().node_visits)
+            })
+            .collect();
+        assert!(!gpu.has_still_bvh());
+        let built = renderer.build_still_bvh(&mut gpu).unwrap();
+        assert!(gpu.has_still_bvh());
+        assert!(
+            built.sah < built.lbvh_sah,
+            "{name}: SAH {} against the LBVH's {}",
+            built.sah,
+            built.lbvh_sah
+        );
+        for ((clip_name, clip), (want, lbvh_visits)) in clips.iter().zip(&lbvh) {
+            let (img, stats) = renderer.render(&gpu, &camera, &options(clip)).unwrap();
+            let visits = stats.trace.unwrap().node_visits;
+            eprintln!(
+                "{name}, {clip_name}: SAH {:.1} (LBVH {:.1}), depth {}, built in {:.0} ms; \
+                 node visits {visits} (LBVH {lbvh_visits})",
+                built.sah, built.lbvh_sah, built.depth, built.build_ms
+            );
+            let differ = img
+                .pixels()
+                .zip(want.pixels())
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(
+                differ, 0,
+                "{name}, {clip_name}: pixels differ from the LBVH's image"
+            );
+        }
+        // Replacing the Gaussians drops the tree built for the old ones.
+        gpu.replace(&scene).unwrap();
+        assert!(!gpu.has_still_bvh());
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The still BVH's layout: inner nodes `[0, n - 1)`, each Gaussian in exactly one leaf from
+/// `n - 1` on with its proxy's own box, every inner box the exact union of its children's, and
+/// the split axis's order kept; Gaussians without a proxy (empty boxes) included.
+#[test]
+fn a_still_bvh_is_a_tree_over_every_proxy() {
+    use rara::raytrace::bvh::GpuBvhNode;
+    use rara::raytrace::still_bvh::{depth, still_tree};
+    let b = |lo: [f32; 3], hi: [f32; 3]| GpuBvhNode {
+        lo,
+        hi,
+        ..GpuBvhNode::default()
+    };
+    let mut boxes: Vec<GpuBvhNode> = (0..500)
+        .map(|i| {
+            let x = (i as f32 * 0.37).sin() * 3.0;
+            let y = (i as f32 * 0.11).cos() * 2.0;
+            let z = i as f32 * 0.01;
+            b([x, y, z], [x + 0.2, y + 0.1, z + 0.3])
+        })
+        .collect();
+    for i in [3, 77, 78, 499] {
+        boxes[i] = b([1.0; 3], [-1.0; 3]); // empty
+    }
+    for count in [1usize, 2, 5, 500] {
+        let boxes = &boxes[..count];
+        let (nodes, stats) = still_tree(boxes);
+        let n = count;
+        assert_eq!(nodes.len(), 2 * n - 1);
+        assert_eq!(stats.depth, depth(&nodes));
+        assert!(stats.depth as usize <= n);
+        let mut seen = vec![0u32; n];
+        let mut reached = vec![0u32; 2 * n - 1];
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            reached[i as usize] += 1;
+            let node = nodes[i as usize];
+            if (i as usize) < n - 1 {
+                let (l, r) = node.children();
+                let (a, c) = (nodes[l as usize], nodes[r as usize]);
+                for k in 0..3 {
+                    let lo = match (a.is_empty(), c.is_empty()) {
+                        (true, true) => continue,
+                        (true, false) => c.lo[k],
+                        (false, true) => a.lo[k],
+                        (false, false) => a.lo[k].min(c.lo[k]),
+                    };
+                    let hi = match (a.is_empty(), c.is_empty()) {
+                        (true, false) => c.hi[k],
+                        (false, true) => a.hi[k],
+                        _ => a.hi[k].max(c.hi[k]),
+                    };
+                    assert_eq!((node.lo[k], node.hi[k]), (lo, hi), "node {i} axis {k}");
+                }
+                if let Some(axis) = node.split_axis() {
+                    let centre = |m: &GpuBvhNode| m.lo[axis] + m.hi[axis];
+                    assert!(centre(&a) <= centre(&c), "node {i}: children out of order");
+                }
+                stack.extend([l, r]);
+            } else {
+                let g = node.left as usize;
+                seen[g] += 1;
+                assert_eq!(
+                    (node.lo, node.hi),
+                    (boxes[g].lo, boxes[g].hi),
+                    "leaf of {g}"
+                );
+            }
+        }
+        assert!(seen.iter().all(|&s| s == 1), "{count}: every Gaussian once");
+        assert!(reached.iter().all(|&r| r == 1), "{count}: every node once");
+    }
+}

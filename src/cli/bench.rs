@@ -68,6 +68,10 @@ pub struct BenchArgs {
     /// ray-tiles: also with the tracer's camera rays from tile lists (section 11).
     #[arg(long, value_enum, default_value_t = super::args::TracerArg::Raster)]
     tracer: super::args::TracerArg,
+    /// With the ray tracer: build its BVH once on the host (obvhs, for a scene that does not
+    /// move) instead of an LBVH on the GPU every frame; the same images.
+    #[arg(long)]
+    still_bvh: bool,
 }
 
 /// A benchmark mode of the paper's Table 1.
@@ -233,8 +237,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
-    let gpu_scene =
+    let mut gpu_scene =
         rara::GpuScene::with_sh_precision(&ctx, &scene, super::sh_precision(args.sh_half))?;
+    if args.still_bvh {
+        let s = renderer.build_still_bvh(&mut gpu_scene)?;
+        eprintln!(
+            "bench: still BVH built on the host in {:.0} ms: SAH cost {:.1} (the GPU's LBVH: \
+             {:.1}), depth {}, {} Gaussians without a proxy",
+            s.build_ms, s.sah, s.lbvh_sah, s.depth, s.empty
+        );
+    }
     eprintln!(
         "bench: {} ({} Gaussians, SH {}) at {}x{}, {} frames per mode after {} warm-up, {} render(s) per frame, plane normal ({:.3}, {:.3}, {:.3}) d {d0:.4} -> {d1:.4}",
         path.display(),

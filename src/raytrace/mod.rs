@@ -26,5 +26,6 @@
 
 pub mod bvh;
 pub mod mixed;
+pub mod still_bvh;
 pub mod tiles;
 pub mod tracer;

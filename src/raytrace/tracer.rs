@@ -822,6 +822,33 @@ impl RayTracer {
         self.texel_layout.is_some()
     }
 
+    /// Builds a BVH of `scene` once, on the host ([`super::still_bvh`]: obvhs over the GPU's
+    /// own proxy boxes for octagons of `q`), and keeps it with the scene: its frames copy it in
+    /// instead of building an LBVH (the same image; fewer nodes per ray). Refused for a tree
+    /// deeper than the traversal's stack.
+    pub fn build_still_bvh(
+        &self,
+        ctx: &Context,
+        scene: &mut GpuScene,
+        q: f32,
+    ) -> Result<super::still_bvh::StillBvhStats> {
+        if scene.count == 0 {
+            return Err(Error::InvalidInput("a still BVH of no Gaussians".into()));
+        }
+        let read = self.bvh.build_and_read(ctx, scene, q)?;
+        let (nodes, mut stats) = super::still_bvh::still_tree(&read.boxes);
+        let depth = stats.depth;
+        stats.lbvh_sah = super::still_bvh::sah_cost(&read.nodes);
+        if depth > TRACE_STACK {
+            return Err(Error::InvalidInput(format!(
+                "the still BVH is {depth} deep, past the traversal's stack of {TRACE_STACK}"
+            )));
+        }
+        let buffer = Buffer::from_slice(ctx, "still bvh nodes", &nodes)?;
+        scene.still_bvh = Some((buffer, q));
+        Ok(stats)
+    }
+
     /// Hits a traversal pass collects per ray.
     pub fn k(&self) -> u32 {
         self.k
@@ -994,13 +1021,25 @@ impl RayTracer {
             compute_barrier(ctx, cmd);
             if tiles.is_none() && mixed.map_or(true, |m| m.build_bvh) {
                 timer.begin_pass(cmd, c"bvh build");
-                self.bvh.record(
-                    ctx,
-                    cmd,
-                    scene.gaussians.address,
-                    &bufs.bvh,
-                    options.q as f32,
-                );
+                match scene.still_bvh(options.q as f32) {
+                    // A scene that does not move brings its tree, built once on the host.
+                    Some(nodes) => {
+                        let region = vk::BufferCopy::default().size(nodes.size);
+                        unsafe {
+                            device.cmd_copy_buffer(cmd, nodes.raw, bufs.bvh.nodes.raw, &[region]);
+                        }
+                        compute_barrier(ctx, cmd);
+                    }
+                    None => {
+                        self.bvh.record(
+                            ctx,
+                            cmd,
+                            scene.gaussians.address,
+                            &bufs.bvh,
+                            options.q as f32,
+                        );
+                    }
+                }
                 timer.end_pass(cmd, c"bvh build");
             }
         }
