@@ -323,9 +323,10 @@ impl GpuScene {
         self.sh_degree
     }
 
-    /// Device bytes held by the scene.
+    /// Device bytes held by the scene (with its still BVH, when built: 32 bytes a node,
+    /// `2n - 1` nodes).
     pub fn device_bytes(&self) -> u64 {
-        self.gaussians.size + self.sh.size
+        self.gaussians.size + self.sh.size + self.still_bvh.as_ref().map_or(0, |(b, _)| b.size)
     }
 
     /// Reads the scene back as the kernels see it: the Gaussians' bytes (48 each: centre and

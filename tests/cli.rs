@@ -1285,6 +1285,48 @@ fn render_with_the_ray_tracer() {
         ]),
         &["rara::reference::raytrace"],
     );
+    // --still-bvh: the BVH built once on the host, the same image; only for --tracer ray.
+    let still = dir().join("ray_still.png");
+    let o = rara(&[
+        "render",
+        scene,
+        "--cameras",
+        cams,
+        "--tracer",
+        "ray",
+        "--still-bvh",
+        "--clip-plane",
+        "1,0,0,0",
+        "-o",
+        still.to_str().unwrap(),
+    ]);
+    assert_success(&o);
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("still BVH built on the host"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(
+        image::open(&out).unwrap().to_rgba8(),
+        image::open(&still).unwrap().to_rgba8(),
+        "render --still-bvh differs from the LBVH's image"
+    );
+    for tracer in ["raster", "ray-tiles"] {
+        assert_error(
+            &rara(&[
+                "render",
+                scene,
+                "--cameras",
+                cams,
+                "--tracer",
+                tracer,
+                "--still-bvh",
+                "-o",
+                still.to_str().unwrap(),
+            ]),
+            &["--still-bvh", "--tracer ray"],
+        );
+    }
 }
 
 /// `render --depth`: an EXR of the view depths and a 16-bit PNG of the same depths spread over

@@ -68,8 +68,8 @@ pub struct BenchArgs {
     /// ray-tiles: also with the tracer's camera rays from tile lists (section 11).
     #[arg(long, value_enum, default_value_t = super::args::TracerArg::Raster)]
     tracer: super::args::TracerArg,
-    /// With the ray tracer: build its BVH once on the host (obvhs, for a scene that does not
-    /// move) instead of an LBVH on the GPU every frame; the same images.
+    /// With the ray tracer (and scene files): build its BVH once on the host (obvhs, for a
+    /// scene that does not move) instead of an LBVH on the GPU every frame; the same images.
     #[arg(long)]
     still_bvh: bool,
 }
@@ -206,7 +206,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             .as_deref()
             .map(|p| Output::prepare(p, &["json"]))
             .transpose()?;
-        return super::scene::bench(file, &camera, args.frames, args.warmup, args.sh_half, json);
+        return super::scene::bench(
+            file,
+            &camera,
+            args.frames,
+            args.warmup,
+            args.sh_half,
+            json,
+            args.still_bvh,
+        );
     }
     let path = args.scene.as_ref().expect("clap requires the scene");
     // The outputs are checked before the run, which can take minutes.
@@ -239,13 +247,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut renderer = Renderer::new(&ctx)?;
     let mut gpu_scene =
         rara::GpuScene::with_sh_precision(&ctx, &scene, super::sh_precision(args.sh_half))?;
+    if args.still_bvh && args.tracer == super::args::TracerArg::Raster {
+        return Err(Error::InvalidInput(
+            "bench --still-bvh builds the ray tracer's BVH: give --tracer ray or ray-tiles".into(),
+        ));
+    }
     if args.still_bvh {
-        let s = renderer.build_still_bvh(&mut gpu_scene)?;
-        eprintln!(
-            "bench: still BVH built on the host in {:.0} ms: SAH cost {:.1} (the GPU's LBVH: \
-             {:.1}), depth {}, {} Gaussians without a proxy",
-            s.build_ms, s.sah, s.lbvh_sah, s.depth, s.empty
-        );
+        let built = renderer.build_still_bvh(&mut gpu_scene)?;
+        eprintln!("bench: {}", super::describe_still_bvh(&built));
     }
     eprintln!(
         "bench: {} ({} Gaussians, SH {}) at {}x{}, {} frames per mode after {} warm-up, {} render(s) per frame, plane normal ({:.3}, {:.3}, {:.3}) d {d0:.4} -> {d1:.4}",

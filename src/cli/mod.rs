@@ -46,6 +46,15 @@ pub fn median(values: &mut [f64]) -> f64 {
     }
 }
 
+/// The line that reports a still BVH's build (`--still-bvh`).
+pub fn describe_still_bvh(s: &rara::raytrace::still_bvh::StillBvhStats) -> String {
+    format!(
+        "still BVH built on the host in {:.0} ms: SAH cost {:.1} (the GPU's LBVH: {:.1}), depth \
+         {}, {} Gaussians without a proxy",
+        s.build_ms, s.sah, s.lbvh_sah, s.depth, s.empty
+    )
+}
+
 /// `--sh-half`: how the SH coefficients are stored on the device.
 pub fn sh_precision(half: bool) -> rara::ShPrecision {
     if half {

@@ -51,6 +51,11 @@ pub struct RenderArgs {
     /// image).
     #[arg(long, value_enum, default_value_t = TracerArg::Raster)]
     tracer: TracerArg,
+    /// With --tracer ray (and scene files): build the ray tracer's BVH once on the host
+    /// (obvhs; fewer nodes per ray) instead of an LBVH on the GPU per frame: pays for a scene
+    /// rendered many times (--repeat). The same image.
+    #[arg(long)]
+    still_bvh: bool,
     /// Also write the splats' depth (SPEC section 9): OUT.exr (32-bit float view depth,
     /// infinity where there is none) or OUT.png (16-bit grey, the depths' range spread over
     /// 0..65534, 65535 where there is none; the range is printed). Ray traced, a hit's depth
@@ -67,9 +72,11 @@ pub struct RenderArgs {
 
 /// `render --object ...`: several objects in one frame.
 fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
-    if args.depth.is_some() || args.repeat > 0 || args.sh_half {
+    if args.depth.is_some() || args.repeat > 0 || args.sh_half || args.still_bvh {
         return Err(Error::InvalidInput(
-            "--object draws without --depth, --repeat or --sh-half so far".into(),
+            "--object draws without --depth, --repeat, --sh-half or --still-bvh so far (the \
+             objects' merged scene is made anew each frame)"
+                .into(),
         ));
     }
     let options = RenderOptions {
@@ -164,6 +171,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             args.reference,
             args.sh_half,
             args.repeat,
+            args.still_bvh,
         );
     }
     if !args.objects.is_empty() {
@@ -176,6 +184,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         tracer: args.tracer.into(),
         ..RenderOptions::default()
     };
+    if args.still_bvh && (options.tracer != rara::Tracer::Ray || args.reference) {
+        return Err(Error::InvalidInput(
+            "--still-bvh builds the BVH the GPU ray tracer walks: give --tracer ray (ray-tiles \
+             takes its camera rays from tile lists; the rasterizer and --reference walk no BVH)"
+                .into(),
+        ));
+    }
     if args.reference && options.tracer.is_ray() {
         return Err(Error::InvalidInput(
             "--reference renders with the CPU rasterizer; the CPU ray tracer is the library's \
@@ -253,7 +268,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let precision = super::sh_precision(args.sh_half);
-    let gpu_scene = match scene {
+    let mut gpu_scene = match scene {
         Some(scene) => {
             // Large scenes take seconds to upload and, on a CPU device, to render: say what is
             // going on.
@@ -270,6 +285,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         None => stream_scene(&ctx, scene_path, precision)?,
     };
+    if args.still_bvh {
+        let spinner = ProgressBar::new_spinner().with_message("building the still BVH");
+        spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+        let built = renderer.build_still_bvh(&mut gpu_scene);
+        spinner.finish_and_clear();
+        eprintln!("{}", super::describe_still_bvh(&built?));
+    }
     let spinner = ProgressBar::new_spinner()
         .with_message(format!("rendering {}x{}", camera.width, camera.height));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));

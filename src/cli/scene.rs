@@ -68,7 +68,8 @@ pub struct MixedGpu {
 
 impl MixedGpu {
     /// Builds the kernels and uploads `scene`.
-    pub fn new(ctx: &Context, scene: &MixedScene, sh_half: bool) -> Result<Self> {
+    /// With `still_bvh`, the Gaussians' BVH is built once on the host (`--still-bvh`).
+    pub fn new(ctx: &Context, scene: &MixedScene, sh_half: bool, still_bvh: bool) -> Result<Self> {
         let spinner = ProgressBar::new_spinner().with_message(format!(
             "uploading {} Gaussians and {} triangles to {}",
             scene.gaussians.len(),
@@ -81,7 +82,12 @@ impl MixedGpu {
             Ok(MixedGpu { tracer, scene: s })
         });
         spinner.finish_and_clear();
-        made
+        let mut made = made?;
+        if still_bvh && scene.gaussians.len() > 0 {
+            let built = made.tracer.build_still_bvh(&mut made.scene)?;
+            eprintln!("{}", super::describe_still_bvh(&built));
+        }
+        Ok(made)
     }
 
     /// Splat objects of the scene.
@@ -135,6 +141,7 @@ pub fn render(
     reference: bool,
     sh_half: bool,
     repeat: usize,
+    still_bvh: bool,
 ) -> Result<()> {
     let scene = load_mixed(path, background)?;
     let pixels = camera.width as u64 * camera.height as u64;
@@ -157,7 +164,7 @@ pub fn render(
         return Ok(());
     }
     let ctx = Context::from_env()?;
-    let gpu = MixedGpu::new(&ctx, &scene, sh_half)?;
+    let gpu = MixedGpu::new(&ctx, &scene, sh_half, still_bvh)?;
     drop(scene);
     let spinner = ProgressBar::new_spinner()
         .with_message(format!("ray tracing {}x{}", camera.width, camera.height));
@@ -197,10 +204,11 @@ pub fn bench(
     warmup: u32,
     sh_half: bool,
     json: Option<super::output::Output>,
+    still_bvh: bool,
 ) -> Result<()> {
     let scene = load_mixed(path, None)?;
     let ctx = Context::from_env()?;
-    let gpu = MixedGpu::new(&ctx, &scene, sh_half)?;
+    let gpu = MixedGpu::new(&ctx, &scene, sh_half, still_bvh)?;
     let pixels = camera.width as u64 * camera.height as u64;
     for _ in 0..warmup {
         gpu.render(camera)?;

@@ -210,7 +210,10 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let uploaded = super::objects::upload(&renderer, &objects)?;
     let scene_objects = super::objects::scene_objects(&uploaded, &objects);
     let (gpu_scene, mut mixed_gpu) = match &mixed {
-        Some(m) => (None, Some(super::scene::MixedGpu::new(&ctx, m, false)?)),
+        Some(m) => (
+            None,
+            Some(super::scene::MixedGpu::new(&ctx, m, false, false)?),
+        ),
         None if !scene_objects.is_empty() => (None, None),
         None => (Some(renderer.upload(scene)?), None),
     };

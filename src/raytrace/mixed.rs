@@ -353,6 +353,17 @@ impl MixedTracer {
         })
     }
 
+    /// Builds the BVH of `scene`'s Gaussians once, on the host, for a scene that does not
+    /// move ([`super::still_bvh`]); every generation's rays then walk it. The same image.
+    pub fn build_still_bvh(
+        &self,
+        scene: &mut GpuMixedScene,
+    ) -> Result<super::still_bvh::StillBvhStats> {
+        let q = RayTraceOptions::default().q as f32;
+        self.tracer
+            .build_still_bvh(&self.ctx, &mut scene.gaussians, q)
+    }
+
     /// The tracer's k-buffer size.
     pub fn k(&self) -> u32 {
         self.tracer.k()
