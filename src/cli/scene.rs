@@ -83,7 +83,7 @@ impl MixedGpu {
         });
         spinner.finish_and_clear();
         let mut made = made?;
-        if still_bvh && scene.gaussians.len() > 0 {
+        if still_bvh && !scene.gaussians.is_empty() {
             let built = made.tracer.build_still_bvh(&mut made.scene)?;
             eprintln!("{}", super::describe_still_bvh(&built));
         }
