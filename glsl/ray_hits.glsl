@@ -133,21 +133,26 @@ vec2 gaussian_hit(TraceParams f, uint i, vec3 e, vec3 d, bool cull, float t_lo, 
     return vec2(t, min(0.99, o * exp(-0.5 * q)));
 }
 
+// The clip weight of hit (t, Gaussian g) under region `region` of the array at `regions`
+// (ClipParams each): an object's own (Renderer::record_objects), or a mixed scene's splat
+// object's. The region's visible spans on the ray are found here, once per composited hit.
+float region_clip_weight(Address regions, uint region, uint g, float t, vec3 e, vec3 d) {
+    ClipParams own = load_clip_params(ClipParamsRef(address_item(regions, region,
+                                                                  CLIP_PARAMS_BYTES)));
+    return clip_weight(own, ray_spans(own, e, d), g, t, e, d);
+}
+
 #ifndef MIXED
 // The clip weight of hit (t, Gaussian g): under the frame's clip (`clip`, whose visible
 // intervals on this ray are `spans`), or, in a frame of objects with clip regions of their own
-// (Renderer::record_objects; TraceParams.objects), under the region of g's object, whose
-// spans are found here (a few planes or a sphere; once per composited hit).
+// (Renderer::record_objects; TraceParams.objects), under the region of g's object.
 float hit_clip_weight(TraceParams f, ClipParams clip, vec4 spans, uint g, float t, vec3 e,
                       vec3 d) {
     Address regions = address_of_words(f.objects.xy);
     if (address_is_null(regions)) {
         return clip_weight(clip, spans, g, t, e, d);
     }
-    uint region = U32s(address_of_words(f.objects.zw)).v[g];
-    ClipParams own = load_clip_params(ClipParamsRef(address_item(regions, region,
-                                                                  CLIP_PARAMS_BYTES)));
-    return clip_weight(own, ray_spans(own, e, d), g, t, e, d);
+    return region_clip_weight(regions, U32s(address_of_words(f.objects.zw)).v[g], g, t, e, d);
 }
 #endif
 

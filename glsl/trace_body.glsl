@@ -590,9 +590,8 @@ void main() {
                 if (object == 0u) {
                     weight = clip_weight(clip, spans, g, hit_t, e, d);
                 } else {
-                    ClipParams own = load_clip_params(ClipParamsRef(
-                        address_item(mixed_address(mixed.refs2.zw), object, CLIP_PARAMS_BYTES)));
-                    weight = clip_weight(own, ray_spans(own, e, d), g, hit_t, e, d);
+                    weight = region_clip_weight(mixed_address(mixed.refs2.zw), object, g, hit_t,
+                                                e, d);
                 }
                 float alpha = hit_alpha * weight;
 #else

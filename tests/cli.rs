@@ -1480,65 +1480,51 @@ fn objects_render_as_their_merged_scene() {
     );
     let first = format!("{hair_s}:0.4,0.1,0,10,90,-20,0.7");
     let second = format!("{hair_s}:-0.5,0,0.2");
-    let objects_png = d.join("objects.png");
-    let merged_png = d.join("objects_merged.png");
-    let o = rara(&[
-        "render",
-        shell_s,
-        "--object",
-        &first,
-        "--object",
-        &second,
-        "--cameras",
-        cams_s,
-        "-o",
-        objects_png.to_str().unwrap(),
-    ]);
-    assert_success(&o);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("3 objects, 2000 Gaussians in one frame"));
-    assert_success(&rara(&render_args(
-        merged_path.to_str().unwrap(),
-        cams_s,
-        merged_png.to_str().unwrap(),
-    )));
-    let (a, b) = (
-        image::open(&objects_png).unwrap().to_rgba8(),
-        image::open(&merged_png).unwrap().to_rgba8(),
-    );
-    assert_eq!(a, b, "render --object differs from the merged scene");
-    // Ray traced, through the BVH: the same as the merged scene's ray-traced frame.
-    let (objects_ray, merged_ray) = (d.join("objects_ray.png"), d.join("merged_ray.png"));
-    let o = rara(&[
-        "render",
-        shell_s,
-        "--object",
-        &first,
-        "--object",
-        &second,
-        "--cameras",
-        cams_s,
-        "--tracer",
-        "ray",
-        "-o",
-        objects_ray.to_str().unwrap(),
-    ]);
-    assert_success(&o);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("ray traced, per ray"));
-    let mut args = render_args(
-        merged_path.to_str().unwrap(),
-        cams_s,
-        merged_ray.to_str().unwrap(),
-    );
-    args.extend(["--tracer", "ray"]);
-    assert_success(&rara(&args));
-    let (a, b) = (
-        image::open(&objects_ray).unwrap().to_rgba8(),
-        image::open(&merged_ray).unwrap().to_rgba8(),
-    );
-    assert_eq!(
-        a, b,
-        "render --object --tracer ray differs from the merged scene"
-    );
+    // Rasterized and ray traced (through the BVH): the merged scene's frame each time.
+    for tracer in ["raster", "ray"] {
+        let objects_png = d.join(format!("objects_{tracer}.png"));
+        let merged_png = d.join(format!("objects_merged_{tracer}.png"));
+        let o = rara(&[
+            "render",
+            shell_s,
+            "--object",
+            &first,
+            "--object",
+            &second,
+            "--cameras",
+            cams_s,
+            "--tracer",
+            tracer,
+            "-o",
+            objects_png.to_str().unwrap(),
+        ]);
+        assert_success(&o);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            stdout.contains("3 objects, 2000 Gaussians in one frame"),
+            "{stdout}"
+        );
+        assert_eq!(
+            stdout.contains("ray traced, per ray"),
+            tracer == "ray",
+            "{stdout}"
+        );
+        let mut args = render_args(
+            merged_path.to_str().unwrap(),
+            cams_s,
+            merged_png.to_str().unwrap(),
+        );
+        args.extend(["--tracer", tracer]);
+        assert_success(&rara(&args));
+        let (a, b) = (
+            image::open(&objects_png).unwrap().to_rgba8(),
+            image::open(&merged_png).unwrap().to_rgba8(),
+        );
+        assert_eq!(
+            a, b,
+            "render --object --tracer {tracer} differs from the merged scene"
+        );
+    }
 
     // sweep: the same frames as the merged scene's sweep.
     let (so, sm) = (d.join("sweep_objects"), d.join("sweep_merged"));

@@ -19,7 +19,6 @@ use crate::constants::{
     TRACE_COUNTER_PASSES, TRACE_COUNTER_VISITS_HI, TRACE_COUNTER_VISITS_LO, TRACE_COUNTER_WALKED,
     TRACE_COUNTER_WORDS, TRACE_HIST_BINS, TRACE_STACK,
 };
-use crate::error::VkContext;
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::options::RayTraceOptions;
@@ -752,19 +751,7 @@ enum RayKind {
 
 /// The layout of the texel set: uniform texel buffers at [`TEXEL_BINDINGS`].
 fn texel_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
-    let bindings: Vec<vk::DescriptorSetLayoutBinding> = TEXEL_BINDINGS
-        .iter()
-        .map(|&b| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(b)
-                .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::COMPUTE)
-        })
-        .collect();
-    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-    unsafe { ctx.device().create_descriptor_set_layout(&info, None) }
-        .vk("vkCreateDescriptorSetLayout")
+    crate::stages::texel_set_layout(ctx, TEXEL_BINDINGS)
 }
 
 impl RayTracer {

@@ -212,7 +212,16 @@ pub fn spread_stride(n: u32) -> u32 {
 /// `R32G32B32A32_UINT` for floats, `R32G32_UINT` for half floats). The kernels declare all
 /// twelve, with these numbers, in `glsl/frame_texels.glsl`.
 pub fn frame_texels_set_layout(ctx: &Context) -> Result<vk::DescriptorSetLayout> {
-    let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..FRAME_TEXEL_BINDINGS)
+    texel_set_layout(ctx, 0..FRAME_TEXEL_BINDINGS)
+}
+
+/// A descriptor set layout of uniform texel buffers at `bindings`, for compute.
+pub(crate) fn texel_set_layout(
+    ctx: &Context,
+    bindings: impl IntoIterator<Item = u32>,
+) -> Result<vk::DescriptorSetLayout> {
+    let bindings: Vec<vk::DescriptorSetLayoutBinding> = bindings
+        .into_iter()
         .map(|b| {
             vk::DescriptorSetLayoutBinding::default()
                 .binding(b)
