@@ -3,7 +3,7 @@
 // a ray (gaussian_hit: the octagon crossing, or 3DGRT's maximum response), its clip weight
 // (clip_weight, over the ray's visible spans from ray_spans; hit_clip_weight picks the clip:
 // the frame's, or the hit's object's) and the composite of one hit
-// (add_hit, SPEC section 4's rule). CPU twin: src/reference/ray_hits.rs, the same functions;
+// (add_hit, SPEC section 4's rule, with mixed scenes' shadows). CPU twin: src/reference/ray_hits.rs, the same functions;
 // sharing them is what makes the paths agree to the bit.
 //
 // Included by trace_body.glsl after what these read: the push constants `pc` (the Gaussians
@@ -156,24 +156,42 @@ float hit_clip_weight(TraceParams f, ClipParams clip, vec4 spans, uint g, float 
 }
 #endif
 
-#ifndef MIXED
-// Composites hit g of `alpha` (its clip weight in) by SPEC section 4's rule: skipped below
-// 1/255; ends the ray where T would fall below 1e-4; else adds g's colour and lowers T.
-// With the depth output, a composited hit of view depth z adds alpha T z to `depth.y`, and
-// sets `depth.x` (the median) where 1 - T first reaches 0.5 (SPEC sections 9 and 11).
-void add_hit(TraceParams f, uint g, float alpha, vec3 e, float z, inout vec3 colour,
-             inout float T, inout uint flags, inout vec2 depth) {
+// Composites hit g at t on the ray e + t d, of `alpha` (its clip weight in), by SPEC section
+// 4's rule: skipped below 1/255; ends the ray where T would fall below 1e-4; else adds g's
+// colour and lowers T. With the depth output, a composited hit of view depth z = t along adds
+// alpha T z to `depth.y`, and sets `depth.x` (the median) where 1 - T first reaches 0.5 (SPEC
+// sections 9 and 11). With MIXED and `shade`, the colour is darkened where a mesh shadows the
+// Gaussian's point on the ray from the lights (section 8); the shadow queries' node visits
+// count as steps.
+#ifdef MIXED
+#define MIXED_PARAMS , MixedParams mixed
+#define MIXED_ARGS , mixed
+#else
+#define MIXED_PARAMS
+#define MIXED_ARGS
+#endif
+void add_hit(TraceParams f, uint g, float alpha, vec3 e, vec3 d, float t, float along,
+             inout vec3 colour, inout float T, inout uint flags, inout vec2 depth,
+             inout uint steps, bool shade MIXED_PARAMS) {
     if (alpha >= 1.0 / 255.0) {
         float next_t = T * (1.0 - alpha);
         if (next_t < 1e-4) {
             flags |= RAY_DONE | RAY_ENDED;
         } else {
             vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
-            colour += alpha * T * eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
+            vec3 c = eval_sh(pc.sh, g * f.size.w, normalize(mu - e));
+#ifdef MIXED
+            if (shade) {
+                uint mesh_visits = 0u;
+                c = shadow_factor(mixed, e + t * d, mesh_visits) * c;
+                steps += mesh_visits;
+            }
+#endif
+            colour += alpha * T * c;
+            float z = t * along;
             depth.y += alpha * T * z;
             depth.x = next_t <= 0.5 && isinf(depth.x) ? z : depth.x;
             T = next_t;
         }
     }
 }
-#endif

@@ -253,6 +253,7 @@ void main() {
             info.z |= RAY_DONE;
         }
     }
+    vec2 depth = vec2(0.0);  // a mixed scene's rays have no depth output
 #else
     // The depth test against an engine's depth (SPEC section 9), as the view depth per pixel
     // that the depth prepare pass left at f.mixed.zw (0: none). A hit at t lies at view depth
@@ -453,7 +454,8 @@ void main() {
                 last_index = g;
                 flags |= RAY_HAS_LAST;
                 ++k_pos;
-                add_hit(f, g, alpha, e, hit_t * along, colour, T, flags, depth);
+                add_hit(f, g, alpha, e, d, hit_t, along, colour, T, flags, depth, steps, shade
+                        MIXED_ARGS);
             }
             compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
         }
@@ -601,26 +603,8 @@ void main() {
                 last_index = g;
                 flags |= RAY_HAS_LAST;
                 ++k_pos;
-#ifdef MIXED
-                if (alpha >= 1.0 / 255.0) {
-                    float next_t = T * (1.0 - alpha);
-                    if (next_t < 1e-4) {
-                        flags |= RAY_DONE | RAY_ENDED;
-                    } else {
-                        vec3 mu = trace_gaussian(pc.gaussians, g).pos_opacity.xyz;
-                        float factor = 1.0;
-                        if (shade) {
-                            uint mesh_visits = 0u;
-                            factor = shadow_factor(mixed, e + hit_t * d, mesh_visits);
-                            steps += mesh_visits;
-                        }
-                        colour += alpha * T * (factor * eval_sh(pc.sh, g * f.size.w, normalize(mu - e)));
-                        T = next_t;
-                    }
-                }
-#else
-                add_hit(f, g, alpha, e, hit_t * along, colour, T, flags, depth);
-#endif
+                add_hit(f, g, alpha, e, d, hit_t, along, colour, T, flags, depth, steps, shade
+                        MIXED_ARGS);
             }
             compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
         }
