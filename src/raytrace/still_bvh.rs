@@ -4,8 +4,10 @@
 //! ([`super::bvh::GpuBvhNode`]: inner nodes `[0, n - 1)` with node 0 the root, then the `n`
 //! leaves, one Gaussian each). The tracer then copies it in instead of building its LBVH
 //! each frame; the traversal is the same code. The leaves' boxes are the GPU's own floats and
-//! every inner box the exact union of its children's, so a ray meets the same leaves and finds
-//! the same hits in the same order: the image is the LBVH's, bit for bit.
+//! every inner box the exact union of its children's, so a ray meets the same leaves; it may
+//! find them in another order (and find some again in another pass), but its buffer keeps the
+//! nearest hits whatever the order, so it composites the same hits in the same order: the
+//! image is the LBVH's, bit for bit.
 
 use std::time::Instant;
 
