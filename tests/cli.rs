@@ -1249,19 +1249,15 @@ fn flatten_mesh_and_render_sequence() {
 fn render_with_the_ray_tracer() {
     let (scene, cams) = good_scene();
     let (scene, cams) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    // `render SCENE --cameras CAMS` with `args`, into `out`.
+    let render = |args: &[&str], out: &std::path::Path| {
+        let mut all = vec!["render", scene, "--cameras", cams];
+        all.extend(args);
+        all.extend(["-o", out.to_str().unwrap()]);
+        rara(&all)
+    };
     let out = dir().join("ray.png");
-    let o = rara(&[
-        "render",
-        scene,
-        "--cameras",
-        cams,
-        "--tracer",
-        "ray",
-        "--clip-plane",
-        "1,0,0,0",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = render(&["--tracer", "ray", "--clip-plane", "1,0,0,0"], &out);
     assert_success(&o);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -1272,34 +1268,15 @@ fn render_with_the_ray_tracer() {
     );
     assert!(out.is_file());
     assert_error(
-        &rara(&[
-            "render",
-            scene,
-            "--cameras",
-            cams,
-            "--tracer",
-            "ray",
-            "--reference",
-            "-o",
-            out.to_str().unwrap(),
-        ]),
+        &render(&["--tracer", "ray", "--reference"], &out),
         &["rara::reference::raytrace"],
     );
     // --still-bvh: the BVH built once on the host, the same image; only for --tracer ray.
     let still = dir().join("ray_still.png");
-    let o = rara(&[
-        "render",
-        scene,
-        "--cameras",
-        cams,
-        "--tracer",
-        "ray",
-        "--still-bvh",
-        "--clip-plane",
-        "1,0,0,0",
-        "-o",
-        still.to_str().unwrap(),
-    ]);
+    let o = render(
+        &["--tracer", "ray", "--still-bvh", "--clip-plane", "1,0,0,0"],
+        &still,
+    );
     assert_success(&o);
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("still BVH built on the host"),
@@ -1313,17 +1290,7 @@ fn render_with_the_ray_tracer() {
     );
     for tracer in ["raster", "ray-tiles"] {
         assert_error(
-            &rara(&[
-                "render",
-                scene,
-                "--cameras",
-                cams,
-                "--tracer",
-                tracer,
-                "--still-bvh",
-                "-o",
-                still.to_str().unwrap(),
-            ]),
+            &render(&["--tracer", tracer, "--still-bvh"], &still),
             &["--still-bvh", "--tracer ray"],
         );
     }
