@@ -167,7 +167,13 @@ void add_wide(uint lo, uint v) {
 void main() {
     TraceParams f = pc.params.p;
     uint w = f.size.x;
+    // The push constants the loops use, read once: gallivm reads a push constant in a loop
+    // again on every iteration, as a load per SIMD lane (Mesa 22 has no loop-invariant code
+    // motion), which was a fifth of a node visit (PERFORMANCE.md).
     uint stride = pc.stride;
+    uint budget = pc.budget;
+    U32s stacks = pc.stacks;
+    BvhTree nodes = pc.nodes;
     uint item = linear_index();
     // The ray's index in its batch (`local`, which the per-ray buffers are indexed by) and in
     // the image (`ray`).
@@ -219,7 +225,7 @@ void main() {
         colour_t = vec4(0.0, 0.0, 0.0, 1.0);
         info = uvec4(0u, 0u, 0u, 1u);   // one node on the stack: the root
         more = uvec4(0u);
-        pc.stacks.v[local] = 0u;
+        stacks.v[local] = 0u;
     } else {
         colour_t = load_vec4(state_at);
         info = load_uvec4(address_plus(state_at, 16u));
@@ -310,11 +316,11 @@ void main() {
     uvec2 list = UVec2s(address_of_words(f.lists.xy)).v[tile];
     U32s list_gaussians = U32s(address_of_words(f.lists.zw));
     Address records = address_of_words(f.records.xy);
-    uint pos = pc.round == 0u ? list.x : pc.stacks.v[local];
-    uint restart = pc.round == 0u ? NO_NODE : pc.stacks.v[stride + local];
+    uint pos = pc.round == 0u ? list.x : stacks.v[local];
+    uint restart = pc.round == 0u ? NO_NODE : stacks.v[stride + local];
     // The list position of this pass's first hit: a hit pushed out of the full buffer lies
     // at or after it.
-    uint pass_first = pc.round == 0u ? NO_NODE : pc.stacks.v[2u * stride + local];
+    uint pass_first = pc.round == 0u ? NO_NODE : stacks.v[2u * stride + local];
 #endif
     if (pc.round != 0u) {
         [[unroll]] for (uint q = 0u; q < uint(TRACE_K) / 4u; ++q) {
@@ -340,6 +346,8 @@ void main() {
     }
     uint found_now = 0u;
     uint visits_now = 0u;
+    uint tests_now = 0u;    // Gaussians tested for a hit
+    bool overflowed = false;
     uint steps = 0u;
 #ifdef TILED
     // A pass walks the list from `pos`; each entry's hit joins the buffer of the K nearest
@@ -348,8 +356,8 @@ void main() {
     // it), and then composites the buffer in order. A hit it found no room for, or one a
     // nearer hit pushed out, is left to the next pass, which starts at the first entry whose
     // hit was left out; a pass that left nothing out ends the ray.
-    while ((flags & RAY_DONE) == 0u && steps < pc.budget) {
-        while ((flags & RAY_COMPOSITING) == 0u && steps < pc.budget) {
+    while ((flags & RAY_DONE) == 0u && steps < budget) {
+        while ((flags & RAY_COMPOSITING) == 0u && steps < budget) {
             ++steps;
             uint g = NO_LEAF;
             bool inside = false;
@@ -385,6 +393,7 @@ void main() {
                 // Only a pixel inside the silhouette's rectangle can hit it (most of a tile's
                 // pixels are not): the lanes that are test together.
                 ++visits_now;
+                ++tests_now;
                 vec2 hit = gaussian_hit(f, g, e, d, cull, t_lo, t_hi);
                 bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
                 bool room = k_count < uint(TRACE_K) || before(hit.x, g, kt[TRACE_K - 1], ki[TRACE_K - 1]);
@@ -422,7 +431,7 @@ void main() {
             }
         }
         bool compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
-        while (subgroupAny(compositing) && compositing && steps < pc.budget) {
+        while (subgroupAny(compositing) && compositing && steps < budget) {
             ++steps;
             // Compositing the pass's hits in order (SPEC section 4's rule).
             if (k_pos == k_count) {
@@ -461,22 +470,22 @@ void main() {
         }
     }
 #else
-    while ((flags & RAY_DONE) == 0u && steps < pc.budget) {
+    while ((flags & RAY_DONE) == 0u && steps < budget) {
         // A step is a node visit (or the end of a pass) or a composited hit. A CPU driver
         // runs every branch under a mask and every loop body at least once, so the loops nest
         // by how often their work is needed, each run by the lanes that need it together: an
         // iteration of this loop is a pass; in it, the traversal tests one leaf per iteration,
         // and between two leaves runs over inner nodes alone (Aila and Laine's
         // "while-while"); then the pass's hits are composited (PERFORMANCE.md).
-        while ((flags & RAY_COMPOSITING) == 0u && steps < pc.budget) {
+        while ((flags & RAY_COMPOSITING) == 0u && steps < budget) {
             uint leaf = NO_LEAF;
-            while ((flags & RAY_COMPOSITING) == 0u && leaf == NO_LEAF && steps < pc.budget) {
+            while ((flags & RAY_COMPOSITING) == 0u && leaf == NO_LEAF && steps < budget) {
                 ++steps;
                 // The node to visit: the near child the last visit went on to, else the stack's
                 // top (so a descent costs one stack write, for the far child, and no read).
                 if (node == NO_NODE && sp > 0u) {
                     --sp;
-                    node = pc.stacks.v[sp * stride + local];
+                    node = stacks.v[sp * stride + local];
                 }
                 if (node == NO_NODE) {
                     // The pass is over: composite what it found.
@@ -489,7 +498,7 @@ void main() {
                 } else {
                     ++visits_now;
                     uvec4 w0, w1;
-                    load_node(pc.nodes, node, w0, w1);
+                    load_node(nodes, node, w0, w1);
                     vec3 lo = uintBitsToFloat(w0.xyz);
                     vec3 hi = uintBitsToFloat(w1.xyz);
                     vec3 a0 = (lo - e) * inv_d;
@@ -521,17 +530,19 @@ void main() {
                         uint axis = w1.w >> BVH_AXIS_SHIFT;
                         uint right = w1.w & BVH_CHILD_MASK;
                         bool right_first = axis < 3u && d[min(axis, 2u)] < 0.0;
-                        pc.stacks.v[sp * stride + local] = right_first ? w0.w : right;
+                        stacks.v[sp * stride + local] = right_first ? w0.w : right;
                         ++sp;
                         node = right_first ? right : w0.w;
                     } else if (enters) {
                         // Cannot happen (depth <= 63 keeps at most 63 entries): counted, never
-                        // silent.
-                        atomicAdd(pc.counters.v[TRACE_COUNTER_OVERFLOW], 1u);
+                        // silent (after the loop: an atomic in it costs every iteration a loop
+                        // over the lanes on gallivm, taken or not).
+                        overflowed = true;
                     }
                 }
             }
             if (subgroupAny(leaf != NO_LEAF) && leaf != NO_LEAF) {
+                ++tests_now;
                 uint g = leaf;
                 vec2 hit = gaussian_hit(f, g, e, d, cull, t_lo, t_hi);
                 bool after = (flags & RAY_HAS_LAST) == 0u || before(last_t, last_index, hit.x, g);
@@ -561,7 +572,7 @@ void main() {
             }
         }
         bool compositing = (flags & RAY_COMPOSITING) != 0u && (flags & RAY_DONE) == 0u;
-        while (subgroupAny(compositing) && compositing && steps < pc.budget) {
+        while (subgroupAny(compositing) && compositing && steps < budget) {
             ++steps;
             // Compositing the pass's hits in order (SPEC section 4's rule).
             if (k_pos == k_count) {
@@ -616,6 +627,10 @@ void main() {
         atomicAdd(pc.counters.v[TRACE_COUNTER_FOUND], found_now);
     }
     add_wide(TRACE_COUNTER_VISITS_LO, visits_now);
+    add_wide(TRACE_COUNTER_TESTS_LO, tests_now);
+    if (overflowed) {
+        atomicAdd(pc.counters.v[TRACE_COUNTER_OVERFLOW], 1u);
+    }
     // The pixel's (C, T) after every round, so that a frame cut short by its rounds still
     // shows what its rays composited so far.
 #ifdef MIXED
@@ -640,12 +655,12 @@ void main() {
     // Still live: onto the next round's list, with its state (the node it was going on to
     // back on its stack).
 #ifdef TILED
-    pc.stacks.v[local] = pos;
-    pc.stacks.v[stride + local] = restart;
-    pc.stacks.v[2u * stride + local] = pass_first;
+    stacks.v[local] = pos;
+    stacks.v[stride + local] = restart;
+    stacks.v[2u * stride + local] = pass_first;
 #else
     if (node != NO_NODE) {
-        pc.stacks.v[sp * stride + local] = node;
+        stacks.v[sp * stride + local] = node;
         ++sp;
     }
 #endif

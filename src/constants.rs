@@ -263,8 +263,14 @@ pub const TRACE_COUNTER_PASSES: u32 = 4;
 pub const TRACE_COUNTER_VISITS_LO: u32 = 5;
 /// See [`TRACE_COUNTER_VISITS_LO`].
 pub const TRACE_COUNTER_VISITS_HI: u32 = 6;
+/// Ray tracer counter slots: Gaussians tested for a hit over all rays (the leaves a BVH pass
+/// reached; with tile lists, the entries whose rectangle holds the pixel), a low word and its
+/// carry word.
+pub const TRACE_COUNTER_TESTS_LO: u32 = 7;
+/// See [`TRACE_COUNTER_TESTS_LO`].
+pub const TRACE_COUNTER_TESTS_HI: u32 = 8;
 /// Words of the ray tracer's counters; its per-ray histograms follow them.
-pub const TRACE_COUNTER_WORDS: u32 = 8;
+pub const TRACE_COUNTER_WORDS: u32 = 10;
 /// Bins of each of the ray tracer's per-ray histograms (hits composited, hits found, passes);
 /// the last bin holds that many or more.
 pub const TRACE_HIST_BINS: u32 = 1024;
@@ -383,6 +389,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TRACE_COUNTER_PASSES", TRACE_COUNTER_PASSES),
     ("TRACE_COUNTER_VISITS_LO", TRACE_COUNTER_VISITS_LO),
     ("TRACE_COUNTER_VISITS_HI", TRACE_COUNTER_VISITS_HI),
+    ("TRACE_COUNTER_TESTS_LO", TRACE_COUNTER_TESTS_LO),
+    ("TRACE_COUNTER_TESTS_HI", TRACE_COUNTER_TESTS_HI),
     ("TRACE_COUNTER_WORDS", TRACE_COUNTER_WORDS),
     ("TRACE_HIST_BINS", TRACE_HIST_BINS),
     ("CLIP_PARAMS_BYTES", CLIP_PARAMS_BYTES),

@@ -622,6 +622,7 @@ struct TraceSummary {
     passes: f64,
     p99_passes: f64,
     visits: f64,
+    tests: f64,
     rounds: f64,
 }
 
@@ -670,6 +671,7 @@ impl ModeResult {
             passes: per(&|t| t.passes_per_ray()),
             p99_passes: per(&|t| t.p99_passes as f64),
             visits: per(&|t| t.visits_per_ray()),
+            tests: per(&|t| t.tests_per_ray()),
             rounds: per(&|t| t.rounds as f64),
         })
     }
@@ -686,14 +688,14 @@ fn print_trace_table(results: &[ModeResult]) {
         return;
     }
     println!(
-        "| {:<16} | {:>9} | {:>9} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>9} | {:>4} | {:>6} | {:>10} |",
-        "ray tracer", "build ms", "trace ms", "Mrays/s", "hits/ray", "hits p99", "found", "passes", "pass p99", "steps/ray", "K", "rounds", "ray/raster"
+        "| {:<16} | {:>9} | {:>9} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>9} | {:>8} | {:>4} | {:>6} | {:>10} |",
+        "ray tracer", "build ms", "trace ms", "Mrays/s", "hits/ray", "hits p99", "found", "passes", "pass p99", "steps/ray", "tests", "K", "rounds", "ray/raster"
     );
-    println!("|{}|", ["---"; 13].join("|"));
+    println!("|{}|", ["---"; 14].join("|"));
     for (r, t) in rows {
         let ratio = paired_tracer_ratio(results, r.mode, r.tracer);
         println!(
-            "| {:<16} | {:>9.1} | {:>9.1} | {:>9.3} | {:>8.1} | {:>8.0} | {:>8.1} | {:>8.2} | {:>8.0} | {:>9.0} | {:>4.0} | {:>6.0} | {:>10} |",
+            "| {:<16} | {:>9.1} | {:>9.1} | {:>9.3} | {:>8.1} | {:>8.0} | {:>8.1} | {:>8.2} | {:>8.0} | {:>9.0} | {:>8.0} | {:>4.0} | {:>6.0} | {:>10} |",
             r.name(),
             t.bvh_ms,
             t.trace_ms,
@@ -704,6 +706,7 @@ fn print_trace_table(results: &[ModeResult]) {
             t.passes,
             t.p99_passes,
             t.visits,
+            t.tests,
             t.k,
             t.rounds,
             ratio.map_or("-".to_string(), |x| format!("{x:.2}"))
@@ -806,6 +809,7 @@ fn json_report(
                 "passes_per_ray": t.passes,
                 "passes_per_ray_p99": t.p99_passes,
                 "node_visits_per_ray": t.visits,
+                "gaussians_tested_per_ray": t.tests,
                 "camera_rays": if r.tracer == rara::Tracer::RayTiles { "tiles" } else { "bvh" },
                 "k": t.k,
                 "tile_pairs": t.pairs,

@@ -320,9 +320,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     set.commit()?;
     if let Some(t) = &stats.trace {
         let (visited, built) = if t.tiled {
-            ("list entries tested", "tile lists built")
+            ("list entries tested".to_string(), "tile lists built")
         } else {
-            ("nodes visited", "BVH build")
+            (
+                format!("nodes visited ({:.0} Gaussians tested)", t.tests_per_ray()),
+                "BVH build",
+            )
         };
         println!(
             "wrote {} ({}x{}) on {}: ray traced, per ray {:.1} hits composited (p99 {}), {:.1} \

@@ -16,8 +16,9 @@ use crate::camera::tile_grid;
 use crate::camera::Camera;
 use crate::constants::{
     TILE_SIZE, TRACE_COUNTER_CAPPED, TRACE_COUNTER_FOUND, TRACE_COUNTER_OVERFLOW,
-    TRACE_COUNTER_PASSES, TRACE_COUNTER_VISITS_HI, TRACE_COUNTER_VISITS_LO, TRACE_COUNTER_WALKED,
-    TRACE_COUNTER_WORDS, TRACE_HIST_BINS, TRACE_STACK,
+    TRACE_COUNTER_PASSES, TRACE_COUNTER_TESTS_HI, TRACE_COUNTER_TESTS_LO, TRACE_COUNTER_VISITS_HI,
+    TRACE_COUNTER_VISITS_LO, TRACE_COUNTER_WALKED, TRACE_COUNTER_WORDS, TRACE_HIST_BINS,
+    TRACE_STACK,
 };
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
@@ -184,6 +185,10 @@ pub struct TraceFrameStats {
     /// ([`TraceBuffers::tiled`]), the list entries tested (an entry a later pass tests again
     /// counts again).
     pub node_visits: u64,
+    /// Gaussians tested for a hit over all rays: the leaves BVH passes reached (each a
+    /// Gaussian whose proxy's box the ray enters), or the list entries whose rectangle holds
+    /// the pixel (then the same as `node_visits`).
+    pub gaussian_tests: u64,
     /// The 99th percentile over the rays of hits walked, hits found and passes.
     pub p99_walked: u32,
     /// See `p99_walked`.
@@ -224,6 +229,11 @@ impl TraceFrameStats {
     /// Mean node visits per ray.
     pub fn visits_per_ray(&self) -> f64 {
         self.node_visits as f64 / self.rays.max(1) as f64
+    }
+
+    /// Mean Gaussians tested for a hit per ray.
+    pub fn tests_per_ray(&self) -> f64 {
+        self.gaussian_tests as f64 / self.rays.max(1) as f64
     }
 }
 
@@ -476,6 +486,7 @@ impl TraceBuffers {
             hits_found: slot(TRACE_COUNTER_FOUND),
             passes: slot(TRACE_COUNTER_PASSES),
             node_visits: slot(TRACE_COUNTER_VISITS_LO) | slot(TRACE_COUNTER_VISITS_HI) << 32,
+            gaussian_tests: slot(TRACE_COUNTER_TESTS_LO) | slot(TRACE_COUNTER_TESTS_HI) << 32,
             p99_walked: p99(&hist[..b]),
             p99_found: p99(&hist[b..2 * b]),
             p99_passes: p99(&hist[2 * b..]),
