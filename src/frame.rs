@@ -110,7 +110,9 @@ pub struct FrameMemory {
     pub fixed: u64,
     /// The ray tracer's BVH ([`crate::Tracer::Ray`] frames): per Gaussian its proxy box
     /// (32 B), Morton sort (16 B and histograms) and leaf node (32 B), per inner node 32 B,
-    /// per node its parent (4 B), per inner node an arrival count (4 B).
+    /// per node its parent (4 B), per inner node an arrival count (4 B). 0 where no frame
+    /// built one: a scene with a still BVH ([`crate::GpuScene::still_bvh_bytes`]) is walked
+    /// where it lies, and camera rays from tile lists walk no tree.
     pub bvh: u64,
     /// The ray tracer's per-ray buffers: per ray of a batch (at most
     /// [`crate::raytrace::tracer::TRACE_BATCH_RAYS`]) its state (48 B), stack (256 B), k-buffer

@@ -53,9 +53,9 @@ pub struct GpuScene {
     /// it (a freed buffer's handle may come back).
     pub(crate) id: u64,
     /// A BVH built once for the ray tracer ([`crate::Renderer::build_still_bvh`]), with the
-    /// octagons' `Q` it was built for: frames with that `Q` copy it in instead of building
-    /// one. Dropped whenever the Gaussians change.
-    pub(crate) still_bvh: Option<(Buffer, f32)>,
+    /// octagons' `Q` it was built for and an id unique to it: frames with that `Q` walk it
+    /// instead of building one. Dropped whenever the Gaussians change.
+    still_bvh: Option<(Buffer, f32, u64)>,
 }
 
 /// The next [`GpuScene`] id.
@@ -285,12 +285,19 @@ impl GpuScene {
         self.upload(scene)
     }
 
-    /// The nodes of the still BVH built for octagons of `q`, if any.
-    pub(crate) fn still_bvh(&self, q: f32) -> Option<&Buffer> {
+    /// The nodes of the still BVH built for octagons of `q`, if any, with the tree's id
+    /// (unique in the process: frame slots key their texel view of the nodes by it).
+    pub(crate) fn still_bvh(&self, q: f32) -> Option<(&Buffer, u64)> {
         self.still_bvh
             .as_ref()
-            .filter(|(_, built)| *built == q)
-            .map(|(b, _)| b)
+            .filter(|(_, built, _)| *built == q)
+            .map(|(b, _, id)| (b, *id))
+    }
+
+    /// Keeps `nodes`, a BVH of the scene's Gaussians for octagons of `q`, with the scene.
+    pub(crate) fn set_still_bvh(&mut self, nodes: Buffer, q: f32) {
+        let id = NEXT_SCENE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.still_bvh = Some((nodes, q, id));
     }
 
     /// Whether a still BVH was built for the scene ([`crate::Renderer::build_still_bvh`]).
@@ -326,7 +333,12 @@ impl GpuScene {
     /// Device bytes held by the scene (with its still BVH, when built: 32 bytes a node,
     /// `2n - 1` nodes).
     pub fn device_bytes(&self) -> u64 {
-        self.gaussians.size + self.sh.size + self.still_bvh.as_ref().map_or(0, |(b, _)| b.size)
+        self.gaussians.size + self.sh.size + self.still_bvh_bytes()
+    }
+
+    /// Device bytes of the still BVH (0 without one), counted in [`GpuScene::device_bytes`].
+    pub fn still_bvh_bytes(&self) -> u64 {
+        self.still_bvh.as_ref().map_or(0, |(b, ..)| b.size)
     }
 
     /// Reads the scene back as the kernels see it: the Gaussians' bytes (48 each: centre and

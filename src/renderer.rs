@@ -291,7 +291,7 @@ impl Renderer {
     }
 
     /// Builds the ray tracer's BVH of `scene` once, on the host, for a scene that does not
-    /// move ([`crate::raytrace::still_bvh`]): ray-traced frames of it then copy that tree in
+    /// move ([`crate::raytrace::still_bvh`]): ray-traced frames of it then walk that tree
     /// instead of building an LBVH on the GPU, the same image with fewer nodes per ray. The
     /// scene drops it when its Gaussians are replaced.
     pub fn build_still_bvh(

@@ -329,6 +329,22 @@ fn a_still_bvh_gives_the_lbvhs_image() {
                 "{name}, {clip_name}: pixels differ from the LBVH's image"
             );
         }
+        // A renderer whose frames all walk the still tree makes no LBVH buffers: the tree's
+        // memory is the scene's 32-byte nodes alone.
+        let mut fresh = Renderer::new(&ctx).unwrap();
+        let (img, _) = fresh.render(&gpu, &camera, &options(&clips[0].1)).unwrap();
+        assert!(
+            img == lbvh[0].0,
+            "{name}: a fresh renderer's still-BVH image"
+        );
+        let memory = fresh.headless_memory();
+        assert_eq!(memory.bvh, 0, "{name}: LBVH buffers made for a still scene");
+        assert!(memory.trace_per_ray > 0);
+        assert_eq!(
+            gpu.still_bvh_bytes(),
+            (2 * scene.len() as u64 - 1) * 32,
+            "{name}: the still tree's bytes"
+        );
         // Replacing the Gaussians drops the tree built for the old ones.
         gpu.replace(&scene).unwrap();
         assert!(!gpu.has_still_bvh());

@@ -107,7 +107,7 @@ pub fn describe_memory(scene: &GpuScene, frame: &FrameMemory) -> String {
         frame.per_intersection as f64 / pairs as f64,
         mb(frame.per_pixel),
         mb(frame.fixed),
-    ) + &describe_trace_memory(frame)
+    ) + &describe_trace_memory(scene, frame)
 }
 
 /// The process's peak resident memory so far, from Linux's `/proc/self/status` (`VmHWM`), as
@@ -130,17 +130,28 @@ pub fn describe_peak_host_memory() -> Option<String> {
 }
 
 /// The ray tracer's part of [`describe_memory`], empty before its first frame.
-fn describe_trace_memory(frame: &FrameMemory) -> String {
-    if frame.bvh == 0 {
+fn describe_trace_memory(scene: &GpuScene, frame: &FrameMemory) -> String {
+    if frame.trace_per_ray == 0 {
         return String::new();
     }
     let n = frame.bvh_gaussians.max(1);
+    let bvh = if frame.bvh > 0 {
+        format!(
+            "BVH {} ({:.1} B/Gaussian: {} nodes of 32 B, proxies, Morton sort)",
+            mb(frame.bvh),
+            frame.bvh as f64 / n as f64,
+            2 * n - 1
+        )
+    } else if scene.has_still_bvh() {
+        format!(
+            "the scene's still BVH, walked where it lies ({:.1} B/Gaussian, counted with the scene)",
+            scene.still_bvh_bytes() as f64 / scene.len().max(1) as f64
+        )
+    } else {
+        "no BVH".to_string()
+    };
     format!(
-        "; ray tracer: BVH {} ({:.1} B/Gaussian: {} nodes of 32 B, proxies, Morton sort) + per \
-         ray {} ({:.0} B/ray)",
-        mb(frame.bvh),
-        frame.bvh as f64 / n as f64,
-        2 * n - 1,
+        "; ray tracer: {bvh} + per ray {} ({:.0} B/ray)",
         mb(frame.trace_per_ray),
         frame.trace_per_ray as f64 / frame.trace_rays.max(1) as f64,
     )
@@ -160,6 +171,7 @@ pub fn memory_json(scene: &GpuScene, frame: &FrameMemory) -> serde_json::Value {
         "frame_per_pixel_bytes": frame.per_pixel,
         "frame_fixed_bytes": frame.fixed,
         "bvh_bytes": frame.bvh,
+        "still_bvh_bytes": scene.still_bvh_bytes(),
         "bvh_bytes_per_gaussian": frame.bvh as f64 / frame.bvh_gaussians.max(1) as f64,
         "bvh_nodes": (2 * frame.bvh_gaussians).saturating_sub(1),
         "bvh_node_bytes": 32,

@@ -2,8 +2,8 @@
 //! `obvhs` (PLOC, then reinsertion to lower its SAH cost) over the very proxy boxes the GPU
 //! build makes (`glsl/bvh_proxies.comp`, read back), and laid out as the GPU's tree
 //! ([`super::bvh::GpuBvhNode`]: inner nodes `[0, n - 1)` with node 0 the root, then the `n`
-//! leaves, one Gaussian each). The tracer then copies it in instead of building its LBVH
-//! each frame; the traversal is the same code. The leaves' boxes are the GPU's own floats and
+//! leaves, one Gaussian each). The tracer's frames then walk it where it lies (no LBVH
+//! buffers, no pass) instead of building an LBVH each frame; the traversal is the same code. The leaves' boxes are the GPU's own floats and
 //! every inner box the exact union of its children's, so a ray meets the same leaves; it may
 //! find them in another order (and find some again in another pass), but its buffer keeps the
 //! nearest hits whatever the order, so it composites the same hits in the same order: the

@@ -270,8 +270,10 @@ pub struct TraceBuffers {
     pub batch_rays: u32,
     /// See `batch_rays`.
     pub batches: u32,
-    /// The BVH.
-    pub bvh: BvhBuffers,
+    /// The per-frame LBVH's buffers, made by the first frame that builds one: frames of a
+    /// scene with a still BVH walk the scene's tree where it lies, and camera rays from tile
+    /// lists need no tree.
+    bvh: Option<BvhBuffers>,
     params: Buffer,
     clip: Buffer,
     rays: Buffer,
@@ -303,8 +305,19 @@ struct TraceTexels {
     set: vk::DescriptorSet,
     /// Views of the nodes, the Gaussians, the coefficients.
     views: [vk::BufferView; 3],
+    /// What the node view is of ([`NodeSource`]).
+    nodes_of: NodeSource,
     /// The scene the Gaussian and coefficient views are of.
     scene_id: u64,
+}
+
+/// Whose BVH nodes a frame walks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum NodeSource {
+    /// The frame slot's own LBVH, built per frame.
+    Lbvh,
+    /// The scene's still BVH with this id ([`GpuScene::still_bvh`]).
+    Still(u64),
 }
 
 /// Bindings of the texel set ([`TraceTexels`]).
@@ -369,7 +382,7 @@ impl TraceBuffers {
             tiled,
             batch_rays: batch as u32,
             batches: batches as u32,
-            bvh: tracer.bvh.buffers(ctx, gaussians)?,
+            bvh: None,
             params: Buffer::new(
                 ctx,
                 "trace params",
@@ -426,9 +439,18 @@ impl TraceBuffers {
             && self.tiled == tiled
     }
 
-    /// Device bytes of the BVH (which scale with the Gaussians).
+    /// Device bytes of the per-frame LBVH (which scale with the Gaussians; 0 before a frame
+    /// built one).
     pub fn bvh_bytes(&self) -> u64 {
-        self.bvh.device_bytes()
+        self.bvh.as_ref().map_or(0, BvhBuffers::device_bytes)
+    }
+
+    /// The per-frame LBVH's buffers, made now if they were not yet.
+    fn lbvh(&mut self, build: &BvhBuild) -> Result<&BvhBuffers> {
+        if self.bvh.is_none() {
+            self.bvh = Some(build.buffers(&self.ctx, self.gaussians)?);
+        }
+        Ok(self.bvh.as_ref().expect("made above"))
     }
 
     /// Device bytes that scale with the rays: per pixel its state, per ray of a batch its
@@ -517,12 +539,20 @@ impl TraceBuffers {
         &mut self,
         layout: vk::DescriptorSetLayout,
         scene: &GpuScene,
+        still: Option<(&Buffer, u64)>,
     ) -> Result<Option<vk::DescriptorSet>> {
+        let (nodes, nodes_of) = match still {
+            Some((nodes, id)) => (nodes, NodeSource::Still(id)),
+            None => match &self.bvh {
+                Some(lbvh) => (&lbvh.nodes, NodeSource::Lbvh),
+                None => return Err(Error::InvalidInput("ray tracer: no BVH to walk".into())),
+            },
+        };
         let (gaussians, sh, scene_id) = scene.buffers();
         let (sh_format, sh_bytes) = crate::stages::sh_texel(scene.sh_precision());
         let rgba32 = vk::Format::R32G32B32A32_UINT;
         let viewed = [
-            (&self.bvh.nodes, rgba32, 16u64),
+            (nodes, rgba32, 16u64),
             (gaussians, rgba32, 16),
             (sh, sh_format, sh_bytes),
         ];
@@ -541,20 +571,19 @@ impl TraceBuffers {
                 pool,
                 set: sets[0],
                 views: [vk::BufferView::null(); 3],
+                nodes_of: NodeSource::Lbvh,
                 scene_id: u64::MAX,
             });
         }
         let t = self.texels.as_mut().expect("made above");
-        // The node view is made once; the scene's when the scene changes (a freed scene's
-        // buffer handles may come back, so they are keyed by the scene's id).
-        let first = if t.views[0] == vk::BufferView::null() {
-            0
-        } else if t.scene_id != scene_id {
-            1
-        } else {
-            return Ok(Some(t.set));
-        };
-        for i in first..3 {
+        // Each view is made again when what it is of changes (a freed buffer's handle may come
+        // back, so they are keyed by the scene's and the still tree's ids, not by handle).
+        let stale = [
+            t.views[0] == vk::BufferView::null() || t.nodes_of != nodes_of,
+            t.scene_id != scene_id,
+            t.scene_id != scene_id,
+        ];
+        for i in (0..3).filter(|&i| stale[i]) {
             let (buffer, format, bytes) = viewed[i];
             let view = write_texel_view(
                 &self.ctx,
@@ -570,6 +599,7 @@ impl TraceBuffers {
             }
             t.views[i] = view;
         }
+        t.nodes_of = nodes_of;
         t.scene_id = scene_id;
         Ok(Some(t.set))
     }
@@ -821,8 +851,8 @@ impl RayTracer {
     }
 
     /// Builds a BVH of `scene` once, on the host ([`super::still_bvh`]: obvhs over the GPU's
-    /// own proxy boxes for octagons of `q`), and keeps it with the scene: its frames copy it in
-    /// instead of building an LBVH (the same image; fewer nodes per ray). Refused for a tree
+    /// own proxy boxes for octagons of `q`), and keeps it with the scene: its frames walk it
+    /// where it lies instead of building an LBVH (the same image; fewer nodes per ray). Refused for a tree
     /// deeper than the traversal's stack.
     pub fn build_still_bvh(
         &self,
@@ -843,7 +873,7 @@ impl RayTracer {
             )));
         }
         let buffer = Buffer::from_slice(ctx, "still bvh nodes", &nodes)?;
-        scene.still_bvh = Some((buffer, q));
+        scene.set_still_bvh(buffer, q);
         Ok(stats)
     }
 
@@ -1017,34 +1047,28 @@ impl RayTracer {
                 }
             }
             compute_barrier(ctx, cmd);
-            if tiles.is_none() && mixed.map_or(true, |m| m.build_bvh) {
+            // A scene that does not move brings its tree, built once on the host: its rays
+            // walk it where it lies, and nothing is built.
+            let still = scene.still_bvh(options.q as f32).is_some();
+            if tiles.is_none() && mixed.map_or(true, |m| m.build_bvh) && !still {
                 timer.begin_pass(cmd, c"bvh build");
-                match scene.still_bvh(options.q as f32) {
-                    // A scene that does not move brings its tree, built once on the host.
-                    Some(nodes) => {
-                        let region = vk::BufferCopy::default().size(nodes.size);
-                        unsafe {
-                            device.cmd_copy_buffer(cmd, nodes.raw, bufs.bvh.nodes.raw, &[region]);
-                        }
-                        compute_barrier(ctx, cmd);
-                    }
-                    None => {
-                        self.bvh.record(
-                            ctx,
-                            cmd,
-                            scene.gaussians.address,
-                            &bufs.bvh,
-                            options.q as f32,
-                        );
-                    }
-                }
+                let lbvh = bufs.lbvh(&self.bvh)?;
+                self.bvh
+                    .record(ctx, cmd, scene.gaussians.address, lbvh, options.q as f32);
                 timer.end_pass(cmd, c"bvh build");
             }
         }
+        // The tree the rays walk (none for camera rays from tile lists).
+        let still = scene.still_bvh(options.q as f32);
+        let nodes_address = match (&tiles, still) {
+            (Some(_), _) => 0,
+            (None, Some((nodes, _))) => nodes.address,
+            (None, None) => bufs.lbvh(&self.bvh)?.nodes.address,
+        };
         let degree = scene.sh_degree().min(3) as usize;
         let set = match (&tiles, self.texel_layout) {
             (Some(t), _) => t.texels,
-            (None, Some(layout)) => bufs.texel_set(layout, scene)?,
+            (None, Some(layout)) => bufs.texel_set(layout, scene, still)?,
             (None, None) => None,
         };
         let ray_kind = match (mixed, tiles) {
@@ -1059,7 +1083,7 @@ impl RayTracer {
             params: bufs.params.address,
             gaussians: gaussians.address,
             sh: sh.address,
-            nodes: bufs.bvh.nodes.address,
+            nodes: nodes_address,
             rays: bufs.rays.address,
             stacks: bufs.stacks.address,
             kbuf: bufs.kbuf.address,
