@@ -864,3 +864,164 @@ fn a_frame_of_two_batches_matches_the_cpu_reference() {
     let (gpu, cpu) = both(&showcase(Clip::default()), &camera);
     common::check_images("mixed showcase, two batches", &gpu, &cpu, 45.0, 255);
 }
+
+/// A scene file's `camera` entry (look_at, inria, file): `render --scene` without camera
+/// options renders what the same camera on the command line renders, to the byte; the command
+/// line overrides it, `--width` resizes it, and a bad or missing camera is a clear error.
+#[test]
+fn a_scene_files_camera_is_the_command_lines() {
+    let dir = common::tempdir("mixed_scene_camera");
+    let splats = common::mixed_scene(400, 7);
+    rara::ply::write_ply(
+        &splats,
+        dir.join("s.ply"),
+        rara::ply::PlyEncoding::BinaryLittleEndian,
+    )
+    .unwrap();
+    let (eye, target) = (Vec3::new(0.4, -0.9, -3.5), Vec3::ZERO);
+    let look = rara::Camera::look_at(eye, target, Vec3::NEG_Y, 40.0, 96, 64).unwrap();
+    let other = rara::Camera::look_at(
+        Vec3::new(-1.0, -0.5, -3.0),
+        target,
+        Vec3::NEG_Y,
+        55.0,
+        80,
+        60,
+    )
+    .unwrap();
+    // Both cameras as an INRIA cameras.json (rotation rows as written).
+    let inria = |c: &rara::Camera, id: usize| {
+        let r = c.rotation.transpose().to_cols_array_2d();
+        format!(
+            r#"{{"id": {id}, "img_name": "x", "width": {}, "height": {}, "position": {:?}, "rotation": {:?}, "fx": {}, "fy": {}}}"#,
+            c.width,
+            c.height,
+            c.position.to_array(),
+            r,
+            c.fx,
+            c.fy
+        )
+    };
+    let cams = write(
+        &dir,
+        "cams.json",
+        &format!("[{}, {}]", inria(&look, 0), inria(&other, 1)),
+    );
+    let scene = |camera: &str| {
+        let extra = if camera.is_empty() {
+            String::new()
+        } else {
+            format!(r#", "camera": {camera}"#)
+        };
+        format!(r#"{{ "splats": [{{ "path": "s.ply" }}]{extra} }}"#)
+    };
+    let plain = write(&dir, "plain.json", &scene(""));
+    let rara = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let render = |file: &std::path::Path, extra: &[&str], name: &str| {
+        let out = dir.join(format!("{name}.png"));
+        let mut args = vec![
+            "render",
+            "--scene",
+            file.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let run = rara(&args);
+        assert!(
+            run.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        image::open(&out).unwrap().to_rgba8()
+    };
+    let cams_s = cams.to_str().unwrap();
+    let eye_args = [
+        "--eye",
+        "0.4,-0.9,-3.5",
+        "--target",
+        "0,0,0",
+        "--fov-y",
+        "40",
+        "--width",
+        "96",
+        "--height",
+        "64",
+    ];
+    let by_eye = render(&plain, &eye_args, "by_eye");
+    let by_file_1 = render(&plain, &["--cameras", cams_s, "--camera", "1"], "by_file_1");
+    assert_ne!(by_eye, by_file_1, "the two cameras see different images");
+    // The look_at form, its defaults (up -Y) and its numbers as the command line's.
+    let look_at = write(
+        &dir,
+        "look_at.json",
+        &scene(
+            r#"{ "look_at": { "eye": [0.4, -0.9, -3.5], "target": [0, 0, 0], "fov_y_deg": 40, "width": 96, "height": 64 } }"#,
+        ),
+    );
+    assert!(render(&look_at, &[], "look_at") == by_eye, "look_at");
+    // An INRIA camera written out, and camera 1 of a cameras.json.
+    let inria_file = write(
+        &dir,
+        "inria.json",
+        &scene(&format!(r#"{{ "inria": {} }}"#, inria(&look, 0))),
+    );
+    assert!(render(&inria_file, &[], "inria") == by_eye, "inria");
+    let from_file = write(
+        &dir,
+        "file.json",
+        &scene(r#"{ "file": { "path": "cams.json", "index": 1 } }"#),
+    );
+    assert!(render(&from_file, &[], "file") == by_file_1, "file");
+    // The command line overrides the file's camera; --width resizes it.
+    assert!(
+        render(&from_file, &eye_args, "override") == by_eye,
+        "override"
+    );
+    let half = render(&look_at, &["--width", "48"], "half");
+    assert_eq!((half.width(), half.height()), (48, 32));
+    // The parsed camera is Camera::look_at's.
+    let parsed = rara::mixed::file::SceneFile::read(&look_at)
+        .unwrap()
+        .camera(&look_at)
+        .unwrap();
+    assert_eq!(parsed, Some(look));
+    // Errors name the entry, and no camera at all names the three ways to give one.
+    for (text, wanted) in [
+        (
+            r#"{ "look_at": { "eye": [0, 0, 0], "target": [0, 0, 0] } }"#,
+            "camera.look_at: --eye and --target must differ",
+        ),
+        (
+            r#"{ "file": { "path": "cams.json", "index": 5 } }"#,
+            "camera index 5 is out of range",
+        ),
+        (
+            r#"{ "file": { "path": "nope.json" } }"#,
+            "camera.file.path: no such file",
+        ),
+        (r#"{ "orbit": {} }"#, "camera: unknown variant `orbit`"),
+        ("", "a \"camera\" entry in"),
+    ] {
+        let bad = write(&dir, "bad.json", &scene(text));
+        let out = dir.join("bad.png");
+        let run = rara(&[
+            "render",
+            "--scene",
+            bad.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{text}: rendered");
+        assert!(
+            stderr.contains(wanted),
+            "{text}: '{stderr}' does not name '{wanted}'"
+        );
+    }
+}

@@ -89,12 +89,7 @@ pub fn parse_color(s: &str) -> std::result::Result<Vec3, String> {
 /// look-at camera; an error naming both ways when neither is given.
 pub fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
     if let Some(path) = &args.cameras {
-        let cam = Camera::load_one(path, args.camera)?;
-        return match args.width {
-            Some(w) => cam.resized(w, args.height),
-            None if args.height.is_some() => cam.resized(cam.width, args.height),
-            None => Ok(cam),
-        };
+        return sized(args, Camera::load_one(path, args.camera)?);
     }
     match (args.eye, args.target) {
         (Some(eye), Some(target)) => {
@@ -107,5 +102,32 @@ pub fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
         _ => Err(Error::InvalidInput(
             "give a camera: --cameras FILE [--camera N], or --eye X,Y,Z --target X,Y,Z".into(),
         )),
+    }
+}
+
+/// `cam` at the width and height `args` give, if they give any (the aspect ratio kept when
+/// only the width is given).
+fn sized(args: &CameraArgs, cam: Camera) -> Result<Camera> {
+    match args.width {
+        Some(w) => cam.resized(w, args.height),
+        None if args.height.is_some() => cam.resized(cam.width, args.height),
+        None => Ok(cam),
+    }
+}
+
+/// The camera of a scene file's frame: the command line's (`--cameras` or `--eye`) where it
+/// gives one, else the file's `camera` entry (read from `file`; `--width` and `--height`
+/// still apply), else an error naming all three.
+pub fn resolve_scene_file_camera(args: &CameraArgs, file: &std::path::Path) -> Result<Camera> {
+    if args.cameras.is_some() || args.eye.is_some() {
+        return resolve_camera(args);
+    }
+    match rara::mixed::file::SceneFile::read(file)?.camera(file)? {
+        Some(cam) => sized(args, cam),
+        None => Err(Error::InvalidInput(format!(
+            "give a camera: --cameras FILE [--camera N], --eye X,Y,Z --target X,Y,Z, or a \
+             \"camera\" entry in {} (docs/CLI.md, \"Scene files\")",
+            file.display()
+        ))),
     }
 }

@@ -12,7 +12,7 @@ use rara::timing::{PassTimer, PassTiming};
 use rara::vk::Buffer;
 use rara::{Context, Error, FrameStats, RenderOptions, Renderer, Result};
 
-use super::args::{resolve_camera, CameraArgs};
+use super::args::{resolve_camera, resolve_scene_file_camera, CameraArgs};
 use super::clip_args::ClipArgs;
 use super::load::load_scene;
 use super::median;
@@ -196,7 +196,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(n) = args.sort {
         return bench_sort(n);
     }
-    let camera = resolve_camera(&args.camera)?;
+    let camera = match &args.scene_file {
+        Some(file) => resolve_scene_file_camera(&args.camera, file)?,
+        None => resolve_camera(&args.camera)?,
+    };
     if let Some(file) = &args.scene_file {
         if !args.clip.is_empty() {
             return Err(super::scene::no_clip_options("clip options"));

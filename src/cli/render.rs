@@ -8,7 +8,7 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rara::{Camera, Context, Error, RenderOptions, Renderer, Result};
 
-use super::args::{parse_color, resolve_camera, CameraArgs, TracerArg};
+use super::args::{parse_color, resolve_camera, resolve_scene_file_camera, CameraArgs, TracerArg};
 use super::clip_args::{describe, ClipArgs};
 use super::load::{load_scene, stream_scene, warn_oversized};
 use super::output::{Output, Outputs};
@@ -151,7 +151,10 @@ fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
 /// Renders the frame `args` describe and writes it (and its depth, when asked).
 pub fn run(args: &RenderArgs) -> Result<()> {
     // Everything that can be checked before the (possibly long) load and render is.
-    let camera = resolve_camera(&args.camera)?;
+    let camera = match &args.scene_file {
+        Some(file) => resolve_scene_file_camera(&args.camera, file)?,
+        None => resolve_camera(&args.camera)?,
+    };
     if let Some(file) = &args.scene_file {
         if !args.clip.is_empty() {
             return Err(super::scene::no_clip_options("clip options"));

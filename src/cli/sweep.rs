@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rara::clip::{Clip, ClipMode, Plane};
 use rara::{Context, Error, RenderOptions, Renderer, Result, Scene};
 
-use super::args::{resolve_camera, CameraArgs};
+use super::args::{resolve_camera, resolve_scene_file_camera, CameraArgs};
 use super::clip_args::{describe, ClipArgs};
 use super::load::load_scene;
 use super::output::{Output, Outputs};
@@ -135,7 +135,10 @@ pub fn default_range(scene: &Scene, n: Vec3) -> (f32, f32) {
 
 /// Runs the sweep.
 pub fn run(args: &SweepArgs) -> Result<()> {
-    let camera = resolve_camera(&args.camera)?;
+    let camera = match &args.scene_file {
+        Some(file) => resolve_scene_file_camera(&args.camera, file)?,
+        None => resolve_camera(&args.camera)?,
+    };
     let objects_path = PathBuf::from(format!(
         "{} objects",
         args.objects.len() + args.scene.is_some() as usize

@@ -11,8 +11,16 @@
 //!   "lights": [{ "point": { "position": [0, -2, 0], "intensity": [4, 4, 4] } },
 //!              { "directional": { "direction": [0, 1, 0], "intensity": [1, 1, 1] } }],
 //!   "ambient": [0.2, 0.2, 0.2], "background": [0, 0, 0], "max_depth": 8,
-//!   "shadow_strength": 0.75 }
+//!   "shadow_strength": 0.75,
+//!   "camera": { "look_at": { "eye": [0, -1, -4], "target": [0, 0, 0], "fov_y_deg": 50,
+//!                            "width": 640, "height": 480 } } }
 //! ```
+//!
+//! The camera (optional; `--cameras` or `--eye` override it) is one of `look_at` (eye,
+//! target, optional up, default `[0, -1, 0]`, vertical field of view `fov_y_deg`, default 50,
+//! width and height, default 640x480), `inria` (one camera as an INRIA `cameras.json` writes
+//! it: width, height, position, rotation rows, fx, fy; its id and img_name are ignored) or
+//! `file` (camera `index`, default 0, of a `cameras.json` at `path`).
 //!
 //! Paths are relative to the scene file; one that starts with `$REAL/` is in the folder of
 //! real scenes (`$RARA_REAL_DATA`, else `../shared/data/real` from the working directory or
@@ -20,8 +28,10 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::{Mat3, Vec3};
 use serde::Deserialize;
 
+use crate::camera::Camera;
 use crate::clip::ClipFile;
 use crate::error::{Error, Result};
 
@@ -49,6 +59,57 @@ pub struct SceneFile {
     pub max_depth: Option<u32>,
     /// Darkening of a Gaussian a mesh shadows (default 0.75).
     pub shadow_strength: Option<f32>,
+    /// The camera frames are rendered from unless the command line gives one.
+    pub camera: Option<CameraEntry>,
+}
+
+/// `camera`: a look-at camera, an INRIA camera written out, or one of a cameras.json file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum CameraEntry {
+    /// From `eye` towards `target`.
+    LookAt {
+        /// The camera centre.
+        eye: [f32; 3],
+        /// The point at the image's centre.
+        target: [f32; 3],
+        /// World up (default `[0, -1, 0]`, the INRIA/COLMAP convention).
+        up: Option<[f32; 3]>,
+        /// Vertical field of view in degrees (default 50).
+        fov_y_deg: Option<f32>,
+        /// Image width (default 640).
+        width: Option<u32>,
+        /// Image height (default: three quarters of the width).
+        height: Option<u32>,
+    },
+    /// One camera with the fields of an INRIA `cameras.json` entry.
+    Inria {
+        /// Image width.
+        width: u32,
+        /// Image height.
+        height: u32,
+        /// The camera centre.
+        position: [f32; 3],
+        /// Camera-to-world rotation, rows as written (columns: right, down, forward).
+        rotation: [[f32; 3]; 3],
+        /// Focal lengths in pixels.
+        fx: f32,
+        /// See `fx`.
+        fy: f32,
+        /// Ignored (the entry's number in its file).
+        #[allow(dead_code)]
+        id: Option<serde_json::Value>,
+        /// Ignored (the training image's name).
+        #[allow(dead_code)]
+        img_name: Option<String>,
+    },
+    /// Camera `index` of a cameras.json file.
+    File {
+        /// The file, relative to the scene file (or `$REAL/...`).
+        path: String,
+        /// Which camera (default 0).
+        index: Option<usize>,
+    },
 }
 
 /// A splat scene placed in the world.
@@ -164,6 +225,68 @@ impl SceneFile {
             let at = if at == "." { "(top level)".into() } else { at };
             at_error(path, &at, inner)
         })
+    }
+}
+
+impl SceneFile {
+    /// The file's camera, checked ([`Camera::validate`]), or `None` when it has no `camera`
+    /// entry; `path` is the scene file's (for relative paths and errors).
+    pub fn camera(&self, path: &Path) -> Result<Option<Camera>> {
+        let Some(entry) = &self.camera else {
+            return Ok(None);
+        };
+        let camera = match entry {
+            CameraEntry::LookAt {
+                eye,
+                target,
+                up,
+                fov_y_deg,
+                width,
+                height,
+            } => {
+                let width = width.unwrap_or(640);
+                let height =
+                    height.unwrap_or_else(|| (width as f32 * 0.75).round().max(1.0) as u32);
+                Camera::look_at(
+                    Vec3::from_array(*eye),
+                    Vec3::from_array(*target),
+                    Vec3::from_array(up.unwrap_or([0.0, -1.0, 0.0])),
+                    fov_y_deg.unwrap_or(50.0),
+                    width,
+                    height,
+                )
+                .map_err(|e| at_error(path, "camera.look_at", e))?
+            }
+            CameraEntry::Inria {
+                width,
+                height,
+                position,
+                rotation,
+                fx,
+                fy,
+                ..
+            } => {
+                // Rows as written; `from_cols_array_2d` takes columns.
+                let camera = Camera {
+                    width: *width,
+                    height: *height,
+                    position: Vec3::from_array(*position),
+                    rotation: Mat3::from_cols_array_2d(rotation).transpose(),
+                    fx: *fx,
+                    fy: *fy,
+                };
+                camera
+                    .validate()
+                    .map_err(|e| at_error(path, "camera.inria", e))?;
+                camera
+            }
+            CameraEntry::File { path: file, index } => {
+                let cameras = resolve_path(path, "camera.file.path", file)?;
+                Camera::load_one(cameras, index.unwrap_or(0))
+                    .map_err(|e| at_error(path, "camera.file", e))?
+            }
+        };
+        Ok(Some(camera))
     }
 }
 
