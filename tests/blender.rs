@@ -307,3 +307,73 @@ fn gltf_validator_accepts_every_glb() {
         assert_eq!(issues["numWarnings"], 0, "{issues}");
     }
 }
+
+/// A camera Blender exports in a glb (issue 73) is the camera a scene file without one renders
+/// from: the same position, viewing direction, up and vertical field of view as Blender's own
+/// camera (converted to glTF's Y up), at the export's aspect ratio.
+#[test]
+fn a_blender_cameras_glb_frames_a_scene_file() {
+    let Some(blender) = blender() else { return };
+    let dir = common::tempdir("blender_camera");
+    let glb = dir.join("cam.glb");
+    let stdout = run_blender(&blender, "camera_glb.py", &[&glb], &[]);
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("CAMERA "))
+        .unwrap_or_else(|| panic!("no CAMERA line in:\n{stdout}"));
+    let v: Vec<f32> = line.split(' ').map(|x| x.parse().unwrap()).collect();
+    let (pos, forward, up) = (
+        Vec3::new(v[0], v[1], v[2]),
+        Vec3::new(v[3], v[4], v[5]),
+        Vec3::new(v[6], v[7], v[8]),
+    );
+    let (yfov, width, height) = (v[9], v[10] as u32, v[11] as u32);
+    let scene = dir.join("scene.json");
+    std::fs::write(
+        &scene,
+        r#"{ "meshes": [{ "path": "cam.glb", "material": { "diffuse": { "color": [1, 1, 1] } } }],
+             "ambient": [0.5, 0.5, 0.5] }"#,
+    )
+    .unwrap();
+    let cam = rara::mixed::file::SceneFile::read(&scene)
+        .unwrap()
+        .camera(&scene)
+        .unwrap()
+        .expect("the glb's camera");
+    eprintln!("Blender: {pos} {forward} up {up} yfov {yfov}; rara: {cam:?}");
+    assert_eq!((cam.width, cam.height), (width, height));
+    assert!((cam.position - pos).length() < 1e-4, "position");
+    assert!((cam.rotation.col(2) - forward).length() < 1e-4, "forward");
+    assert!((cam.rotation.col(1) + up).length() < 1e-4, "down is -up");
+    let fov = 2.0 * (cam.height as f32 / (2.0 * cam.fy)).atan();
+    assert!(
+        (fov - yfov).abs() < 1e-4,
+        "vertical field of view {fov} against {yfov}"
+    );
+    // And the scene renders from it.
+    let out = dir.join("out.png");
+    let run = Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args([
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--width",
+            "64",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let img = image::open(&out).unwrap().to_rgba8();
+    assert_eq!((img.width(), img.height()), (64, 48));
+    // The sphere at the origin is at the image's centre, the background at its corner.
+    assert!(
+        img.get_pixel(32, 24)[0] > 0 && img.get_pixel(0, 0)[0] == 0,
+        "the sphere is not at the centre"
+    );
+}

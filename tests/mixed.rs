@@ -991,6 +991,78 @@ fn a_scene_files_camera_is_the_command_lines() {
         .camera(&look_at)
         .unwrap();
     assert_eq!(parsed, Some(look));
+    // Without a camera entry, a glTF mesh's own camera (placed by the mesh entry's
+    // transform), as a glTF viewer would show it: down the node's -Z, +Y up.
+    let tri: Vec<u8> = [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    std::fs::write(dir.join("tri.bin"), &tri).unwrap();
+    let half_turn_y = std::f32::consts::FRAC_1_SQRT_2;
+    for (name, rotation) in [
+        ("plain", [0.0, 0.0, 0.0, 1.0]),
+        ("turned", [0.0, half_turn_y, 0.0, half_turn_y]),
+    ] {
+        write(
+            &dir,
+            "cam.gltf",
+            &format!(
+                r#"{{"asset": {{"version": "2.0"}}, "buffers": [{{"uri": "tri.bin", "byteLength": 36}}],
+                    "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+                    "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}}],
+                    "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+                    "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.6, "aspectRatio": 1.5, "znear": 0.01}}}}],
+                    "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0, 0, 5], "rotation": {rotation:?}}}],
+                    "scenes": [{{"nodes": [0, 1]}}], "scene": 0}}"#
+            ),
+        );
+        let with_gltf = write(
+            &dir,
+            "gltf_camera.json",
+            r#"{ "splats": [{ "path": "s.ply" }],
+                 "meshes": [{ "path": "cam.gltf", "transform": { "translation": [1, 0, 0] },
+                              "material": { "diffuse": { "color": [1, 1, 1] } } }] }"#,
+        );
+        let cam = rara::mixed::file::SceneFile::read(&with_gltf)
+            .unwrap()
+            .camera(&with_gltf)
+            .unwrap()
+            .expect("the glTF's camera");
+        assert_eq!((cam.width, cam.height), (640, 427), "{name}");
+        assert!(
+            (cam.position - Vec3::new(1.0, 0.0, 5.0)).length() < 1e-6,
+            "{name}"
+        );
+        let forward = cam.rotation.col(2);
+        let want_forward = if name == "plain" {
+            Vec3::NEG_Z
+        } else {
+            Vec3::NEG_X
+        };
+        assert!(
+            (forward - want_forward).length() < 1e-6,
+            "{name}: forward {forward}"
+        );
+        assert!(
+            (cam.rotation.col(1) - Vec3::NEG_Y).length() < 1e-6,
+            "{name}: down"
+        );
+        if name == "plain" {
+            let want = rara::Camera::look_at(
+                Vec3::new(1.0, 0.0, 5.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::Y,
+                0.6f32.to_degrees(),
+                640,
+                427,
+            )
+            .unwrap();
+            assert!((cam.fy - want.fy).abs() < 1e-3 && cam.fx == cam.fy);
+            assert!((cam.rotation.col(0) - want.rotation.col(0)).length() < 1e-6);
+        }
+        let img = render(&with_gltf, &["--width", "64"], name);
+        assert_eq!((img.width(), img.height()), (64, 43), "{name}");
+    }
     // Errors name the entry, and no camera at all names the three ways to give one.
     for (text, wanted) in [
         (

@@ -389,6 +389,27 @@ impl Document {
         Ok(out)
     }
 
+    /// The first node of the scenes walked that holds a perspective camera: its world matrix,
+    /// the camera's vertical field of view (radians) and its aspect ratio (width / height),
+    /// when given. (glTF cameras look down the node's -Z with +Y up; orthographic ones are
+    /// skipped.)
+    pub fn first_camera(&self) -> Result<Option<(DMat4, f64, Option<f64>)>> {
+        for roots in self.scene_roots()? {
+            for (index, world) in self.walk(&roots)? {
+                let Some(camera) = self.root.nodes[index].camera else {
+                    continue;
+                };
+                let c = self.root.cameras.get(camera.value()).ok_or_else(|| {
+                    self.bad(format!("node {index}: no camera {}", camera.value()))
+                })?;
+                if let Some(p) = &c.perspective {
+                    return Ok(Some((world, p.yfov as f64, p.aspect_ratio.map(f64::from))));
+                }
+            }
+        }
+        Ok(None)
+    }
+
     /// Every node reached from `roots`, parents before children in the document's order, with
     /// its world matrix. glTF's nodes form trees: a node reached twice (a cycle, a node with
     /// two parents or listed twice) is an error, as is a hierarchy deeper than

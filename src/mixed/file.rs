@@ -20,7 +20,8 @@
 //! target, optional up, default `[0, -1, 0]`, vertical field of view `fov_y_deg`, default 50,
 //! width and height, default 640x480), `inria` (one camera as an INRIA `cameras.json` writes
 //! it: width, height, position, rotation rows, fx, fy; its id and img_name are ignored) or
-//! `file` (camera `index`, default 0, of a `cameras.json` at `path`).
+//! `file` (camera `index`, default 0, of a `cameras.json` at `path`). Without the entry, the
+//! first perspective camera of the first glTF mesh file that has one is used.
 //!
 //! Paths are relative to the scene file; one that starts with `$REAL/` is in the folder of
 //! real scenes (`$RARA_REAL_DATA`, else `../shared/data/real` from the working directory or
@@ -233,7 +234,7 @@ impl SceneFile {
     /// entry; `path` is the scene file's (for relative paths and errors).
     pub fn camera(&self, path: &Path) -> Result<Option<Camera>> {
         let Some(entry) = &self.camera else {
-            return Ok(None);
+            return self.gltf_camera(path);
         };
         let camera = match entry {
             CameraEntry::LookAt {
@@ -287,6 +288,70 @@ impl SceneFile {
             }
         };
         Ok(Some(camera))
+    }
+}
+
+impl SceneFile {
+    /// Without a `camera` entry: the first perspective camera of the first glTF mesh file
+    /// that has one ([`crate::input::gltf::Document::first_camera`]), placed by that mesh
+    /// entry's transform as its triangles are (the position through the whole transform, the
+    /// axes turned by its rotation), 640 pixels wide and as high as its aspect ratio makes it
+    /// (480 without one).
+    fn gltf_camera(&self, path: &Path) -> Result<Option<Camera>> {
+        for (i, mesh) in self.meshes.iter().enumerate() {
+            let at = format!("meshes[{i}].path");
+            let lower = mesh.path.to_ascii_lowercase();
+            if !(lower.ends_with(".glb") || lower.ends_with(".gltf")) {
+                continue;
+            }
+            let file = resolve_path(path, &at, &mesh.path)?;
+            let doc = crate::input::gltf::Document::open(&file)?;
+            let Some((world, yfov, aspect)) = doc.first_camera()? else {
+                continue;
+            };
+            let placed = super::Transform::from_entry(
+                path,
+                &format!("meshes[{i}].transform"),
+                &mesh.transform,
+                false,
+            )?;
+            let eye = world.transform_point3(glam::DVec3::ZERO).as_vec3();
+            // The node's axes: right +X, up +Y, backward +Z (scale, which glTF forbids on
+            // camera nodes, taken out).
+            let axis = |v: glam::DVec3| world.transform_vector3(v).as_vec3();
+            let forward = placed.rotation * -axis(glam::DVec3::Z).normalize_or_zero();
+            let right_raw = placed.rotation * axis(glam::DVec3::X);
+            let right = (right_raw - right_raw.dot(forward) * forward).normalize_or_zero();
+            let down = forward.cross(right);
+            let width = 640u32;
+            let height = aspect
+                .filter(|a| a.is_finite() && *a > 0.0)
+                .map_or(480, |a| (width as f64 / a).round().max(1.0) as u32);
+            let fy = height as f32 / (2.0 * (yfov as f32 / 2.0).tan());
+            let camera = Camera {
+                width,
+                height,
+                position: placed.point(eye),
+                rotation: Mat3::from_cols(right, down, forward),
+                fx: fy,
+                fy,
+            };
+            if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
+                return Err(at_error(
+                    path,
+                    &at,
+                    format!(
+                        "{}: the camera's yfov {yfov} is not in (0, pi)",
+                        file.display()
+                    ),
+                ));
+            }
+            camera
+                .validate()
+                .map_err(|e| at_error(path, &at, format!("{}: its camera: {e}", file.display())))?;
+            return Ok(Some(camera));
+        }
+        Ok(None)
     }
 }
 
