@@ -1097,3 +1097,83 @@ fn a_scene_files_camera_is_the_command_lines() {
         );
     }
 }
+
+/// A scene file's splat scenes are read by the loader `render` uses, so every format: a glb
+/// (KHR_gaussian_splatting, lossless for these floats) renders the PLY's image to the byte,
+/// the lossy SPZ and .splat the image of their own Gaussians written back as PLY.
+#[test]
+fn scene_files_take_splat_scenes_in_every_format() {
+    let dir = common::tempdir("mixed_formats");
+    let splats = common::mixed_scene(600, 3);
+    let ply = dir.join("s.ply");
+    rara::ply::write_ply(&splats, &ply, rara::ply::PlyEncoding::BinaryLittleEndian).unwrap();
+    let rara = |args: &[&str]| {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    };
+    let render = |name: &str| {
+        let file = write(
+            &dir,
+            &format!("{name}.json"),
+            &format!(
+                r#"{{ "splats": [{{ "path": "{name}" }}],
+                     "meshes": [{{ "path": "ball.obj", "transform": {{ "translation": [0.6, 0, -0.5], "scale": 0.3 }},
+                                  "material": {{ "mirror": {{ "reflectance": 0.9 }} }} }}] }}"#
+            ),
+        );
+        let out = dir.join(format!("{name}.png"));
+        rara(&[
+            "render",
+            "--scene",
+            file.to_str().unwrap(),
+            "--eye",
+            "0.4,-0.9,-3.5",
+            "--target",
+            "0,0,0",
+            "--width",
+            "96",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        image::open(&out).unwrap().to_rgba8()
+    };
+    write(
+        &dir,
+        "ball.obj",
+        &Shape::sphere(6, 12).to_obj("a test ball"),
+    );
+    let want = render("s.ply");
+    // A lossless format gives the PLY's image; a lossy one, the image of the Gaussians it
+    // holds, as converted back to PLY.
+    for (name, lossless) in [("s.glb", true), ("s.spz", false), ("s.splat", false)] {
+        rara(&[
+            "convert",
+            ply.to_str().unwrap(),
+            "-o",
+            dir.join(name).to_str().unwrap(),
+        ]);
+        let got = render(name);
+        let want = if lossless {
+            want.clone()
+        } else {
+            let back = format!("{name}.ply");
+            rara(&[
+                "convert",
+                dir.join(name).to_str().unwrap(),
+                "-o",
+                dir.join(&back).to_str().unwrap(),
+            ]);
+            render(&back)
+        };
+        let (n, max) = differences(&got, &want);
+        eprintln!("{name}: {n} pixels differ (max {max})");
+        assert_eq!(n, 0, "{name}");
+    }
+}

@@ -117,7 +117,7 @@ pub enum CameraEntry {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SplatEntry {
-    /// The scene file (.ply).
+    /// The splat scene's file, in any format `render` reads (the caller's loader).
     pub path: String,
     /// Where it goes (a rigid motion and a uniform scale).
     #[serde(default)]
