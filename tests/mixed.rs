@@ -1177,3 +1177,44 @@ fn scene_files_take_splat_scenes_in_every_format() {
         assert_eq!(n, 0, "{name}");
     }
 }
+
+/// Many splat objects (the showcase and 19 more, some clipped, one empty): each Gaussian's
+/// object, found in halves over their first Gaussians, picks its clip; GPU against the CPU.
+#[test]
+fn many_objects_match_the_cpu_reference() {
+    use rara::mixed::Transform;
+    let mut scene = showcase(Clip::default());
+    let small = common::mixed_scene(60, 31);
+    let (lo, hi) = common::percentile_box(&small);
+    let clip_local = common::tracer_clips(lo, hi)
+        .into_iter()
+        .find(|(n, _)| *n == "plane_mass")
+        .unwrap()
+        .1;
+    let empty = rara::Scene::default();
+    for k in 0..19 {
+        let t = Transform {
+            rotation: Quat::from_rotation_y(0.3 * k as f32),
+            translation: Vec3::new(
+                -1.5 + 0.33 * (k % 10) as f32,
+                -1.0 + 0.8 * (k / 10) as f32,
+                -1.2,
+            ),
+            scale: Vec3::splat(0.25),
+        };
+        let clip = if k % 3 == 0 {
+            let mut c = clip_local.clone();
+            c.region = Some(t.region(clip_local.region.as_ref().unwrap()).unwrap());
+            c
+        } else {
+            Clip::default()
+        };
+        scene.add_splats(if k == 7 { &empty } else { &small }, &t, clip);
+    }
+    assert_eq!(scene.objects.len(), 20);
+    let camera = common::tracer_camera(160);
+    let (gpu, cpu) = both(&scene, &camera);
+    gpu.save(common::artifacts_dir().join("mixed_many_objects_gpu.png"))
+        .unwrap();
+    common::check_images("mixed, 20 objects, some clipped", &gpu, &cpu, 45.0, 255);
+}

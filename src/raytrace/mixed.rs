@@ -45,7 +45,7 @@ struct GpuMixedParams {
     counts: [u32; 4],
     ambient: [f32; 4],
     background: [f32; 4],
-    object_first: [u32; 8],
+    object_first: [u32; MIXED_MAX_OBJECTS as usize],
     light_at: [[f32; 4]; MIXED_MAX_LIGHTS as usize],
     light_intensity: [[f32; 4]; MIXED_MAX_LIGHTS as usize],
     refs: [u32; 4],
