@@ -282,6 +282,9 @@ void main() {
             store_uvec4(address_plus(ray_at, 48u), uvec4(ray.cull ? MIXED_RAY_CULL : 0u, 0u, 0u, 0u));
             list_for_tracer(m, px);
         }
+        if (visits > uint(MIXED_MESH_VISITS_MAX)) {
+            atomicAdd(pc.counters.v[MIXED_COUNTER_LONG_WALKS], 1u);
+        }
         store_vec4_item(pc.cur_hit, px, hit);
         pc.cur_tri.v[px] = tri;
     }

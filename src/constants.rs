@@ -288,7 +288,7 @@ pub const MIXED_MAX_OBJECTS: u32 = 64;
 /// depth 8 leaves at most one sibling per level and the shadow rays of one diffuse hit.
 pub const MIXED_STACK: u32 = 12;
 /// Mixed scenes: entries of a BVH traversal stack over the triangles (the tree of at most
-/// 16,384 triangles is 13 levels deep).
+/// 4,194,304 triangles, four to a leaf, is 21 levels deep).
 pub const MIXED_MESH_STACK: u32 = 32;
 /// Mixed counter slot: rays the next generation traces.
 pub const MIXED_COUNTER_LIVE: u32 = 0;
@@ -302,6 +302,14 @@ pub const MIXED_COUNTER_SHADOW: u32 = 3;
 pub const MIXED_COUNTER_CUT: u32 = 4;
 /// Mixed counter slot: rays a full pixel stack dropped (never expected).
 pub const MIXED_COUNTER_OVERFLOW: u32 = 5;
+/// Mixed counter slot: rays whose walk through the meshes' BVH in the ray tree's pass took
+/// more than [`MIXED_MESH_VISITS_MAX`] node visits (an error: near lavapipe's loop cap).
+pub const MIXED_COUNTER_LONG_WALKS: u32 = 6;
+/// Node visits one mesh traversal of the ray tree's pass may take before the frame is
+/// refused: lavapipe stops an invocation after 65,535 loop iterations in all (PLATFORM.md), and
+/// the tree's pass has no rounds. A balanced tree of millions of triangles takes tens to
+/// thousands of visits a ray.
+pub const MIXED_MESH_VISITS_MAX: u32 = 49152;
 /// Mixed counter words.
 pub const MIXED_COUNTER_WORDS: u32 = 8;
 
@@ -405,5 +413,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("MIXED_COUNTER_SHADOW", MIXED_COUNTER_SHADOW),
     ("MIXED_COUNTER_CUT", MIXED_COUNTER_CUT),
     ("MIXED_COUNTER_OVERFLOW", MIXED_COUNTER_OVERFLOW),
+    ("MIXED_COUNTER_LONG_WALKS", MIXED_COUNTER_LONG_WALKS),
+    ("MIXED_MESH_VISITS_MAX", MIXED_MESH_VISITS_MAX),
     ("MIXED_COUNTER_WORDS", MIXED_COUNTER_WORDS),
 ];

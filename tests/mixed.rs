@@ -1218,3 +1218,61 @@ fn many_objects_match_the_cpu_reference() {
         .unwrap();
     common::check_images("mixed, 20 objects, some clipped", &gpu, &cpu, 45.0, 255);
 }
+
+/// Meshes of two million triangles (issue 73): a diffuse sphere of 2,000,000 triangles and a
+/// mirror of 2 beside a splat scene, lit; the tree stays inside the traversal's stack and the
+/// GPU's image is the CPU reference's.
+#[test]
+fn two_million_triangles_match_the_cpu_reference() {
+    let mut scene = MixedScene::splats_only(
+        common::mixed_scene(600, 7),
+        Clip::default(),
+        Vec3::new(0.1, 0.1, 0.2),
+    );
+    let start = std::time::Instant::now();
+    let ball = Shape::sphere(1001, 1000);
+    let tris = placed(
+        &ball,
+        Vec3::splat(0.5),
+        Quat::IDENTITY,
+        Vec3::new(0.7, 0.2, -0.6),
+    );
+    assert_eq!(tris.len(), 2_000_000);
+    scene.add_mesh(tris, Material::Diffuse(Vec3::new(0.8, 0.5, 0.3)));
+    scene.add_mesh(
+        placed(
+            &Shape::quad(),
+            Vec3::splat(2.5),
+            Quat::IDENTITY,
+            Vec3::new(0.0, 0.0, 1.6),
+        ),
+        Material::Mirror(0.9),
+    );
+    scene.lights.push(Light::Point {
+        position: Vec3::new(1.0, -2.5, -1.5),
+        intensity: Vec3::splat(6.0),
+    });
+    scene.ambient = Vec3::splat(0.15);
+    let built_ms = start.elapsed().as_secs_f64() * 1e3;
+    // The depth of the meshes' tree: within the GPU traversal's stack.
+    fn depth(nodes: &[rara::mixed::triangles::GpuMeshNode], n: usize) -> u32 {
+        let node = &nodes[n];
+        if node.a & rara::mixed::triangles::MESH_LEAF_BIT != 0 {
+            1
+        } else {
+            1 + depth(nodes, node.a as usize).max(depth(nodes, node.b as usize))
+        }
+    }
+    let d = depth(&scene.meshes.nodes, 0);
+    eprintln!(
+        "2,000,002 triangles: BVHs (all, opaque) built in {built_ms:.0} ms, {} and {} nodes, depth {d}",
+        scene.meshes.nodes.len(),
+        scene.occluders.nodes.len()
+    );
+    assert!(d < rara::constants::MIXED_MESH_STACK, "depth {d}");
+    let camera = common::tracer_camera(96);
+    let (gpu, cpu) = both(&scene, &camera);
+    gpu.save(common::artifacts_dir().join("mixed_two_million_triangles_gpu.png"))
+        .unwrap();
+    common::check_images("mixed, 2M triangles", &gpu, &cpu, 45.0, 255);
+}

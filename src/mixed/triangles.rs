@@ -160,11 +160,14 @@ pub struct MeshBvh {
     pub nodes: Vec<GpuMeshNode>,
     /// The triangles, in leaf order.
     pub triangles: Vec<Triangle>,
+    /// Milliseconds the build took (host wall time).
+    pub build_ms: f64,
 }
 
 impl MeshBvh {
     /// The BVH of `triangles`.
     pub fn build(triangles: Vec<Triangle>) -> MeshBvh {
+        let start = std::time::Instant::now();
         let mut bvh = MeshBvh::default();
         if triangles.is_empty() {
             return bvh;
@@ -173,6 +176,7 @@ impl MeshBvh {
         let mut sorted = Vec::with_capacity(triangles.len());
         bvh.split(&triangles, &mut order, &mut sorted);
         bvh.triangles = sorted;
+        bvh.build_ms = start.elapsed().as_secs_f64() * 1e3;
         bvh
     }
 

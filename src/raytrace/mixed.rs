@@ -13,9 +13,9 @@ use bytemuck::{Pod, Zeroable};
 use super::tracer::{MixedRays, RayTracer, TraceBuffers, MAX_TRACE_ROUNDS, TRACE_PARAMS_BYTES};
 use crate::camera::Camera;
 use crate::constants::{
-    MIXED_COUNTER_CUT, MIXED_COUNTER_LIVE, MIXED_COUNTER_OVERFLOW, MIXED_COUNTER_PRIMARY,
-    MIXED_COUNTER_SECONDARY, MIXED_COUNTER_SHADOW, MIXED_COUNTER_WORDS, MIXED_MAX_LIGHTS,
-    MIXED_MAX_OBJECTS, MIXED_STACK,
+    MIXED_COUNTER_CUT, MIXED_COUNTER_LIVE, MIXED_COUNTER_LONG_WALKS, MIXED_COUNTER_OVERFLOW,
+    MIXED_COUNTER_PRIMARY, MIXED_COUNTER_SECONDARY, MIXED_COUNTER_SHADOW, MIXED_COUNTER_WORDS,
+    MIXED_MAX_LIGHTS, MIXED_MAX_OBJECTS, MIXED_MESH_VISITS_MAX, MIXED_STACK,
 };
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
@@ -457,6 +457,14 @@ impl MixedTracer {
                 );
             })?;
             add_times(&timer, &mut stats)?;
+            if tree.counter(MIXED_COUNTER_LONG_WALKS) > 0 {
+                return Err(Error::InvalidInput(format!(
+                    "mixed scene: {} rays walked more than {MIXED_MESH_VISITS_MAX} nodes of the \
+                     meshes' BVH, near what lavapipe runs in one invocation (65,535 loop \
+                     iterations); fewer triangles along such rays would fit",
+                    tree.counter(MIXED_COUNTER_LONG_WALKS)
+                )));
+            }
             if tree.counter(MIXED_COUNTER_OVERFLOW) > 0 {
                 return Err(Error::InvalidInput(format!(
                     "mixed scene: {} rays did not fit a pixel's stack of {MIXED_STACK}",
