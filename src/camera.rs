@@ -24,14 +24,39 @@ pub struct Camera {
     pub fy: f32,
 }
 
-#[derive(serde::Deserialize)]
-struct JsonCamera {
-    width: u32,
-    height: u32,
-    position: [f32; 3],
-    rotation: [[f32; 3]; 3],
-    fx: f32,
-    fy: f32,
+/// One camera as an INRIA `cameras.json` writes it (other fields, such as `id` and
+/// `img_name`, are ignored).
+#[derive(Clone, Debug, serde::Deserialize)]
+pub struct InriaCamera {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The camera centre.
+    pub position: [f32; 3],
+    /// Camera-to-world rotation, rows as written (columns: right, down, forward).
+    pub rotation: [[f32; 3]; 3],
+    /// Focal lengths in pixels.
+    pub fx: f32,
+    /// See `fx`.
+    pub fy: f32,
+}
+
+impl InriaCamera {
+    /// The camera, checked ([`Camera::validate`]).
+    pub fn to_camera(&self) -> Result<Camera> {
+        // rotation[r][c]: rows as written; from_cols_array_2d takes columns, so transpose.
+        let camera = Camera {
+            width: self.width,
+            height: self.height,
+            position: Vec3::from_array(self.position),
+            rotation: Mat3::from_cols_array_2d(&self.rotation).transpose(),
+            fx: self.fx,
+            fy: self.fy,
+        };
+        camera.validate()?;
+        Ok(camera)
+    }
 }
 
 impl Camera {
@@ -149,7 +174,7 @@ impl Camera {
             path: path.to_path_buf(),
             message,
         };
-        let cams: Vec<JsonCamera> = serde_json::from_str(text).map_err(|e| {
+        let cams: Vec<InriaCamera> = serde_json::from_str(text).map_err(|e| {
             err(format!("not an INRIA cameras.json (an array of objects with width, height, position, rotation, fx, fy): {e}"))
         })?;
         if cams.is_empty() {
@@ -157,22 +182,7 @@ impl Camera {
         }
         cams.iter()
             .enumerate()
-            .map(|(n, c)| {
-                // rotation[r][c]: rows as written; from_cols_array_2d takes columns, so transpose.
-                let rotation = Mat3::from_cols_array_2d(&c.rotation).transpose();
-                let camera = Camera {
-                    width: c.width,
-                    height: c.height,
-                    position: Vec3::from_array(c.position),
-                    rotation,
-                    fx: c.fx,
-                    fy: c.fy,
-                };
-                camera
-                    .validate()
-                    .map_err(|e| err(format!("camera {n}: {e}")))?;
-                Ok(camera)
-            })
+            .map(|(n, c)| c.to_camera().map_err(|e| err(format!("camera {n}: {e}"))))
             .collect()
     }
 

@@ -543,18 +543,32 @@ fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
     p
 }
 
-/// A scene file read end to end (a PLY splat scene, an OBJ with normals, a PLY mesh), and its
-/// errors: each names its JSON path.
-#[test]
-fn scene_files_load_and_name_the_path_of_each_error() {
-    let dir = common::tempdir("mixed_files");
-    let splats = common::mixed_scene(50, 5);
+/// `common::mixed_scene(count, seed)`, written to `dir/s.ply` (binary).
+fn write_splats(dir: &std::path::Path, count: usize, seed: u64) -> rara::Scene {
+    let splats = common::mixed_scene(count, seed);
     rara::ply::write_ply(
         &splats,
         dir.join("s.ply"),
         rara::ply::PlyEncoding::BinaryLittleEndian,
     )
     .unwrap();
+    splats
+}
+
+/// The `rara` binary run with `args`.
+fn run_rara(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// A scene file read end to end (a PLY splat scene, an OBJ with normals, a PLY mesh), and its
+/// errors: each names its JSON path.
+#[test]
+fn scene_files_load_and_name_the_path_of_each_error() {
+    let dir = common::tempdir("mixed_files");
+    let splats = write_splats(&dir, 50, 5);
     write(
         &dir,
         "ball.obj",
@@ -743,12 +757,7 @@ fn examples_match_the_cpu_reference() {
 #[test]
 fn the_cli_renders_and_benches_a_scene_file() {
     let dir = common::tempdir("mixed_cli");
-    rara::ply::write_ply(
-        &common::mixed_scene(300, 9),
-        dir.join("s.ply"),
-        rara::ply::PlyEncoding::BinaryLittleEndian,
-    )
-    .unwrap();
+    write_splats(&dir, 300, 9);
     write(&dir, "quad.obj", &Shape::quad().to_obj("a quad"));
     let scene = write(
         &dir,
@@ -757,12 +766,7 @@ fn the_cli_renders_and_benches_a_scene_file() {
              "meshes": [{ "path": "quad.obj", "transform": { "translation": [0, 0, 1.5], "scale": 3 },
                           "material": { "mirror": { "reflectance": 0.8 } } }] }"#,
     );
-    let rara = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
-            .args(args)
-            .output()
-            .unwrap()
-    };
+    let rara = run_rara;
     let out = dir.join("out.png");
     let cam = [
         "--eye",
@@ -871,13 +875,7 @@ fn a_frame_of_two_batches_matches_the_cpu_reference() {
 #[test]
 fn a_scene_files_camera_is_the_command_lines() {
     let dir = common::tempdir("mixed_scene_camera");
-    let splats = common::mixed_scene(400, 7);
-    rara::ply::write_ply(
-        &splats,
-        dir.join("s.ply"),
-        rara::ply::PlyEncoding::BinaryLittleEndian,
-    )
-    .unwrap();
+    write_splats(&dir, 400, 7);
     let (eye, target) = (Vec3::new(0.4, -0.9, -3.5), Vec3::ZERO);
     let look = rara::Camera::look_at(eye, target, Vec3::NEG_Y, 40.0, 96, 64).unwrap();
     let other = rara::Camera::look_at(
@@ -916,12 +914,7 @@ fn a_scene_files_camera_is_the_command_lines() {
         format!(r#"{{ "splats": [{{ "path": "s.ply" }}]{extra} }}"#)
     };
     let plain = write(&dir, "plain.json", &scene(""));
-    let rara = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
-            .args(args)
-            .output()
-            .unwrap()
-    };
+    let rara = run_rara;
     let render = |file: &std::path::Path, extra: &[&str], name: &str| {
         let out = dir.join(format!("{name}.png"));
         let mut args = vec![
@@ -1104,14 +1097,10 @@ fn a_scene_files_camera_is_the_command_lines() {
 #[test]
 fn scene_files_take_splat_scenes_in_every_format() {
     let dir = common::tempdir("mixed_formats");
-    let splats = common::mixed_scene(600, 3);
+    write_splats(&dir, 600, 3);
     let ply = dir.join("s.ply");
-    rara::ply::write_ply(&splats, &ply, rara::ply::PlyEncoding::BinaryLittleEndian).unwrap();
     let rara = |args: &[&str]| {
-        let run = std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
-            .args(args)
-            .output()
-            .unwrap();
+        let run = run_rara(args);
         assert!(
             run.status.success(),
             "{args:?}: {}",

@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Vec3};
 use serde::Deserialize;
 
-use crate::camera::Camera;
+use crate::camera::{Camera, InriaCamera};
 use crate::clip::ClipFile;
 use crate::error::{Error, Result};
 
@@ -83,27 +83,9 @@ pub enum CameraEntry {
         /// Image height (default: three quarters of the width).
         height: Option<u32>,
     },
-    /// One camera with the fields of an INRIA `cameras.json` entry.
-    Inria {
-        /// Image width.
-        width: u32,
-        /// Image height.
-        height: u32,
-        /// The camera centre.
-        position: [f32; 3],
-        /// Camera-to-world rotation, rows as written (columns: right, down, forward).
-        rotation: [[f32; 3]; 3],
-        /// Focal lengths in pixels.
-        fx: f32,
-        /// See `fx`.
-        fy: f32,
-        /// Ignored (the entry's number in its file).
-        #[allow(dead_code)]
-        id: Option<serde_json::Value>,
-        /// Ignored (the training image's name).
-        #[allow(dead_code)]
-        img_name: Option<String>,
-    },
+    /// One camera with the fields of an INRIA `cameras.json` entry (its `id` and `img_name`
+    /// ignored).
+    Inria(InriaCamera),
     /// Camera `index` of a cameras.json file.
     File {
         /// The file, relative to the scene file (or `$REAL/...`).
@@ -258,29 +240,9 @@ impl SceneFile {
                 )
                 .map_err(|e| at_error(path, "camera.look_at", e))?
             }
-            CameraEntry::Inria {
-                width,
-                height,
-                position,
-                rotation,
-                fx,
-                fy,
-                ..
-            } => {
-                // Rows as written; `from_cols_array_2d` takes columns.
-                let camera = Camera {
-                    width: *width,
-                    height: *height,
-                    position: Vec3::from_array(*position),
-                    rotation: Mat3::from_cols_array_2d(rotation).transpose(),
-                    fx: *fx,
-                    fy: *fy,
-                };
-                camera
-                    .validate()
-                    .map_err(|e| at_error(path, "camera.inria", e))?;
-                camera
-            }
+            CameraEntry::Inria(c) => c
+                .to_camera()
+                .map_err(|e| at_error(path, "camera.inria", e))?,
             CameraEntry::File { path: file, index } => {
                 let cameras = resolve_path(path, "camera.file.path", file)?;
                 Camera::load_one(cameras, index.unwrap_or(0))
