@@ -35,15 +35,7 @@ fn both(scene: &MixedScene, camera: &rara::Camera) -> (image::RgbaImage, image::
 fn showcase(clip: Clip) -> MixedScene {
     let mut s =
         MixedScene::splats_only(common::mixed_scene(600, 7), clip, Vec3::new(0.1, 0.1, 0.2));
-    s.add_mesh(
-        placed(
-            &Shape::quad(),
-            Vec3::splat(2.5),
-            Quat::IDENTITY,
-            Vec3::new(0.0, 0.0, 1.6),
-        ),
-        Material::Mirror(0.9),
-    );
+    add_mirror_behind(&mut s);
     s.add_mesh(
         placed(
             &Shape::quad(),
@@ -62,12 +54,30 @@ fn showcase(clip: Clip) -> MixedScene {
         ),
         Material::Glass(1.5),
     );
+    light_from_above(&mut s);
+    s
+}
+
+/// The showcase's mirror: a quad behind the splats.
+fn add_mirror_behind(s: &mut MixedScene) {
+    s.add_mesh(
+        placed(
+            &Shape::quad(),
+            Vec3::splat(2.5),
+            Quat::IDENTITY,
+            Vec3::new(0.0, 0.0, 1.6),
+        ),
+        Material::Mirror(0.9),
+    );
+}
+
+/// The showcase's light: a point light above and in front, and some ambient light.
+fn light_from_above(s: &mut MixedScene) {
     s.lights.push(Light::Point {
         position: Vec3::new(1.0, -2.5, -1.5),
         intensity: Vec3::splat(6.0),
     });
     s.ambient = Vec3::splat(0.15);
-    s
 }
 
 #[test]
@@ -1228,20 +1238,8 @@ fn two_million_triangles_match_the_cpu_reference() {
     );
     assert_eq!(tris.len(), 2_000_000);
     scene.add_mesh(tris, Material::Diffuse(Vec3::new(0.8, 0.5, 0.3)));
-    scene.add_mesh(
-        placed(
-            &Shape::quad(),
-            Vec3::splat(2.5),
-            Quat::IDENTITY,
-            Vec3::new(0.0, 0.0, 1.6),
-        ),
-        Material::Mirror(0.9),
-    );
-    scene.lights.push(Light::Point {
-        position: Vec3::new(1.0, -2.5, -1.5),
-        intensity: Vec3::splat(6.0),
-    });
-    scene.ambient = Vec3::splat(0.15);
+    add_mirror_behind(&mut scene);
+    light_from_above(&mut scene);
     let built_ms = start.elapsed().as_secs_f64() * 1e3;
     // The depth of the meshes' tree: within the GPU traversal's stack.
     fn depth(nodes: &[rara::mixed::triangles::GpuMeshNode], n: usize) -> u32 {
