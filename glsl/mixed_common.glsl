@@ -48,7 +48,9 @@ struct MixedParams {
     uvec4 counts;       // triangles, mesh nodes, lights, splat objects
     vec4 ambient;       // rgb, shadow strength
     vec4 background;    // rgb, max depth
-    uvec4 object_first[MIXED_MAX_OBJECTS / 4];  // first Gaussian of each object, in order
+    uvec4 objects;      // the splat objects' first Gaussians, a word each in order: address
+                        // (lo, hi), unused (apart from the parameters, which every invocation
+                        // loads whole)
     vec4 light_at[MIXED_MAX_LIGHTS];        // point: position, w 0; directional: travel direction, w 1
     vec4 light_intensity[MIXED_MAX_LIGHTS]; // rgb
     uvec4 refs;         // addresses (lo, hi): triangles, nodes
@@ -208,11 +210,12 @@ float shadow_factor(MixedParams m, vec3 p, inout uint visits) {
 // The splat object Gaussian g belongs to: the last whose first Gaussian is at most g (the
 // firsts do not decrease; an empty object shares its successor's), found in halves.
 uint object_of(MixedParams m, uint g) {
-    uint lo = 0u;           // object_first[lo] <= g (object 0 starts at Gaussian 0)
+    U32s firsts = U32s(mixed_address(m.objects.xy));
+    uint lo = 0u;           // firsts[lo] <= g (object 0 starts at Gaussian 0)
     uint hi = m.counts.w;   // every object from hi on starts past g
     while (hi - lo > 1u) {
         uint mid = (lo + hi) / 2u;
-        if (m.object_first[mid / 4u][mid % 4u] <= g) {
+        if (firsts.v[mid] <= g) {
             lo = mid;
         } else {
             hi = mid;

@@ -281,8 +281,8 @@ pub const CLIP_PARAMS_BYTES: u32 = 48 + 16 * MAX_CLIP_PLANES;
 
 /// Mixed scenes (SPEC section 8): lights a scene holds at most.
 pub const MIXED_MAX_LIGHTS: u32 = 4;
-/// Mixed scenes: splat objects a scene holds at most (a multiple of 4: their first Gaussians
-/// are `uvec4`s of the scene's parameters, searched in halves per composited hit).
+/// Mixed scenes: splat objects a scene holds at most (their first Gaussians are a buffer of
+/// their own, searched in halves per composited hit).
 pub const MIXED_MAX_OBJECTS: u32 = 64;
 /// Mixed scenes: pending rays per pixel (`glsl/mixed_spawn.comp`): a depth-first ray tree of
 /// depth 8 leaves at most one sibling per level and the shadow rays of one diffuse hit.

@@ -15,7 +15,7 @@ use crate::camera::Camera;
 use crate::constants::{
     MIXED_COUNTER_CUT, MIXED_COUNTER_LIVE, MIXED_COUNTER_LONG_WALKS, MIXED_COUNTER_OVERFLOW,
     MIXED_COUNTER_PRIMARY, MIXED_COUNTER_SECONDARY, MIXED_COUNTER_SHADOW, MIXED_COUNTER_WORDS,
-    MIXED_MAX_LIGHTS, MIXED_MAX_OBJECTS, MIXED_MESH_VISITS_MAX, MIXED_STACK,
+    MIXED_MAX_LIGHTS, MIXED_MESH_VISITS_MAX, MIXED_STACK,
 };
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
@@ -45,7 +45,7 @@ struct GpuMixedParams {
     counts: [u32; 4],
     ambient: [f32; 4],
     background: [f32; 4],
-    object_first: [u32; MIXED_MAX_OBJECTS as usize],
+    objects: [u32; 4],
     light_at: [[f32; 4]; MIXED_MAX_LIGHTS as usize],
     light_intensity: [[f32; 4]; MIXED_MAX_LIGHTS as usize],
     refs: [u32; 4],
@@ -91,6 +91,8 @@ pub struct GpuMixedScene {
     occluder_triangles: Buffer,
     occluder_nodes: Buffer,
     clips: Buffer,
+    /// Per splat object its first Gaussian (`object_of` in `glsl/mixed_common.glsl`).
+    object_firsts: Buffer,
     params: GpuMixedParams,
     /// The first object's clip (the tracer's `clip`, for its validation and upload).
     clip0: crate::clip::Clip,
@@ -167,14 +169,10 @@ impl GpuMixedScene {
             scene.background.z,
             scene.max_depth as f32,
         ];
-        for (k, o) in scene
-            .objects
-            .iter()
-            .enumerate()
-            .take(MIXED_MAX_OBJECTS as usize)
-        {
-            params.object_first[k] = o.first;
-        }
+        let firsts: Vec<u32> = scene.objects.iter().map(|o| o.first).collect();
+        let object_firsts = Buffer::from_slice(ctx, "mixed object firsts", &firsts)?;
+        let [a, b] = lo_hi(object_firsts.address);
+        params.objects = [a, b, 0, 0];
         for (k, l) in scene.lights.iter().enumerate() {
             let (at, i) = match *l {
                 Light::Point {
@@ -208,6 +206,7 @@ impl GpuMixedScene {
             occluder_triangles,
             occluder_nodes,
             clips,
+            object_firsts,
             params,
             clip0: scene.objects[0].clip.clone(),
         })
@@ -237,13 +236,15 @@ impl GpuMixedScene {
         Ok(())
     }
 
-    /// Device bytes of the meshes and the clips (the Gaussians' are [`GpuScene`]'s).
+    /// Device bytes of the meshes, the clips and the objects' first Gaussians (the Gaussians'
+    /// are [`GpuScene`]'s).
     pub fn mesh_bytes(&self) -> u64 {
         self.triangles.size
             + self.nodes.size
             + self.occluder_triangles.size
             + self.occluder_nodes.size
             + self.clips.size
+            + self.object_firsts.size
     }
 }
 
