@@ -140,6 +140,10 @@ fn main() {
             .collect()
     });
     results.sort_by_key(|r| r.0);
+    cache.keep_only(
+        jobs.iter()
+            .map(|(_, _, _, int64, text)| (text.as_str(), *int64)),
+    );
 
     // The words go to OUT_DIR as .spv files, embedded with include_bytes! (a literal of
     // every word made the crate slow to compile), aligned for vkCreateShaderModule.
@@ -327,6 +331,28 @@ impl SpirvCache {
         Some(self.dir.as_ref()?.join(format!("{:016x}", h.finish())))
     }
 
+    /// Removes every entry but those of `kept` (this build's kernels), so the cache holds one
+    /// build's worth whatever the edits before it.
+    fn keep_only<'a>(&self, kept: impl Iterator<Item = (&'a str, bool)>) {
+        let Some(dir) = &self.dir else {
+            return;
+        };
+        let keep: std::collections::HashSet<PathBuf> = kept
+            .filter_map(|(text, int64)| self.entry(text, int64))
+            .collect();
+        let Ok(listing) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for path in listing.flatten().map(|e| e.path()) {
+            // `KEY.spv`, `KEY.glsl`, `KEY.spv.PID.tmp`: the entry is the path up to the first dot.
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let key = dir.join(name.split('.').next().unwrap_or(""));
+            if !keep.contains(&key) {
+                let _ = std::fs::remove_file(&path);
+            }
+        }
+    }
+
     /// The words compiled from `text` before, if the cache has them.
     fn get(&self, text: &str, int64: bool) -> Option<Vec<u32>> {
         let entry = self.entry(text, int64)?;
@@ -342,15 +368,22 @@ impl SpirvCache {
         (bytes.len() % 4 == 0 && words.first() == Some(&0x0723_0203)).then_some(words)
     }
 
-    /// Keeps `words` for `text` (best effort: a failed write only costs a compile later). The
-    /// words go first, the text last, so an entry cut short by a killed build is never read.
+    /// Keeps `words` for `text` (best effort: a failed write only costs a compile later). Each
+    /// file is written beside its place and renamed into it, the words first and the text
+    /// last, so neither a killed build nor another build script writing the same entry at the
+    /// same time leaves an entry that reads back cut short.
     fn put(&self, text: &str, int64: bool, words: &[u32]) {
         let Some(entry) = self.entry(text, int64) else {
             return;
         };
+        let place = |ext: &str, bytes: &[u8]| {
+            let tmp = entry.with_extension(format!("{ext}.{}.tmp", std::process::id()));
+            std::fs::write(&tmp, bytes).is_ok()
+                && std::fs::rename(&tmp, entry.with_extension(ext)).is_ok()
+        };
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_ne_bytes()).collect();
-        if std::fs::write(entry.with_extension("spv"), bytes).is_ok() {
-            let _ = std::fs::write(entry.with_extension("glsl"), text);
+        if place("spv", &bytes) {
+            place("glsl", text.as_bytes());
         }
     }
 }
