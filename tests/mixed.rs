@@ -565,6 +565,16 @@ fn write_splats(dir: &std::path::Path, count: usize, seed: u64) -> rara::Scene {
     splats
 }
 
+/// The camera of the command-line tests: a look-at view of the generated scenes, 96 wide.
+const CLI_CAMERA: [&str; 6] = [
+    "--eye",
+    "0.4,-0.9,-3.5",
+    "--target",
+    "0,0,0",
+    "--width",
+    "96",
+];
+
 /// The `rara` binary run with `args`.
 fn run_rara(args: &[&str]) -> std::process::Output {
     std::process::Command::new(env!("CARGO_BIN_EXE_rara"))
@@ -778,14 +788,7 @@ fn the_cli_renders_and_benches_a_scene_file() {
     );
     let rara = run_rara;
     let out = dir.join("out.png");
-    let cam = [
-        "--eye",
-        "0.4,-0.9,-3.5",
-        "--target",
-        "0,0,0",
-        "--width",
-        "96",
-    ];
+    let cam = CLI_CAMERA;
     let s = scene.to_str().unwrap();
     let run = rara(
         &[
@@ -1128,19 +1131,14 @@ fn scene_files_take_splat_scenes_in_every_format() {
             ),
         );
         let out = dir.join(format!("{name}.png"));
-        rara(&[
+        let args = [
             "render",
             "--scene",
             file.to_str().unwrap(),
-            "--eye",
-            "0.4,-0.9,-3.5",
-            "--target",
-            "0,0,0",
-            "--width",
-            "96",
             "-o",
             out.to_str().unwrap(),
-        ]);
+        ];
+        rara(&[&args[..], &CLI_CAMERA[..]].concat());
         image::open(&out).unwrap().to_rgba8()
     };
     write(
