@@ -48,9 +48,9 @@ struct MixedParams {
     uvec4 counts;       // triangles, mesh nodes, lights, splat objects
     vec4 ambient;       // rgb, shadow strength
     vec4 background;    // rgb, max depth
-    uvec4 objects;      // the splat objects' first Gaussians, a word each in order: address
-                        // (lo, hi), unused (apart from the parameters, which every invocation
-                        // loads whole)
+    uvec4 objects;      // address (lo, hi) of the splat objects' first Gaussians, a word
+                        // each in order (a buffer of their own: every invocation loads these
+                        // parameters whole), unused, unused
     vec4 light_at[MIXED_MAX_LIGHTS];        // point: position, w 0; directional: travel direction, w 1
     vec4 light_intensity[MIXED_MAX_LIGHTS]; // rgb
     uvec4 refs;         // addresses (lo, hi): triangles, nodes

@@ -89,6 +89,12 @@ impl Camera {
         (self.rotation * Vec3::new((i - cx) / self.fx, (j - cy) / self.fy, 1.0)).normalize()
     }
 
+    /// The height a camera gets where only its width is given: three quarters of it (4:3),
+    /// at least one pixel.
+    pub fn default_height(width: u32) -> u32 {
+        (width as f32 * 0.75).round().max(1.0) as u32
+    }
+
     /// A camera at `eye` looking at `target`, with `up` pointing up in the image and a vertical
     /// field of view of `fov_y_deg` degrees (square pixels).
     ///

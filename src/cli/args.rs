@@ -94,9 +94,7 @@ pub fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
     match (args.eye, args.target) {
         (Some(eye), Some(target)) => {
             let width = args.width.unwrap_or(640);
-            let height = args
-                .height
-                .unwrap_or_else(|| (width as f32 * 0.75).round().max(1.0) as u32);
+            let height = args.height.unwrap_or_else(|| Camera::default_height(width));
             Camera::look_at(eye, target, args.up, args.fov_y, width, height)
         }
         _ => Err(Error::InvalidInput(

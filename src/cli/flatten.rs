@@ -79,7 +79,7 @@ pub fn orbit_around(scene: &Scene, views: usize, width: u32) -> Result<Vec<Camer
     let mut d: Vec<f32> = scene.means.iter().map(|m| (*m - centre).length()).collect();
     d.sort_by(f32::total_cmp);
     let radius = d.get(d.len() * 9 / 10).copied().unwrap_or(1.0).max(1e-3);
-    let height = (width as f32 * 0.75).round().max(1.0) as u32;
+    let height = rara::Camera::default_height(width);
     rara::synth::orbit_cameras(views, 2.5 * radius, width, height, 50.0)?
         .into_iter()
         .map(|c| {

@@ -209,9 +209,7 @@ impl SceneFile {
             at_error(path, &at, inner)
         })
     }
-}
 
-impl SceneFile {
     /// The file's camera, checked ([`Camera::validate`]), or `None` when it has no `camera`
     /// entry; `path` is the scene file's (for relative paths and errors).
     pub fn camera(&self, path: &Path) -> Result<Option<Camera>> {
@@ -228,8 +226,7 @@ impl SceneFile {
                 height,
             } => {
                 let width = width.unwrap_or(640);
-                let height =
-                    height.unwrap_or_else(|| (width as f32 * 0.75).round().max(1.0) as u32);
+                let height = height.unwrap_or_else(|| Camera::default_height(width));
                 Camera::look_at(
                     Vec3::from_array(*eye),
                     Vec3::from_array(*target),
@@ -251,9 +248,7 @@ impl SceneFile {
         };
         Ok(Some(camera))
     }
-}
 
-impl SceneFile {
     /// Without a `camera` entry: the first perspective camera of the first glTF mesh file
     /// that has one ([`crate::input::gltf::Document::first_camera`]), placed by that mesh
     /// entry's transform as its triangles are (the position through the whole transform, the
@@ -271,6 +266,16 @@ impl SceneFile {
             let Some((world, yfov, aspect)) = doc.first_camera()? else {
                 continue;
             };
+            if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
+                return Err(at_error(
+                    path,
+                    &at,
+                    format!(
+                        "{}: the camera's yfov {yfov} is not in (0, pi)",
+                        file.display()
+                    ),
+                ));
+            }
             let placed = super::Transform::from_entry(
                 path,
                 &format!("meshes[{i}].transform"),
@@ -298,16 +303,6 @@ impl SceneFile {
                 fx: fy,
                 fy,
             };
-            if !(yfov > 0.0 && yfov < std::f64::consts::PI) {
-                return Err(at_error(
-                    path,
-                    &at,
-                    format!(
-                        "{}: the camera's yfov {yfov} is not in (0, pi)",
-                        file.display()
-                    ),
-                ));
-            }
             camera
                 .validate()
                 .map_err(|e| at_error(path, &at, format!("{}: its camera: {e}", file.display())))?;
