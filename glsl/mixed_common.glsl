@@ -31,17 +31,38 @@ struct MeshNode {
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MeshNodes { MeshNode v[]; };
 
-// A triangle (GpuTriangle): vertices, material kind in v0.w; vertex normals, the material's
-// parameters in their w (diffuse colour; mirror reflectance; glass IOR).
+// A triangle as the intersection test reads it (GpuTriangle): its vertices, w unused.
 struct MeshTriangle {
     vec4 v0;
     vec4 v1;
     vec4 v2;
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MeshTriangles { MeshTriangle v[]; };
+
+// What a hit on a triangle is shaded with (GpuShading), apart from MeshTriangle so that BVH
+// walks load only the vertices: vertex normals with u0, v0, u1 in their w; then (v1, u2, v2,
+// the material's index as float bits).
+struct MeshShading {
     vec4 n0;
     vec4 n1;
     vec4 n2;
+    vec4 rest;
 };
-layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MeshTriangles { MeshTriangle v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MeshShadings { MeshShading v[]; };
+
+// A material (GpuMaterial, src/mixed/material.rs): colour rgb (diffuse albedo, mirror
+// reflectance) and the surface (MATERIAL_*) in w; emission rgb and glass's IOR in w; the
+// base colour texture: first texel (NO_TEXTURE: none), width, height, wraps (u | v << 2).
+struct MeshMaterial {
+    vec4 colour;
+    vec4 emission;
+    uvec4 texture;
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MeshMaterials { MeshMaterial v[]; };
+#define NO_TEXTURE 0xffffffffu
+#define WRAP_REPEAT 0u
+#define WRAP_CLAMP 1u
+#define WRAP_MIRRORED 2u
 
 // The scene (GpuMixedParams).
 struct MixedParams {
@@ -59,6 +80,8 @@ struct MixedParams {
     uvec4 occluder_counts;  // the opaque triangles, their nodes
     uvec4 lists;        // per tracer batch, this generation's rays: address (lo, hi), the
                         // batch's rays (the list's stride), unused
+    uvec4 surfaces;     // addresses (lo, hi): the triangles' MeshShading, the MeshMaterials
+    uvec4 texels;       // address (lo, hi) of every texture's RGBA8 texels, materials, unused
 };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MixedParamsRef { MixedParams p; };
 

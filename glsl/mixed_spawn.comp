@@ -54,8 +54,8 @@ layout(push_constant) uniform Push {
 #define BLOCKED 0xfffffffeu
 
 // A ray of the tree, three words: (virtual origin, t_start), (direction, t_end), (carry rgb,
-// kind | depth << 2 | cull << 6 as a float). Carry: a shadow ray's light if unblocked, a
-// secondary ray's weight in r (1 for the camera ray).
+// kind | depth << 2 | cull << 6 as a float). Carry: a shadow ray's light if unblocked, else
+// the ray's RGB weight (1 for the camera ray; split_weight).
 struct TreeRay {
     vec3 o;
     float t_start;
@@ -103,13 +103,66 @@ void push(TreeRay r) {
     ++g_sp;
 }
 
-// A child of `ray` at its hit t along `dir` with `weight`: pushed, or cut by the depth or
+// A ray's RGB weight as the T its Gaussians composite under (its largest channel) and its
+// tint (the weight over that T; exactly 1 where every channel is the same, so that such a
+// ray composites on into the pixel's colour as a ray-traced frame does, to the bit).
+// split_weight in src/reference/mixed.rs.
+float split_weight(vec3 w, out vec3 tint, out bool tinted) {
+    float t = max(w.r, max(w.g, w.b));
+    tinted = w.r != w.g || w.g != w.b;
+    tint = tinted ? w / t : vec3(1.0);
+    return t;
+}
+
+// Texel i of a row of n moved into [0, n) by wrap mode `mode` (Wrap::texel in
+// src/mixed/material.rs; GLSL's % is undefined for negative operands, hence the two cases).
+int wrap_texel(int i, int n, uint mode) {
+    if (mode == WRAP_CLAMP) {
+        return clamp(i, 0, n - 1);
+    }
+    int period = mode == WRAP_MIRRORED ? 2 * n : n;
+    int k = i >= 0 ? i % period : period - 1 - ((-i - 1) % period);
+    return (mode == WRAP_MIRRORED && k >= n) ? 2 * n - 1 - k : k;
+}
+
+vec3 srgb_to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+}
+
+// Texel (i, j) of a texture, decoded to linear RGB.
+vec3 texel(MixedParams m, uvec4 tex, int i, int j) {
+    int w = int(tex.y);
+    int h = int(tex.z);
+    uint at = tex.x + uint(wrap_texel(j, h, tex.w >> 2u) * w + wrap_texel(i, w, tex.w & 3u));
+    return srgb_to_linear(unpackUnorm4x8(U32s(mixed_address(m.texels.xy)).v[at]).rgb);
+}
+
+// A texture's linear RGB at uv: its four nearest texels decoded, blended bilinearly (glTF's
+// conventions: Texture::sample in src/mixed/material.rs).
+vec3 sample_texture(MixedParams m, uvec4 tex, vec2 uv) {
+    vec2 x = uv * vec2(tex.yz) - 0.5;
+    if (any(isnan(x)) || any(isinf(x))) {
+        return vec3(0.0);
+    }
+    // Far past the image, a float has no fraction left to blend (the CPU twin goes on in
+    // 64-bit integers; the same texels, up to 2^24 texels out).
+    x = clamp(x, vec2(-16777216.0), vec2(16777216.0));
+    vec2 x0 = floor(x);
+    vec2 f = x - x0;
+    int i = int(x0.x);
+    int j = int(x0.y);
+    vec3 top = mix(texel(m, tex, i, j), texel(m, tex, i + 1, j), f.x);
+    vec3 bottom = mix(texel(m, tex, i, j + 1), texel(m, tex, i + 1, j + 1), f.x);
+    return mix(top, bottom, f.y);
+}
+
+// A child of `ray` at its hit t along `dir` with RGB `weight`: pushed, or cut by the depth or
 // weight limit (it takes the background).
-void child(MixedParams m, TreeRay ray, float t, vec3 p, vec3 dir, float weight, bool straight) {
+void child(MixedParams m, TreeRay ray, float t, vec3 p, vec3 dir, vec3 weight, bool straight) {
     // A ray that goes straight on (glass of IOR 1) is the same ray going on, not a branch:
     // same depth, and no weight limit (section 4's rule stops it).
     uint depth = straight ? ray.depth : ray.depth + 1u;
-    if (!straight && (depth > uint(m.background.w) || weight < 1.0 / 255.0)) {
+    if (!straight && (depth > uint(m.background.w) || max(weight.r, max(weight.g, weight.b)) < 1.0 / 255.0)) {
         atomicAdd(pc.counters.v[MIXED_COUNTER_CUT], 1u);
         g_acc += weight * m.background.rgb;
         return;
@@ -119,25 +172,34 @@ void child(MixedParams m, TreeRay ray, float t, vec3 p, vec3 dir, float weight, 
     c.t_start = t;
     c.d = dir;
     c.t_end = UNBOUNDED;
-    c.carry = vec3(weight, 0.0, 0.0);
+    c.carry = weight;
     c.kind = KIND_SECONDARY;
     c.depth = depth;
     c.cull = straight ? ray.cull : false;
     push(c);
 }
 
-// The mesh hit of `ray` (triangle `tri`, (t, barycentrics) `hit`) reached with transmittance w.
-void shade(MixedParams m, TreeRay ray, uint tri, vec4 hit, float w) {
+// The mesh hit of `ray` (triangle `tri`, (t, barycentrics) `hit`) reached with RGB weight w.
+void shade(MixedParams m, TreeRay ray, uint tri, vec4 hit, vec3 w) {
     MeshTriangle tr = MeshTriangles(mixed_address(m.refs.xy)).v[tri];
+    MeshShading sh = MeshShadings(mixed_address(m.surfaces.xy)).v[tri];
+    MeshMaterial mat = MeshMaterials(mixed_address(m.surfaces.zw)).v[floatBitsToUint(sh.rest.w)];
     float t = hit.x;
     vec3 p = ray.o + t * ray.d;
-    vec3 n = tr.n0.xyz * hit.y + tr.n1.xyz * hit.z + tr.n2.xyz * hit.w;
+    vec3 n = sh.n0.xyz * hit.y + sh.n1.xyz * hit.z + sh.n2.xyz * hit.w;
     float len = length(n);
     n = len > 1e-12 ? n / len : normalize(cross(tr.v1.xyz - tr.v0.xyz, tr.v2.xyz - tr.v0.xyz));
     vec3 facing = dot(n, ray.d) > 0.0 ? -n : n;
-    uint kind = uint(tr.v0.w);
+    uint kind = uint(mat.colour.w);
+    g_acc += w * mat.emission.rgb;
+    // The colour (albedo or reflectance) at the hit: the material's times its texture's.
+    vec3 c = mat.colour.rgb;
+    if (kind != MATERIAL_GLASS && mat.texture.x != NO_TEXTURE) {
+        vec2 uv = vec2(sh.n0.w, sh.n1.w) * hit.y + vec2(sh.n2.w, sh.rest.x) * hit.z
+                + sh.rest.yz * hit.w;
+        c *= sample_texture(m, mat.texture, uv);
+    }
     if (kind == MATERIAL_DIFFUSE) {
-        vec3 c = vec3(tr.n0.w, tr.n1.w, tr.n2.w);
         g_acc += w * (c * m.ambient.rgb);
         for (uint l = 0u; l < m.counts.z; ++l) {
             vec3 dir;
@@ -160,9 +222,9 @@ void shade(MixedParams m, TreeRay ray, uint tri, vec4 hit, float w) {
         }
     } else if (kind == MATERIAL_MIRROR) {
         vec3 r = ray.d - 2.0 * dot(facing, ray.d) * facing;
-        child(m, ray, t, p, r, w * tr.n0.w, false);
+        child(m, ray, t, p, r, w * c, false);
     } else {
-        float eta = tr.n0.w;
+        float eta = mat.emission.w;
         bool entering = dot(n, ray.d) < 0.0;
         float n1 = entering ? 1.0 : eta;
         float n2 = entering ? eta : 1.0;
@@ -176,7 +238,7 @@ void shade(MixedParams m, TreeRay ray, uint tri, vec4 hit, float w) {
         if (sin2t >= 1.0) {
             child(m, ray, t, p, r, w, false);
         } else if (n1 == n2) {
-            child(m, ray, t, p, r, 0.0, false);
+            child(m, ray, t, p, r, vec3(0.0), false);
             child(m, ray, t, p, ray.d, w, true);
         } else {
             float cost = sqrt(1.0 - sin2t);
@@ -220,7 +282,7 @@ void main() {
                                      uvec2(px % w, px / w));
         ray.t_start = 0.0;
         ray.t_end = UNBOUNDED;
-        ray.carry = vec3(1.0, 0.0, 0.0);
+        ray.carry = vec3(1.0);
         ray.kind = KIND_CAMERA;
         ray.depth = 0u;
         ray.cull = true;
@@ -236,14 +298,21 @@ void main() {
                 g_acc += last.carry * abs(s.w);
             }
         } else {
-            g_acc = s.rgb;
+            // The tracer composited an untinted ray on from the pixel's colour, a tinted one
+            // from 0 (split_weight): its colour joins the pixel's times the tint.
+            vec3 tint;
+            bool tinted;
+            split_weight(last.carry, tint, tinted);
+            vec3 colour = s.rgb;
             float t = abs(s.w);
             if (s.w < 0.0 || tri == NO_TRIANGLE) {
                 // Over the background as write_target ends a ray-traced frame (state_over,
                 // no fused multiply-add), so a scene without meshes is that frame to the bit.
-                g_acc = state_over(s, vec4(m.background.rgb, 0.0)).rgb;
-            } else {
-                shade(m, last, tri, load_vec4_item(pc.cur_hit, px), t);
+                colour = state_over(s, vec4(m.background.rgb, 0.0)).rgb;
+            }
+            g_acc = tinted ? g_acc + tint * colour : colour;
+            if (!(s.w < 0.0 || tri == NO_TRIANGLE)) {
+                shade(m, last, tri, load_vec4_item(pc.cur_hit, px), tint * t);
             }
         }
         has_ray = g_sp > 0u;
@@ -278,7 +347,10 @@ void main() {
             tri = mesh_hit(m, ray.o, ray.d, ray.t_start + offset, UNBOUNDED, false, hit, visits);
             store_vec4(ray_at, vec4(ray.o, ray.t_start));
             store_vec4(address_plus(ray_at, 16u), vec4(ray.d, tri == NO_TRIANGLE ? UNBOUNDED : hit.x));
-            store_vec4(address_plus(ray_at, 32u), vec4(g_acc, ray.carry.r));
+            vec3 tint;
+            bool tinted;
+            float t0 = split_weight(ray.carry, tint, tinted);
+            store_vec4(address_plus(ray_at, 32u), vec4(tinted ? vec3(0.0) : g_acc, t0));
             store_uvec4(address_plus(ray_at, 48u), uvec4(ray.cull ? MIXED_RAY_CULL : 0u, 0u, 0u, 0u));
             list_for_tracer(m, px);
         }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Renders the mixed-scene examples of examples/scenes (SPEC section 8) into docs/, from the
-# first orbit camera of each real scene, and benches each at 640x480. Needs the real scenes
+# first orbit camera of each real scene (materials_plant: its own camera, and its Blender glb
+# made first by scripts/blender_assets.sh), and benches each at 640x480. Needs the real scenes
 # (RARA_REAL_DATA, else ../shared/data/real). Usage: scripts/mixed_examples.sh [WIDTH] [FRAMES]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,3 +26,10 @@ for pair in mirror_plant:plant_capture_sh0 glass_biker:biker_capture_sh0 \
             --cameras "$real/$stem.orbit_cameras.json" --width 640 --frames "$frames" --warmup 1
     fi
 done
+scripts/blender_assets.sh
+./target/release/rara render --scene examples/scenes/materials_plant.json --width "$width" \
+    -o docs/mixed_materials_plant.png
+if [ "$frames" -gt 0 ]; then
+    ./target/release/rara bench --scene examples/scenes/materials_plant.json --width 640 \
+        --frames "$frames" --warmup 1
+fi

@@ -377,3 +377,203 @@ fn a_blender_cameras_glb_frames_a_scene_file() {
         "the sphere is not at the centre"
     );
 }
+
+/// The GPU's frame beside the CPU reference's, in the test artifacts.
+fn save_pair(gpu: &image::RgbaImage, cpu: &image::RgbaImage, name: &str) {
+    let mut side = image::RgbaImage::new(2 * gpu.width(), gpu.height());
+    image::imageops::replace(&mut side, gpu, 0, 0);
+    image::imageops::replace(&mut side, cpu, gpu.width() as i64, 0);
+    let out = common::artifacts_dir().join(name);
+    side.save(&out).unwrap();
+    eprintln!("side by side (GPU | CPU reference): {}", out.display());
+}
+
+/// Makes `tests/blender/materials_glb.py`'s glb (`levels` subdivisions of its Suzanne) at
+/// `glb`; returns the triangles Blender exported.
+fn blender_materials_glb(blender: &str, glb: &Path, levels: u32) -> usize {
+    let stdout = run_blender(blender, "materials_glb.py", &[glb], &[&levels.to_string()]);
+    stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("TRIANGLES "))
+        .unwrap_or_else(|| panic!("no TRIANGLES line in:\n{stdout}"))
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+/// Issue 73: a glb that Blender makes, a subdivided Suzanne of about 260k triangles with an
+/// image texture beside a glass, a gold and an emissive material, renders in a mixed scene with
+/// the file's own materials: each mapped as docs/ARCHITECTURE.md says; the texture upright and
+/// sRGB-decoded where a camera facing it sees it (a wrong V flip swaps its quadrants, a missing
+/// decode shows grey 128 for 55); the gold mirror tinting what it reflects; the lamp's
+/// emission added; and the GPU's frame of it all against the CPU reference.
+#[test]
+fn a_blender_glb_renders_with_its_own_materials() {
+    use rara::mixed::{MixedScene, Surface};
+    use rara::raytrace::mixed::{GpuMixedScene, MixedTracer};
+    let Some(blender) = blender() else { return };
+    let dir = common::tempdir("blender_materials");
+    let glb = dir.join("materials.glb");
+    let exported = blender_materials_glb(&blender, &glb, 4);
+    // The materials, as read.
+    let doc = rara::input::gltf::Document::open(&glb).unwrap();
+    let own = rara::mixed::gltf_material::read_materials(&doc, &glb).unwrap();
+    let names: Vec<&str> = doc
+        .root
+        .materials
+        .iter()
+        .map(|m| m.name.as_deref().unwrap())
+        .collect();
+    let of = |name: &str| own.materials[names.iter().position(|n| *n == name).unwrap()];
+    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+    let (quadrants, painted) = (of("Quadrants"), of("Painted"));
+    assert_eq!(quadrants.surface, Surface::Diffuse);
+    assert!(quadrants.texture.is_some() && close(quadrants.colour, Vec3::ONE));
+    assert_eq!(painted.surface, Surface::Diffuse);
+    assert!(painted.texture.is_some() && close(painted.colour, Vec3::new(1.0, 0.9, 0.8)));
+    assert_eq!(of("Glass").surface, Surface::Glass(1.45));
+    let gold = of("Gold");
+    assert_eq!(gold.surface, Surface::Mirror);
+    assert!(close(gold.colour, Vec3::new(1.0, 0.766, 0.336)));
+    assert!(close(of("Lamp").emission, Vec3::new(3.0, 1.5, 0.3)));
+    assert_eq!(own.textures.len(), 2);
+    assert_eq!((own.textures[0].width, own.textures[0].height), (64, 64));
+
+    // Lit by the ambient term alone, a diffuse surface shows its albedo.
+    let scene_file = dir.join("scene.json");
+    std::fs::write(
+        &scene_file,
+        r#"{ "meshes": [{ "path": "materials.glb" }],
+             "ambient": [1, 1, 1], "background": [0.5, 0.5, 0.5] }"#,
+    )
+    .unwrap();
+    let scene = MixedScene::load(&scene_file, |f| Ok(rara::ply::load_ply(f)?.0)).unwrap();
+    assert_eq!(scene.meshes.triangles.len(), exported);
+    assert!(exported >= 200_000, "{exported} triangles");
+    let ctx = common::context();
+    let tracer = MixedTracer::new(&ctx).unwrap();
+    let gpu_scene = GpuMixedScene::new(&ctx, &scene, rara::ShPrecision::F32).unwrap();
+    let options = rara::RayTraceOptions::default();
+    let look = |eye: Vec3, target: Vec3, up: Vec3, fov: f32, w: u32, h: u32| {
+        let camera = Camera::look_at(eye, target, up, fov, w, h).unwrap();
+        let gpu = tracer.render(&gpu_scene, &camera, &options).unwrap().0;
+        let cpu = rara::reference::mixed::render(&scene, &camera, &options).0;
+        (gpu, cpu)
+    };
+    // Blender (x, y, z) is glTF (x, z, -y): the canvas stands at (0, 1.2, -3) facing +Z, the
+    // image's top up (+Y).
+    let (gpu, cpu) = look(
+        Vec3::new(0.0, 1.2, -1.0),
+        Vec3::new(0.0, 1.2, -3.0),
+        Vec3::Y,
+        40.0,
+        64,
+        64,
+    );
+    save_pair(&gpu, &cpu, "materials_canvas.png");
+    for (img, which) in [(&gpu, "GPU"), (&cpu, "CPU")] {
+        for ((x, y), want, what) in [
+            ((16, 16), [255, 0, 0], "top left red"),
+            ((48, 16), [0, 255, 0], "top right green"),
+            ((16, 48), [0, 0, 255], "bottom left blue"),
+            // sRGB 128 is linear 0.2159: 55 in the (linear) image.
+            ((48, 48), [55, 55, 55], "bottom right sRGB grey 128"),
+        ] {
+            let p = img.get_pixel(x, y);
+            let ok = (0..3).all(|c| p[c].abs_diff(want[c]) <= 1);
+            assert!(
+                ok,
+                "{which}: ({x}, {y}) is {p:?}, the texture's {what} is {want:?}"
+            );
+        }
+    }
+    // The gold sphere, head on: its centre reflects the background straight back, times gold.
+    let centre = Vec3::new(1.8, 0.6, 0.6);
+    let (gpu, cpu) = look(centre + Vec3::Z * 4.0, centre, Vec3::Y, 6.0, 32, 32);
+    for img in [&gpu, &cpu] {
+        let p = img.get_pixel(16, 16);
+        let want = [127.5, 0.5 * 0.766 * 255.0, 0.5 * 0.336 * 255.0];
+        let ok = (0..3).all(|c| (p[c] as f32 - want[c]).abs() <= 1.5);
+        assert!(ok, "the gold mirror's centre is {p:?}, not {want:?}");
+    }
+    // The lamp's face: its albedo under the ambient term plus its emission (3, 1.5, 0.3).
+    let centre = Vec3::new(0.0, 0.2, 1.6);
+    let (gpu, cpu) = look(centre + Vec3::Z * 3.0, centre, Vec3::Y, 4.0, 32, 32);
+    for img in [&gpu, &cpu] {
+        let p = img.get_pixel(16, 16);
+        let b = ((0.05 + 0.3) * 255.0f32).round() as u8;
+        assert!(
+            p[0] == 255 && p[1] == 255 && p[2].abs_diff(b) <= 1,
+            "the lamp is {p:?}"
+        );
+    }
+    // The glass sphere, head on: the grey background through it, slightly dimmed.
+    let centre = Vec3::new(-1.8, 0.6, 0.6);
+    let (gpu, cpu) = look(centre + Vec3::Z * 4.0, centre, Vec3::Y, 6.0, 32, 32);
+    for img in [&gpu, &cpu] {
+        let p = img.get_pixel(16, 16);
+        assert!(
+            p[0] == p[1] && p[1] == p[2] && (118..=128).contains(&p[0]),
+            "the glass sphere's centre is {p:?}"
+        );
+    }
+    // The whole group, GPU against CPU.
+    let (gpu, cpu) = look(
+        Vec3::new(0.0, 1.6, 7.0),
+        Vec3::new(0.0, 0.7, 0.0),
+        Vec3::Y,
+        35.0,
+        160,
+        120,
+    );
+    save_pair(&gpu, &cpu, "materials_group.png");
+    common::check_images("Blender's materials glb, GPU vs CPU", &gpu, &cpu, 45.0, 255);
+    drop(tracer);
+    drop(gpu_scene);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// `examples/scenes/materials_plant.json` (issue 73's example: Blender's glb beside plant, from
+/// the scene file's own camera) at 320 pixels wide, GPU against the CPU reference. The glb is
+/// not in the repository (7.5 MB): made here as `scripts/blender_assets.sh` makes it, where it
+/// is missing.
+#[test]
+fn the_materials_example_matches_the_cpu_reference() {
+    use rara::raytrace::mixed::{GpuMixedScene, MixedTracer};
+    if common::real_scene("plant_capture_sh0").is_none() {
+        common::test_skipped("the real scene plant_capture_sh0 is not present");
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let glb = root.join("examples/scenes/meshes/materials.glb");
+    if !glb.exists() {
+        let Some(blender) = blender() else { return };
+        // Written beside, then renamed: another test process never reads half a file.
+        let part = glb.with_extension("part.glb");
+        blender_materials_glb(&blender, &part, 4);
+        std::fs::rename(&part, &glb).unwrap();
+    }
+    let file = root.join("examples/scenes/materials_plant.json");
+    let parsed = rara::mixed::file::SceneFile::read(&file).unwrap();
+    let camera = parsed
+        .camera(&file)
+        .unwrap()
+        .expect("the example's camera")
+        .resized(320, None)
+        .unwrap();
+    let scene =
+        rara::mixed::MixedScene::from_file(parsed, &file, |f| Ok(rara::ply::load_ply(f)?.0))
+            .unwrap();
+    let ctx = common::context();
+    let tracer = MixedTracer::new(&ctx).unwrap();
+    let gpu_scene = GpuMixedScene::new(&ctx, &scene, rara::ShPrecision::F32).unwrap();
+    let options = rara::RayTraceOptions::default();
+    let gpu = tracer.render(&gpu_scene, &camera, &options).unwrap().0;
+    let cpu = rara::reference::mixed::render(&scene, &camera, &options).0;
+    eprintln!("real-scene case 'example materials_plant' ran");
+    save_pair(&gpu, &cpu, "materials_plant.png");
+    common::check_images("example materials_plant, GPU vs CPU", &gpu, &cpu, 45.0, 255);
+    drop(tracer);
+    drop(gpu_scene);
+    common::assert_no_validation_messages(&ctx);
+}

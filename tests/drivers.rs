@@ -113,7 +113,7 @@ fn frames(ctx: &Context) -> Vec<(String, image::RgbaImage)> {
     let mut mixed = MixedScene::splats_only(scene, Clip::rara(planes), Vec3::splat(0.1));
     let floor =
         Shape::quad().triangles(|p| Vec3::new(3.0 * p.x, 1.2, 3.0 * p.y), |_| Vec3::NEG_Y, 0);
-    mixed.add_mesh(floor, Material::Mirror(0.8));
+    mixed.add_mesh(floor, Material::mirror(0.8));
     mixed.lights.push(Light::Point {
         position: Vec3::new(1.0, -2.5, -1.5),
         intensity: Vec3::splat(6.0),

@@ -1219,7 +1219,14 @@ fn read_mesh_file(path: &Path, input: &[u8], original: &rara::Scene) -> Result<(
     if let Ok((scene, _)) = &imported {
         check_scene(scene, original.len()).map_err(|e| format!("ACCEPTED BAD INPUT: {e}"))?;
     }
-    let triangles = rara::mixed::mesh_triangles(path, &rara::mixed::Transform::default(), 0);
+    // No material given: a glTF's own are read too (and their images decoded).
+    let triangles = rara::mixed::mesh_triangles(
+        path,
+        &rara::mixed::Transform::default(),
+        None,
+        &mut Vec::new(),
+        &mut Vec::new(),
+    );
     match (imported, triangles) {
         (Ok(_), _) | (_, Ok(_)) => Ok(()),
         (Err(e), _) => Err(e.to_string().replace(&shown, "")),

@@ -43,7 +43,7 @@ fn showcase(clip: Clip) -> MixedScene {
             Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
             Vec3::new(0.0, 1.3, 0.0),
         ),
-        Material::Diffuse(Vec3::new(0.8, 0.7, 0.5)),
+        Material::diffuse(Vec3::new(0.8, 0.7, 0.5)),
     );
     s.add_mesh(
         placed(
@@ -52,7 +52,7 @@ fn showcase(clip: Clip) -> MixedScene {
             Quat::IDENTITY,
             Vec3::new(-0.5, 0.3, -1.4),
         ),
-        Material::Glass(1.5),
+        Material::glass(1.5),
     );
     light_from_above(&mut s);
     s
@@ -67,7 +67,7 @@ fn add_mirror_behind(s: &mut MixedScene) {
             Quat::IDENTITY,
             Vec3::new(0.0, 0.0, 1.6),
         ),
-        Material::Mirror(0.9),
+        Material::mirror(0.9),
     );
 }
 
@@ -256,7 +256,7 @@ fn glass_of_ior_1_changes_no_pixel() {
                 Quat::IDENTITY,
                 Vec3::new(0.3, -0.2, -0.2),
             ),
-            Material::Glass(1.0),
+            Material::glass(1.0),
         );
         with.add_mesh(
             placed(
@@ -265,7 +265,7 @@ fn glass_of_ior_1_changes_no_pixel() {
                 Quat::from_rotation_y(0.5),
                 Vec3::new(-0.3, 0.2, -2.0),
             ),
-            Material::Glass(1.0),
+            Material::glass(1.0),
         );
         let (n, max) = differences(
             &gpu_render(&ctx, &tracer, &with, &camera),
@@ -330,7 +330,7 @@ fn a_full_view_mirror_shows_what_the_mirrored_camera_sees() {
                 mirror_rotation,
                 Vec3::ZERO,
             ),
-            Material::Mirror(1.0),
+            Material::mirror(1.0),
         );
         let alone = MixedScene::splats_only(splats.clone(), clip.clone(), with.background);
         let gpu_mirror = gpu_render(&ctx, &tracer, &with, &camera);
@@ -414,7 +414,7 @@ fn shadows_match_their_closed_forms() {
         let mut s = MixedScene::splats_only(splats, Clip::default(), Vec3::ZERO);
         s.add_mesh(
             placed(&Shape::quad(), Vec3::splat(6.0), Quat::IDENTITY, Vec3::ZERO),
-            Material::Diffuse(Vec3::ONE),
+            Material::diffuse(Vec3::ONE),
         );
         s.lights.push(Light::Directional {
             direction: Vec3::new(-1.0, 0.0, 1.0).normalize(),
@@ -482,7 +482,7 @@ fn shadows_match_their_closed_forms() {
                 Quat::IDENTITY,
                 Vec3::new(x, 0.0, -1.0),
             ),
-            Material::Diffuse(Vec3::ONE),
+            Material::diffuse(Vec3::ONE),
         );
         s.lights.push(Light::Directional {
             direction: Vec3::new(-1.0, 0.0, 1.0).normalize(),
@@ -1235,7 +1235,7 @@ fn two_million_triangles_match_the_cpu_reference() {
         Vec3::new(0.7, 0.2, -0.6),
     );
     assert_eq!(tris.len(), 2_000_000);
-    scene.add_mesh(tris, Material::Diffuse(Vec3::new(0.8, 0.5, 0.3)));
+    scene.add_mesh(tris, Material::diffuse(Vec3::new(0.8, 0.5, 0.3)));
     add_mirror_behind(&mut scene);
     light_from_above(&mut scene);
     let built_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -86,11 +86,16 @@ impl MixedGpu {
         let mut made = made?;
         if !scene.meshes.triangles.is_empty() {
             let bytes = made.scene.mesh_bytes();
+            let texels: usize = scene.textures.iter().map(|t| t.texels.len()).sum();
             eprintln!(
-                "meshes on the device: {} ({:.0} B a triangle: 112 B and 32 B a node, twice for \
-                 an opaque one, which the shadow rays' BVH holds too)",
+                "meshes on the device: {} ({:.0} B a triangle: 48 B to intersect, 64 B to \
+                 shade, 32 B a node, and 48 B and 32 B again for an opaque one, which the shadow \
+                 rays' BVH holds too); {} materials, {} textures of {} texels",
                 super::mb(bytes),
                 bytes as f64 / scene.meshes.triangles.len() as f64,
+                scene.materials.len(),
+                scene.textures.len(),
+                texels,
             );
         }
         if still_bvh && !scene.gaussians.is_empty() {

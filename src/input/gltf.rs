@@ -184,6 +184,35 @@ impl Document {
         })
     }
 
+    /// The encoded bytes of image `index` (PNG, JPEG...): from its buffer view, its base64
+    /// data URI, or the file its URI names beside the document (at most [`MAX_GLTF_BYTES`]).
+    pub fn image_bytes(&self, index: usize) -> Result<Vec<u8>> {
+        let image = self
+            .root
+            .images
+            .get(index)
+            .ok_or_else(|| self.bad(format!("no image {index}")))?;
+        match (&image.buffer_view, &image.uri) {
+            (Some(view), _) => Ok(self.view(view.value())?.0.to_vec()),
+            (None, Some(uri)) if uri.starts_with("data:") => {
+                let (_, encoded) = uri.split_once(";base64,").ok_or_else(|| {
+                    self.bad(format!("image {index}: a data URI that is not base64"))
+                })?;
+                use base64::Engine;
+                base64::engine::general_purpose::STANDARD
+                    .decode(encoded)
+                    .map_err(|e| self.bad(format!("image {index}: {e}")))
+            }
+            (None, Some(uri)) => {
+                let file = side_file(&self.path, false, uri, &format!("image {index}'s uri"))?;
+                read_side_file(&file, None, MAX_GLTF_BYTES, "glTF image")
+            }
+            (None, None) => {
+                Err(self.bad(format!("image {index} has neither a uri nor a bufferView")))
+            }
+        }
+    }
+
     fn bad(&self, message: impl std::fmt::Display) -> Error {
         bad(&self.path, message)
     }

@@ -65,6 +65,13 @@ pub struct MeshData {
     pub faces: Vec<Vec<u32>>,
     /// Per vertex, its normal, where the file has one for every vertex (not normalised).
     pub normals: Option<Vec<DVec3>>,
+    /// Per vertex, its texture coordinates (glTF: the `TEXCOORD_n` set its primitive's base
+    /// colour texture reads, `TEXCOORD_0` without one; `(0, 0)` for a primitive without that
+    /// set), where some primitive has them.
+    pub uvs: Option<Vec<[f32; 2]>>,
+    /// Per face, its glTF material (`None`: the primitive names none); empty for the other
+    /// formats.
+    pub face_materials: Vec<Option<u32>>,
 }
 
 fn mesh_err(path: &Path, message: impl std::fmt::Display) -> Error {
@@ -395,6 +402,7 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
     let mut all_ids = true;
     let (mut normals, mut all_normals) = (Vec::new(), true);
     let (mut primitive_ids, mut corner_ids) = (Vec::new(), Vec::new());
+    let (mut uvs, mut any_uvs) = (Vec::new(), false);
     for (m, world) in placed {
         for primitive in &doc.root.meshes[m].primitives {
             let mode = match primitive.mode {
@@ -448,6 +456,40 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
                     _ => false,
                 })
             };
+            let material = primitive.material.map(|m| m.value() as u32);
+            let set = material.map_or(0, |m| {
+                crate::mixed::gltf_material::base_colour_tex_coord(doc, m as usize)
+            });
+            match attribute(Semantic::TexCoords(set)) {
+                Some(a) => {
+                    let uv = doc.floats(a, 2)?;
+                    if uv.len() / 2 != count {
+                        return Err(mesh_err(
+                            path,
+                            format!(
+                                "TEXCOORD_{set} has {} entries for {count} vertices",
+                                uv.len() / 2
+                            ),
+                        ));
+                    }
+                    uvs.extend(uv.chunks_exact(2).map(|p| [p[0], p[1]]));
+                    any_uvs = true;
+                }
+                None => {
+                    if material.is_some_and(|m| {
+                        crate::mixed::gltf_material::has_base_colour_texture(doc, m as usize)
+                    }) {
+                        return Err(mesh_err(
+                            path,
+                            format!(
+                                "mesh {m}: a primitive's material samples a texture at \
+                                 TEXCOORD_{set}, which the primitive lacks"
+                            ),
+                        ));
+                    }
+                    uvs.resize(uvs.len() + count, [0.0f32; 2]);
+                }
+            }
             all_ids &= read_ids("PRIMITIVE_ID", &mut primitive_ids)?;
             all_ids &= read_ids("CORNER_ID", &mut corner_ids)?;
             let (idx, what) = match primitive.indices {
@@ -458,6 +500,7 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
                 triangles(mode, &idx, what, path)?
                     .map(|t| t.map(|i| base.saturating_add(i)).to_vec()),
             );
+            mesh.face_materials.resize(mesh.faces.len(), material);
         }
     }
     if all_ids && !mesh.positions.is_empty() {
@@ -466,6 +509,9 @@ pub fn read_gltf_mesh(doc: &Document, path: &Path) -> Result<MeshData> {
     }
     if all_normals && !mesh.positions.is_empty() {
         mesh.normals = Some(normals);
+    }
+    if any_uvs {
+        mesh.uvs = Some(uvs);
     }
     Ok(mesh)
 }

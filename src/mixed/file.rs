@@ -108,7 +108,7 @@ pub struct SplatEntry {
     pub clip: Option<ClipFile>,
 }
 
-/// A triangle mesh placed in the world, with one material.
+/// A triangle mesh placed in the world, with one material or the file's own.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshEntry {
@@ -117,8 +117,9 @@ pub struct MeshEntry {
     /// Where it goes (scale may differ per axis).
     #[serde(default)]
     pub transform: TransformEntry,
-    /// Its material.
-    pub material: MaterialEntry,
+    /// Its material for every face; without one, the file's own (a glTF's materials; white
+    /// diffuse for a file without any).
+    pub material: Option<MaterialEntry>,
 }
 
 /// Scale, then rotation, then translation.

@@ -1,12 +1,16 @@
 //! Mixed scenes (SPEC section 8, issue 33): splat scenes, triangle meshes with a diffuse,
-//! mirror or glass material, point and directional lights, traced together.
+//! mirror or glass material (a glTF file's own, textures included), point and directional
+//! lights, traced together.
 //!
 //! - [`file`](mod@file): the JSON scene file;
 //! - [`triangles`]: the triangles, their BVH and the watertight ray-triangle test;
+//! - [`material`]: materials and textures; [`gltf_material`]: a glTF file's, mapped onto them;
 //! - [`MixedScene`]: everything in world space, ready for the CPU reference
 //!   ([`crate::reference::mixed`]) and the GPU ([`crate::raytrace::mixed`]).
 
 pub mod file;
+pub mod gltf_material;
+pub mod material;
 pub mod shapes;
 pub mod triangles;
 
@@ -21,6 +25,7 @@ use crate::scene::Scene;
 use file::{
     at_error, resolve_path, LightEntry, MaterialEntry, ScaleEntry, SceneFile, TransformEntry,
 };
+pub use material::{Material, Surface, Texture};
 use triangles::{MeshBvh, Triangle};
 
 /// Lights a scene holds at most (each composited Gaussian tests every light for a mesh shadow,
@@ -150,17 +155,6 @@ impl Transform {
     }
 }
 
-/// A mesh's material (SPEC section 8).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Material {
-    /// Opaque and lit: colour RGB.
-    Diffuse(Vec3),
-    /// Reflects the remaining transmittance times the reflectance.
-    Mirror(f32),
-    /// A dielectric of this index of refraction (exact Fresnel, Snell).
-    Glass(f32),
-}
-
 /// A light (SPEC section 8).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Light {
@@ -206,6 +200,8 @@ pub struct MixedScene {
     pub occluders: MeshBvh,
     /// Materials, indexed by [`Triangle::material`].
     pub materials: Vec<Material>,
+    /// Textures, indexed by [`Material::texture`].
+    pub textures: Vec<Texture>,
     /// Lights.
     pub lights: Vec<Light>,
     /// Ambient RGB.
@@ -247,6 +243,7 @@ impl MixedScene {
             meshes: MeshBvh::default(),
             occluders: MeshBvh::default(),
             materials: Vec::new(),
+            textures: Vec::new(),
             lights: Vec::new(),
             ambient: Vec3::ZERO,
             background,
@@ -272,7 +269,7 @@ impl MixedScene {
     pub fn set_triangles(&mut self, triangles: Vec<Triangle>) {
         let opaque = triangles
             .iter()
-            .filter(|t| !matches!(self.materials[t.material as usize], Material::Glass(_)))
+            .filter(|t| self.materials[t.material as usize].is_opaque())
             .copied()
             .collect();
         self.meshes = MeshBvh::build(triangles);
@@ -405,6 +402,7 @@ impl MixedScene {
             meshes: MeshBvh::default(),
             occluders: MeshBvh::default(),
             materials: Vec::new(),
+            textures: Vec::new(),
             lights,
             ambient,
             background,
@@ -418,44 +416,18 @@ impl MixedScene {
             // Meshes and lights alone: one empty splat object keeps the frame's layout.
             out.add_splats(&Scene::default(), &Transform::default(), Clip::default());
         }
-        // Meshes.
-        let mut materials = Vec::new();
+        // Meshes: the entry's material for all its faces, else the file's own.
         let mut all = Vec::new();
         for (i, m) in f.meshes.iter().enumerate() {
             let at = format!("meshes[{i}]");
             let file = resolve_path(path, &format!("{at}.path"), &m.path)?;
             let t = Transform::from_entry(path, &format!("{at}.transform"), &m.transform, false)?;
-            let material = match m.material {
-                MaterialEntry::Diffuse { color } => Material::Diffuse(colour(
-                    path,
-                    &format!("{at}.material.diffuse.color"),
-                    color,
-                    1.0,
-                )?),
-                MaterialEntry::Mirror { reflectance } => {
-                    if !(0.0..=1.0).contains(&reflectance) {
-                        return Err(at_error(
-                            path,
-                            &format!("{at}.material.mirror.reflectance"),
-                            "must lie in [0, 1]",
-                        ));
-                    }
-                    Material::Mirror(reflectance)
-                }
-                MaterialEntry::Glass { ior } => {
-                    if !(ior.is_finite() && ior >= 1.0) {
-                        return Err(at_error(
-                            path,
-                            &format!("{at}.material.glass.ior"),
-                            "must be finite and >= 1",
-                        ));
-                    }
-                    Material::Glass(ior)
-                }
+            let chosen = match &m.material {
+                Some(entry) => Some(material_of(path, &format!("{at}.material"), entry)?),
+                None => None,
             };
-            let tris = mesh_triangles(&file, &t, materials.len() as u32)
+            let tris = mesh_triangles(&file, &t, chosen, &mut out.materials, &mut out.textures)
                 .map_err(|e| at_error(path, &format!("{at}.path"), e))?;
-            materials.push(material);
             all.extend(tris);
             if all.len() > MAX_TRIANGLES {
                 return Err(at_error(
@@ -465,7 +437,6 @@ impl MixedScene {
                 ));
             }
         }
-        out.materials = materials;
         out.set_triangles(all);
         Ok(out)
     }
@@ -549,10 +520,90 @@ pub fn moved(scene: &Scene, t: &Transform) -> Scene {
     out
 }
 
+/// A scene file's `material` entry, checked (`at` names it in errors).
+fn material_of(path: &Path, at: &str, entry: &MaterialEntry) -> Result<Material> {
+    Ok(match *entry {
+        MaterialEntry::Diffuse { color } => {
+            Material::diffuse(colour(path, &format!("{at}.diffuse.color"), color, 1.0)?)
+        }
+        MaterialEntry::Mirror { reflectance } => {
+            if !(0.0..=1.0).contains(&reflectance) {
+                return Err(at_error(
+                    path,
+                    &format!("{at}.mirror.reflectance"),
+                    "must lie in [0, 1]",
+                ));
+            }
+            Material::mirror(reflectance)
+        }
+        MaterialEntry::Glass { ior } => {
+            if !(ior.is_finite() && ior >= 1.0) {
+                return Err(at_error(
+                    path,
+                    &format!("{at}.glass.ior"),
+                    "must be finite and >= 1",
+                ));
+            }
+            Material::glass(ior)
+        }
+    })
+}
+
+/// The material a face without one takes: glTF's default material (white, fully rough), as
+/// rara maps it (diffuse white).
+pub fn default_material() -> Material {
+    Material::diffuse(Vec3::ONE)
+}
+
 /// A mesh file's faces as world triangles (polygons as fans), with the file's vertex normals
-/// where it has them.
-pub fn mesh_triangles(file: &Path, t: &Transform, material: u32) -> Result<Vec<Triangle>> {
-    let mesh = crate::mesh::import::read_mesh(file)?;
+/// and texture coordinates where it has them. Their materials are appended to `materials`
+/// (and their textures to `textures`): `chosen` for every face where given, else the file's
+/// own (a glTF's, per primitive; [`default_material`] for a face without one, and for the
+/// formats without materials).
+pub fn mesh_triangles(
+    file: &Path,
+    t: &Transform,
+    chosen: Option<Material>,
+    materials: &mut Vec<Material>,
+    textures: &mut Vec<Texture>,
+) -> Result<Vec<Triangle>> {
+    let gltf = matches!(
+        file.extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .as_deref(),
+        Some("glb" | "gltf")
+    );
+    let (mesh, own) = if gltf && chosen.is_none() {
+        let doc = crate::input::gltf::Document::open(file)?;
+        let mesh = crate::mesh::import::read_gltf_mesh(&doc, file)?;
+        let own = gltf_material::read_materials(&doc, file)?;
+        (mesh, Some(own))
+    } else {
+        (crate::mesh::import::read_mesh(file)?, None)
+    };
+    // Each face's index into `materials`.
+    let base = materials.len() as u32;
+    let face_material: Box<dyn Fn(usize) -> u32> = match own {
+        Some(own) if !own.materials.is_empty() => {
+            let first_texture = textures.len() as u32;
+            materials.extend(own.materials.iter().map(|m| Material {
+                texture: m.texture.map(|k| k + first_texture),
+                ..*m
+            }));
+            textures.extend(own.textures);
+            // Faces without a material take the default, after the file's.
+            let fallback = materials.len() as u32;
+            if mesh.face_materials.iter().any(|m| m.is_none()) {
+                materials.push(default_material());
+            }
+            let faces = mesh.face_materials.clone();
+            Box::new(move |f| faces[f].map_or(fallback, |m| base + m))
+        }
+        _ => {
+            materials.push(chosen.unwrap_or_else(default_material));
+            Box::new(move |_| base)
+        }
+    };
     let n = mesh.positions.len();
     let mut out = Vec::new();
     for (f, face) in mesh.faces.iter().enumerate() {
@@ -569,6 +620,7 @@ pub fn mesh_triangles(file: &Path, t: &Transform, material: u32) -> Result<Vec<T
                 file.display()
             )));
         }
+        let material = face_material(f);
         for k in 1..face.len().saturating_sub(1) {
             let idx = [face[0], face[k], face[k + 1]].map(|i| i as usize);
             let v = idx.map(|i| t.point(mesh.positions[i].as_vec3()));
@@ -590,9 +642,14 @@ pub fn mesh_triangles(file: &Path, t: &Transform, material: u32) -> Result<Vec<T
                 }),
                 None => [face_n; 3],
             };
+            let uv = match &mesh.uvs {
+                Some(uvs) => idx.map(|i| glam::Vec2::from(uvs[i])),
+                None => [glam::Vec2::ZERO; 3],
+            };
             out.push(Triangle {
                 v,
                 n: normals,
+                uv,
                 material,
             });
         }

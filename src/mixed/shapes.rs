@@ -100,6 +100,7 @@ impl Shape {
                 Triangle {
                     v: idx.map(|i| f(self.positions[i])),
                     n: idx.map(|i| fn_(self.normals[i]).normalize()),
+                    uv: [glam::Vec2::ZERO; 3],
                     material,
                 }
             })

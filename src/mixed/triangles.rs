@@ -1,10 +1,10 @@
 //! The triangles of a mixed scene (SPEC section 8): each with its vertices, its vertex
-//! normals and its material, a BVH over them that the CPU reference and the GPU kernels both
+//! normals, texture coordinates and material, a BVH over them that the CPU reference and the GPU kernels both
 //! traverse (the GPU gets the same nodes, [`GpuMeshNode`]), and the watertight ray-triangle
 //! test of Woop, Benthin and Wald (2013), whose GLSL twin is `glsl/mixed_common.glsl`.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 /// Triangles a leaf holds at most.
 pub const LEAF_TRIANGLES: usize = 4;
@@ -20,6 +20,8 @@ pub struct Triangle {
     /// Vertex normals (the file's, turned by the mesh's transform, unit length), or the face
     /// normal three times where the file has none.
     pub n: [Vec3; 3],
+    /// Texture coordinates of the vertices (zero where the file has none).
+    pub uv: [Vec2; 3],
     /// Index into the scene's materials.
     pub material: u32,
 }
@@ -46,24 +48,59 @@ pub struct GpuMeshNode {
     pub b: u32,
 }
 
-/// A triangle as the GPU reads it, seven 16-byte words (`MeshTriangle` in
-/// `glsl/mixed_common.glsl`): the vertices with the material's kind in `v0.w`, then the three
-/// vertex normals with the material's three parameters in their `w`.
+/// A triangle as the intersection test reads it, three 16-byte words (`MeshTriangle` in
+/// `glsl/mixed_common.glsl`): its vertices (`w` unused). What shading needs lies apart, in
+/// [`GpuShading`], so that BVH walks (and the shadow rays' triangles, which have no shading)
+/// load 48 bytes a triangle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangle {
-    /// Vertex 0 and the material kind (`MATERIAL_*` as a float).
+    /// Vertex 0.
     pub v0: [f32; 4],
-    /// Vertex 1, unused.
+    /// Vertex 1.
     pub v1: [f32; 4],
-    /// Vertex 2, unused.
+    /// Vertex 2.
     pub v2: [f32; 4],
-    /// Normal 0 and parameter 0.
+}
+
+/// What a hit on a triangle is shaded with, four 16-byte words (`MeshShading` in
+/// `glsl/mixed_common.glsl`): the vertex normals with `u0, v0, u1` in their `w`, then `u2,
+/// v2`, the material's index (its bits) and a word unused.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShading {
+    /// Normal 0 and `u0`.
     pub n0: [f32; 4],
-    /// Normal 1 and parameter 1.
+    /// Normal 1 and `v0`.
     pub n1: [f32; 4],
-    /// Normal 2 and parameter 2.
+    /// Normal 2 and `u1`.
     pub n2: [f32; 4],
+    /// `v1`, `u2`, `v2`, the material index's bits.
+    pub rest: [f32; 4],
+}
+
+impl Triangle {
+    /// Its intersection words.
+    pub fn gpu(&self) -> GpuTriangle {
+        let v = |k: usize| [self.v[k].x, self.v[k].y, self.v[k].z, 0.0];
+        GpuTriangle {
+            v0: v(0),
+            v1: v(1),
+            v2: v(2),
+        }
+    }
+
+    /// Its shading words.
+    pub fn gpu_shading(&self) -> GpuShading {
+        let n = |k: usize, w: f32| [self.n[k].x, self.n[k].y, self.n[k].z, w];
+        let uv = self.uv;
+        GpuShading {
+            n0: n(0, uv[0].x),
+            n1: n(1, uv[0].y),
+            n2: n(2, uv[1].x),
+            rest: [uv[1].y, uv[2].x, uv[2].y, f32::from_bits(self.material)],
+        }
+    }
 }
 
 /// A ray's hit on a triangle: its parameter and the barycentric weights of its vertices.
@@ -263,6 +300,14 @@ impl MeshBvh {
             }
         }
         best
+    }
+
+    /// The texture coordinates at a hit: the vertices' weighted by its barycentrics (in f32,
+    /// as the kernel forms them).
+    pub fn uv(&self, hit: &TriangleHit) -> Vec2 {
+        let uv = self.triangles[hit.triangle as usize].uv;
+        let b = hit.bary.as_vec3();
+        uv[0] * b.x + uv[1] * b.y + uv[2] * b.z
     }
 
     /// The shading normal at a hit: the vertex normals weighted by its barycentrics,

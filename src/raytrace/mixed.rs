@@ -20,8 +20,9 @@ use crate::constants::{
 use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::GpuClipParams;
-use crate::mixed::triangles::GpuTriangle;
-use crate::mixed::{Light, Material, MixedScene};
+use crate::mixed::material::{gpu_materials, GpuMaterial};
+use crate::mixed::triangles::{GpuShading, GpuTriangle};
+use crate::mixed::{Light, MixedScene};
 use crate::options::RayTraceOptions;
 use crate::precision::ShPrecision;
 use crate::shaders;
@@ -53,6 +54,8 @@ struct GpuMixedParams {
     occluders: [u32; 4],
     occluder_counts: [u32; 4],
     lists: [u32; 4],
+    surfaces: [u32; 4],
+    texels: [u32; 4],
 }
 
 #[repr(C)]
@@ -93,6 +96,12 @@ pub struct GpuMixedScene {
     clips: Buffer,
     /// Per splat object its first Gaussian (`object_of` in `glsl/mixed_common.glsl`).
     object_firsts: Buffer,
+    /// Per triangle (in `triangles`' order) its normals, UVs and material.
+    shading: Buffer,
+    /// The materials ([`GpuMaterial`]).
+    materials: Buffer,
+    /// Every texture's texels, RGBA8 words.
+    texels: Buffer,
     params: GpuMixedParams,
     /// The first object's clip (the tracer's `clip`, for its validation and upload).
     clip0: crate::clip::Clip,
@@ -103,35 +112,29 @@ impl GpuMixedScene {
     pub fn new(ctx: &Context, scene: &MixedScene, precision: ShPrecision) -> Result<Self> {
         scene.validate()?;
         let gaussians = GpuScene::with_sh_precision(ctx, &scene.gaussians, precision)?;
+        // (A buffer is never empty: a scene without meshes gets one unused entry.)
+        fn or_one<T: Default>(mut v: Vec<T>) -> Vec<T> {
+            if v.is_empty() {
+                v.push(T::default());
+            }
+            v
+        }
         let gpu_triangles = |bvh: &crate::mixed::triangles::MeshBvh| -> Vec<GpuTriangle> {
-            let tris: Vec<GpuTriangle> = bvh
+            or_one(bvh.triangles.iter().map(|t| t.gpu()).collect())
+        };
+        let shading: Vec<GpuShading> = or_one(
+            scene
+                .meshes
                 .triangles
                 .iter()
-                .map(|t| {
-                    let (kind, p) = match scene.materials[t.material as usize] {
-                        Material::Diffuse(c) => (0.0, c.to_array()),
-                        Material::Mirror(r) => (1.0, [r, 0.0, 0.0]),
-                        Material::Glass(eta) => (2.0, [eta, 0.0, 0.0]),
-                    };
-                    let v = |k: usize, w: f32| [t.v[k].x, t.v[k].y, t.v[k].z, w];
-                    let n = |k: usize| [t.n[k].x, t.n[k].y, t.n[k].z, p[k]];
-                    GpuTriangle {
-                        v0: v(0, kind),
-                        v1: v(1, 0.0),
-                        v2: v(2, 0.0),
-                        n0: n(0),
-                        n1: n(1),
-                        n2: n(2),
-                    }
-                })
-                .collect();
-            // (A buffer is never empty: a scene without meshes gets one unused entry.)
-            if tris.is_empty() {
-                vec![GpuTriangle::zeroed()]
-            } else {
-                tris
-            }
-        };
+                .map(|t| t.gpu_shading())
+                .collect(),
+        );
+        let (materials, texels) = gpu_materials(&scene.materials, &scene.textures);
+        let shading = Buffer::from_slice(ctx, "mixed triangle shading", &shading)?;
+        let materials =
+            Buffer::from_slice(ctx, "mixed materials", &or_one::<GpuMaterial>(materials))?;
+        let texels = Buffer::from_slice(ctx, "mixed texels", &or_one::<u32>(texels))?;
         let node_data = |bvh: &crate::mixed::triangles::MeshBvh| {
             if bvh.nodes.is_empty() {
                 vec![Default::default()]
@@ -173,6 +176,11 @@ impl GpuMixedScene {
         let object_firsts = Buffer::from_slice(ctx, "mixed object firsts", &firsts)?;
         let [a, b] = lo_hi(object_firsts.address);
         params.objects = [a, b, 0, 0];
+        let [a, b] = lo_hi(shading.address);
+        let [c, d] = lo_hi(materials.address);
+        params.surfaces = [a, b, c, d];
+        let [a, b] = lo_hi(texels.address);
+        params.texels = [a, b, scene.materials.len() as u32, 0];
         for (k, l) in scene.lights.iter().enumerate() {
             let (at, i) = match *l {
                 Light::Point {
@@ -207,6 +215,9 @@ impl GpuMixedScene {
             occluder_nodes,
             clips,
             object_firsts,
+            shading,
+            materials,
+            texels,
             params,
             clip0: scene.objects[0].clip.clone(),
         })
@@ -236,10 +247,14 @@ impl GpuMixedScene {
         Ok(())
     }
 
-    /// Device bytes of the meshes, the clips and the objects' first Gaussians (the Gaussians'
-    /// are [`GpuScene`]'s).
+    /// Device bytes of the meshes (their triangles, shading data, BVHs, materials and
+    /// textures), the clips and the objects' first Gaussians (the Gaussians' are
+    /// [`GpuScene`]'s).
     pub fn mesh_bytes(&self) -> u64 {
         self.triangles.size
+            + self.shading.size
+            + self.materials.size
+            + self.texels.size
             + self.nodes.size
             + self.occluder_triangles.size
             + self.occluder_nodes.size

@@ -32,7 +32,7 @@ use super::raytrace::Bvh;
 use super::Rgba8Image;
 use crate::camera::Camera;
 use crate::mixed::triangles::TriangleHit;
-use crate::mixed::{Light, Material, MixedScene};
+use crate::mixed::{Light, MixedScene, Surface};
 use crate::options::RayTraceOptions;
 use crate::sh::eval_sh;
 
@@ -72,7 +72,10 @@ struct Ray {
     t_start: f64,
     /// Shadow rays: where the light is (infinity for a directional one).
     t_end: f64,
-    weight: f32,
+    /// RGB weight: what reaches the pixel of each unit of light it brings (its parent's
+    /// remaining `T` times the reflectances and Fresnel terms on its path; 1 for the camera
+    /// ray). Its largest channel is the `T` its Gaussians composite under.
+    weight: Vec3,
     depth: u32,
     kind: Kind,
     /// Drops what section 3 culls (camera rays, and their straight continuations).
@@ -188,7 +191,7 @@ impl Frame<'_> {
             d,
             t_start: 0.0,
             t_end: f64::INFINITY,
-            weight: 1.0,
+            weight: Vec3::ONE,
             depth: 0,
             kind: Kind::Camera,
             cull: true,
@@ -217,24 +220,37 @@ impl Frame<'_> {
                 .meshes
                 .hit(ray.o, ray.d, ray.t_start + offset, f64::INFINITY, false);
             let t_mesh = hit.map_or(f64::INFINITY, |h| h.t);
-            let (colour, t, ended) = self.segment(&ray, ray.t_start, t_mesh, acc, ray.weight);
-            acc = colour;
-            let Some(hit) = hit.filter(|_| !ended) else {
-                acc += t * bg;
+            // A ray of one weight in every channel composites on into the pixel's colour
+            // under T = that weight (the kernels' order, so a scene without colour on its
+            // paths is the ray tracer's frame to the bit); a tinted one composites from 0
+            // under its largest channel, and its colour joins the pixel's times its tint.
+            let (t0, tint) = split_weight(ray.weight);
+            let start = if tint.is_some() { Vec3::ZERO } else { acc };
+            let (mut colour, t, ended) = self.segment(&ray, ray.t_start, t_mesh, start, t0);
+            let hit = hit.filter(|_| !ended);
+            if hit.is_none() {
+                colour += t * bg;
+            }
+            acc = match tint {
+                Some(tint) => acc + tint * colour,
+                None => colour,
+            };
+            let Some(hit) = hit else {
                 continue;
             };
-            self.shade(&ray, &hit, t, &mut acc, &mut stack, stats);
+            let w = tint.unwrap_or(Vec3::ONE) * t;
+            self.shade(&ray, &hit, w, &mut acc, &mut stack, stats);
         }
         acc
     }
 
-    /// The mesh hit of `ray` with the transmittance `w` that reaches it: its light, or its
+    /// The mesh hit of `ray` with the RGB weight `w` that reaches it: its light, or its
     /// children onto `stack`.
     fn shade(
         &self,
         ray: &Ray,
         hit: &TriangleHit,
-        w: f32,
+        w: Vec3,
         acc: &mut Vec3,
         stack: &mut Vec<Ray>,
         stats: &mut MixedStats,
@@ -243,12 +259,13 @@ impl Frame<'_> {
         let p = ray.o + hit.t * ray.d;
         let n = s.meshes.normal(hit);
         let material = s.materials[s.meshes.triangles[hit.triangle as usize].material as usize];
+        *acc += w * material.emission;
         let facing = if n.dot(ray.d) > 0.0 { -n } else { n };
-        let mut child = |d: DVec3, weight: f32, straight: bool, acc: &mut Vec3| {
+        let mut child = |d: DVec3, weight: Vec3, straight: bool, acc: &mut Vec3| {
             // A ray that goes straight on (glass of IOR 1) is the same ray going on, not a
             // branch: same depth, and no weight limit (section 4's rule stops it).
             let depth = if straight { ray.depth } else { ray.depth + 1 };
-            if !straight && (depth > s.max_depth || weight < 1.0 / 255.0) {
+            if !straight && (depth > s.max_depth || weight.max_element() < 1.0 / 255.0) {
                 stats.cut += 1;
                 *acc += weight * s.background;
                 return;
@@ -269,8 +286,9 @@ impl Frame<'_> {
                 cull,
             });
         };
-        match material {
-            Material::Diffuse(c) => {
+        match material.surface {
+            Surface::Diffuse => {
+                let c = material.colour_at(&s.textures, s.meshes.uv(hit));
                 *acc += w * (c * s.ambient);
                 for l in &s.lights {
                     let (dl, dist, light) = toward_light(l, p);
@@ -281,7 +299,7 @@ impl Frame<'_> {
                             d: dl,
                             t_start: 0.0,
                             t_end: dist,
-                            weight: 1.0,
+                            weight: Vec3::ONE,
                             depth: ray.depth,
                             kind: Kind::Shadow(w * (c * (ndl as f32 * light))),
                             cull: false,
@@ -289,11 +307,12 @@ impl Frame<'_> {
                     }
                 }
             }
-            Material::Mirror(rho) => {
+            Surface::Mirror => {
+                let rho = material.colour_at(&s.textures, s.meshes.uv(hit));
                 let r = ray.d - 2.0 * facing.dot(ray.d) * facing;
                 child(r, w * rho, false, acc);
             }
-            Material::Glass(eta) => {
+            Surface::Glass(eta) => {
                 let (n1, n2, nn) = if n.dot(ray.d) < 0.0 {
                     (1.0, eta as f64, n)
                 } else {
@@ -307,6 +326,18 @@ impl Frame<'_> {
                 }
             }
         }
+    }
+}
+
+/// A ray's RGB weight as the `T` its Gaussians composite under (its largest channel) and its
+/// tint (the weight over that `T`), `None` where every channel is the same (the kernel's
+/// `split_weight`).
+pub fn split_weight(w: Vec3) -> (f32, Option<Vec3>) {
+    let t = w.max_element();
+    if w.x == w.y && w.y == w.z {
+        (t, None)
+    } else {
+        (t, Some(w / t))
     }
 }
 
