@@ -32,14 +32,27 @@ pub fn describe(scene: &MixedScene, path: &Path) -> String {
         .filter(|o| o.clip.region.is_some())
         .count();
     format!(
-        "scene {}: {} splat objects ({} Gaussians, {clipped} clipped), {} triangles in {} meshes \
-         (their BVHs built in {:.0} ms), {} lights, ray depth {}",
+        "scene {}: {} splat objects ({} Gaussians, {clipped} clipped), {} triangles of {} \
+         materials ({} textures; their BVHs built in {:.0} ms by {}, depth {}), {} lights, ray depth {}",
         path.display(),
         scene.objects.len(),
         scene.gaussians.len(),
         scene.meshes.triangles.len(),
         scene.materials.len(),
+        scene.textures.len(),
         scene.meshes.build_ms + scene.occluders.build_ms,
+        if scene.meshes.median_split {
+            "median split (obvhs's tree was deeper than the traversal's stack)".to_string()
+        } else if scene.meshes.median_triangles > 0 {
+            format!(
+                "obvhs ({} triangles of its subtrees too deep for the traversal's stack split \
+                 again by the median)",
+                scene.meshes.median_triangles
+            )
+        } else {
+            "obvhs".to_string()
+        },
+        scene.meshes.depth,
         scene.lights.len(),
         scene.max_depth
     )

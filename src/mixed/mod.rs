@@ -31,11 +31,11 @@ use triangles::{MeshBvh, Triangle};
 /// Lights a scene holds at most (each composited Gaussian tests every light for a mesh shadow,
 /// inside lavapipe's loop budget: docs/ARCHITECTURE.md).
 pub const MAX_LIGHTS: usize = crate::constants::MIXED_MAX_LIGHTS as usize;
-/// Triangles a scene holds at most (2^22): device memory of 112 B a triangle (twice for an
-/// opaque one, which the shadow rays' BVH holds too) and 32 B a node, about 1 GB at the
-/// limit; the median-split tree stays 21 levels deep, inside the traversal's stack of
-/// `MIXED_MESH_STACK`, and a ray's walk that nears lavapipe's loop budget is counted and
-/// refused (`MIXED_MESH_VISITS_MAX`).
+/// Triangles a scene holds at most (2^22): device memory of 112 B a triangle (and 48 B more
+/// for an opaque one, which the shadow rays' BVH holds too) and 32 B a node, under 1 GB at
+/// the limit; the BVH is kept inside the traversal's stack of `MIXED_MESH_STACK`
+/// ([`triangles::MeshBvh`]), and a ray's walk that nears lavapipe's loop budget is counted
+/// and refused (`MIXED_MESH_VISITS_MAX`).
 pub const MAX_TRIANGLES: usize = 1 << 22;
 /// Splat scenes a scene file places at most.
 pub const MAX_SPLAT_OBJECTS: usize = crate::constants::MIXED_MAX_OBJECTS as usize;

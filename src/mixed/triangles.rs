@@ -189,35 +189,188 @@ pub fn box_range(lo: &[f32; 3], hi: &[f32; 3], o: DVec3, inv_d: DVec3) -> Option
     (t_in <= t_out + slack).then_some((t_in - slack, t_out + slack))
 }
 
-/// A BVH over triangles: a median split on the longest axis of the centroids' bounds,
-/// [`LEAF_TRIANGLES`] or fewer per leaf, the triangles stored in leaf order.
+/// A BVH over triangles, [`LEAF_TRIANGLES`] or fewer per leaf, the triangles stored in leaf
+/// order: `obvhs`'s (PLOC, then reinsertion to lower its SAH cost), its subtrees that end
+/// deeper than the kernels' traversal stack holds ([`MAX_MESH_DEPTH`]) split again by the
+/// median on the longest axis of the centroids' bounds (whose depth is `log2(n / 4)`), and
+/// the median split of everything where even that is too deep.
 #[derive(Clone, Debug, Default)]
 pub struct MeshBvh {
-    /// Nodes, the root first; a node's left child follows it.
+    /// Nodes, the root first.
     pub nodes: Vec<GpuMeshNode>,
     /// The triangles, in leaf order.
     pub triangles: Vec<Triangle>,
     /// Milliseconds the build took (host wall time).
     pub build_ms: f64,
+    /// The tree's depth (a lone leaf: 0).
+    pub depth: u32,
+    /// Whether the median split was built for all of it (obvhs's tree was too deep even with
+    /// its deep subtrees split again).
+    pub median_split: bool,
+    /// Triangles of obvhs's subtrees that ended too deep, split again by the median.
+    pub median_triangles: usize,
 }
+
+/// The deepest tree the kernels' traversal walks whole: with a stack of `MIXED_MESH_STACK`
+/// entries, a node at depth `d` finds at most `d` entries on it and pushes two.
+pub const MAX_MESH_DEPTH: u32 = crate::constants::MIXED_MESH_STACK - 1;
 
 impl MeshBvh {
     /// The BVH of `triangles`.
     pub fn build(triangles: Vec<Triangle>) -> MeshBvh {
         let start = std::time::Instant::now();
-        let mut bvh = MeshBvh::default();
         if triangles.is_empty() {
-            return bvh;
+            return MeshBvh::default();
         }
-        let mut order: Vec<usize> = (0..triangles.len()).collect();
-        let mut sorted = Vec::with_capacity(triangles.len());
-        bvh.split(&triangles, &mut order, &mut sorted);
-        bvh.triangles = sorted;
+        let mut bvh = MeshBvh::from_obvhs(&triangles);
+        if bvh.depth > MAX_MESH_DEPTH {
+            bvh = MeshBvh::median(triangles);
+        }
         bvh.build_ms = start.elapsed().as_secs_f64() * 1e3;
         bvh
     }
 
-    fn split(&mut self, tris: &[Triangle], order: &mut [usize], sorted: &mut Vec<Triangle>) -> u32 {
+    /// The median-split BVH of `triangles` (non-empty).
+    pub fn median(triangles: Vec<Triangle>) -> MeshBvh {
+        let mut bvh = MeshBvh {
+            median_split: true,
+            median_triangles: triangles.len(),
+            ..MeshBvh::default()
+        };
+        let mut order: Vec<usize> = (0..triangles.len()).collect();
+        let mut sorted = Vec::with_capacity(triangles.len());
+        bvh.split(&triangles, &mut order, &mut sorted, 0);
+        bvh.triangles = sorted;
+        bvh
+    }
+
+    /// obvhs's BVH of `triangles` (non-empty) in the kernels' layout.
+    fn from_obvhs(triangles: &[Triangle]) -> MeshBvh {
+        use obvhs::aabb::Aabb;
+        let aabbs: Vec<Aabb> = triangles
+            .iter()
+            .map(|t| {
+                let lo = t.v[0].min(t.v[1]).min(t.v[2]);
+                let hi = t.v[0].max(t.v[1]).max(t.v[2]);
+                // obvhs's Aabb is two 16-byte vectors (x, y, z and a pad), plain old data.
+                bytemuck::cast([lo.x, lo.y, lo.z, 0.0, hi.x, hi.y, hi.z, 0.0])
+            })
+            .collect();
+        let params = obvhs::BvhBuildParams {
+            // No pre-splitting: each triangle in one leaf, stored once.
+            pre_split: false,
+            max_prims_per_leaf: LEAF_TRIANGLES as u32,
+            ..obvhs::BvhBuildParams::medium_build()
+        };
+        let tree = obvhs::bvh2::builder::build_bvh2(&aabbs, params, &mut Default::default());
+        // Each obvhs node's height (a leaf: 0) and triangles, children before parents.
+        let mut height = vec![0u32; tree.nodes.len()];
+        let mut count = vec![0usize; tree.nodes.len()];
+        let mut order = vec![(0usize, false)];
+        while let Some((i, done)) = order.pop() {
+            let node = &tree.nodes[i];
+            if node.is_leaf() {
+                count[i] = node.prim_count as usize;
+                continue;
+            }
+            let a = node.first_index as usize;
+            if done {
+                height[i] = 1 + height[a].max(height[a + 1]);
+                count[i] = count[a] + count[a + 1];
+            } else {
+                order.push((i, true));
+                order.push((a, false));
+                order.push((a + 1, false));
+            }
+        }
+        let mut bvh = MeshBvh {
+            nodes: Vec::with_capacity(tree.nodes.len()),
+            ..MeshBvh::default()
+        };
+        let mut sorted = Vec::with_capacity(triangles.len());
+        // The height of the median split of m triangles.
+        let median_height = |m: usize| m.div_ceil(LEAF_TRIANGLES).next_power_of_two().ilog2();
+        // Depth first from obvhs's root (node 0): each node's slot taken when it is reached,
+        // its children filled in when they are. Where a subtree would end deeper than the
+        // traversal's stack holds (PLOC chains slivers: a UV sphere's poles took obvhs's tree
+        // of 2M triangles 63 deep), its nodes are kept as long as their children could still
+        // be split by the median in time, and the node below which they could not is.
+        let mut stack = vec![(0usize, u32::MAX, false, 0u32)];
+        while let Some((src, parent, right, depth)) = stack.pop() {
+            let node = &tree.nodes[src];
+            let too_deep = depth + height[src] > MAX_MESH_DEPTH && {
+                let a = node.first_index as usize;
+                node.is_leaf()
+                    || [a, a + 1]
+                        .iter()
+                        .any(|&c| depth + 1 + median_height(count[c]) > MAX_MESH_DEPTH)
+            };
+            let at = if too_deep {
+                let mut prims = Vec::new();
+                let mut under = vec![src];
+                while let Some(i) = under.pop() {
+                    let n = &tree.nodes[i];
+                    if n.is_leaf() {
+                        let first = n.first_index as usize;
+                        prims.extend(
+                            tree.primitive_indices[first..first + n.prim_count as usize]
+                                .iter()
+                                .map(|&k| k as usize),
+                        );
+                    } else {
+                        under.push(n.first_index as usize + 1);
+                        under.push(n.first_index as usize);
+                    }
+                }
+                bvh.median_triangles += prims.len();
+                bvh.split(triangles, &mut prims, &mut sorted, depth)
+            } else {
+                let at = bvh.nodes.len() as u32;
+                bvh.depth = bvh.depth.max(depth);
+                let (lo, hi) = (node.aabb.min, node.aabb.max);
+                let mut out = GpuMeshNode {
+                    lo: [lo.x, lo.y, lo.z],
+                    a: 0,
+                    hi: [hi.x, hi.y, hi.z],
+                    b: 0,
+                };
+                if node.is_leaf() {
+                    let first = node.first_index as usize;
+                    out.a = sorted.len() as u32 | MESH_LEAF_BIT;
+                    out.b = node.prim_count;
+                    for &k in &tree.primitive_indices[first..first + node.prim_count as usize] {
+                        sorted.push(triangles[k as usize]);
+                    }
+                } else {
+                    let a = node.first_index as usize;
+                    stack.push((a + 1, at, true, depth + 1));
+                    stack.push((a, at, false, depth + 1));
+                }
+                bvh.nodes.push(out);
+                at
+            };
+            if parent != u32::MAX {
+                let p = &mut bvh.nodes[parent as usize];
+                if right {
+                    p.b = at;
+                } else {
+                    p.a = at;
+                }
+            }
+        }
+        bvh.triangles = sorted;
+        debug_assert_eq!(bvh.triangles.len(), triangles.len());
+        bvh
+    }
+
+    fn split(
+        &mut self,
+        tris: &[Triangle],
+        order: &mut [usize],
+        sorted: &mut Vec<Triangle>,
+        depth: u32,
+    ) -> u32 {
+        self.depth = self.depth.max(depth);
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for &k in order.iter() {
             for v in tris[k].v {
@@ -248,8 +401,8 @@ impl MeshBvh {
         let mid = order.len() / 2;
         order.select_nth_unstable_by(mid, |&a, &b| centre(a)[axis].total_cmp(&centre(b)[axis]));
         let (left, right) = order.split_at_mut(mid);
-        let l = self.split(tris, left, sorted);
-        let r = self.split(tris, right, sorted);
+        let l = self.split(tris, left, sorted, depth + 1);
+        let r = self.split(tris, right, sorted, depth + 1);
         self.nodes[node as usize].a = l;
         self.nodes[node as usize].b = r;
         node

@@ -4,7 +4,7 @@
 //! ([`super::tracer`]) over every pixel's ray, compositing its Gaussians up to the mesh. The
 //! host runs generations until no pixel has a ray left (one wait per generation: this path is
 //! headless, [`MixedTracer::render`]). The Gaussians' BVH is built once per frame, in the
-//! first generation; the triangles' BVH is built on the host when the scene is uploaded
+//! first generation; the triangles' BVH is built on the host (obvhs) when the scene is loaded
 //! ([`crate::mixed::triangles::MeshBvh`]). CPU twin: [`crate::reference::mixed`].
 
 use ash::vk;
