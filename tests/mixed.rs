@@ -1308,3 +1308,186 @@ fn two_million_triangles_match_the_cpu_reference() {
         .unwrap();
     common::check_images("mixed, 2M triangles", &gpu, &cpu, 45.0, 255);
 }
+
+/// A glb made here (not by a real producer: the cases Blender does not write): its quad's
+/// material samples a texture at `TEXCOORD_1` (`TEXCOORD_0` is all zeros) from a data-URI
+/// PNG of four flat quadrants, with a base colour factor, u clamped and v mirrored; a second
+/// primitive has no material. `image` picks the image's encoding (`"png"`, `"jpeg"`) and
+/// `material` the quad's material JSON (`TEX` stands for the texture reference).
+fn texture_glb(dir: &std::path::Path, image: &str, material: &str) -> std::path::PathBuf {
+    use base64::Engine;
+    let mut img = image::RgbImage::new(64, 64);
+    for (x, y, p) in img.enumerate_pixels_mut() {
+        *p = image::Rgb(match (x >= 32, y >= 32) {
+            (false, false) => [255, 0, 0],
+            (true, false) => [0, 255, 0],
+            (false, true) => [0, 0, 255],
+            (true, true) => [255, 255, 255],
+        });
+    }
+    let mut encoded = Vec::new();
+    let format = match image {
+        "png" => image::ImageFormat::Png,
+        _ => image::ImageFormat::Jpeg,
+    };
+    img.write_to(&mut std::io::Cursor::new(&mut encoded), format)
+        .unwrap();
+    let uri = format!(
+        "data:image/{image};base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&encoded)
+    );
+    // The quad at z = 2, x and y in [-1, 1]: u = x + 1 and v = y + 1, both in [0, 2]; then
+    // a triangle off to the side; then the indices.
+    let mut bin: Vec<u8> = Vec::new();
+    let f = |bin: &mut Vec<u8>, xs: &[f32]| bin.extend(xs.iter().flat_map(|x| x.to_le_bytes()));
+    f(
+        &mut bin,
+        &[-1., -1., 2., 1., -1., 2., 1., 1., 2., -1., 1., 2.],
+    ); // 0..48
+    f(&mut bin, &[0.0; 8]); // 48..80: TEXCOORD_0
+    f(&mut bin, &[0., 0., 2., 0., 2., 2., 0., 2.]); // 80..112: TEXCOORD_1
+    f(&mut bin, &[5., 0., 2., 6., 0., 2., 5., 1., 2.]); // 112..148
+    bin.extend([0u16, 2, 1, 0, 3, 2].iter().flat_map(|i| i.to_le_bytes())); // 148..160
+    let json = format!(
+        r#"{{ "asset": {{ "version": "2.0" }},
+  "buffers": [{{ "byteLength": {len} }}],
+  "bufferViews": [
+    {{ "buffer": 0, "byteOffset": 0, "byteLength": 48 }},
+    {{ "buffer": 0, "byteOffset": 48, "byteLength": 32 }},
+    {{ "buffer": 0, "byteOffset": 80, "byteLength": 32 }},
+    {{ "buffer": 0, "byteOffset": 112, "byteLength": 36 }},
+    {{ "buffer": 0, "byteOffset": 148, "byteLength": 12 }}],
+  "accessors": [
+    {{ "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+       "min": [-1, -1, 2], "max": [1, 1, 2] }},
+    {{ "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2" }},
+    {{ "bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2" }},
+    {{ "bufferView": 3, "componentType": 5126, "count": 3, "type": "VEC3",
+       "min": [5, 0, 2], "max": [6, 1, 2] }},
+    {{ "bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR" }}],
+  "images": [{{ "uri": "{uri}" }}],
+  "samplers": [{{ "wrapS": 33071, "wrapT": 33648 }}],
+  "textures": [{{ "source": 0, "sampler": 0 }}],
+  "materials": [{material}],
+  "meshes": [{{ "primitives": [
+    {{ "attributes": {{ "POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": 2 }}, "indices": 4,
+       "material": 0 }},
+    {{ "attributes": {{ "POSITION": 3 }} }}] }}],
+  "nodes": [{{ "mesh": 0 }}], "scenes": [{{ "nodes": [0] }}], "scene": 0 }}"#,
+        len = bin.len(),
+        material = material.replace(
+            "TEX",
+            r#""baseColorTexture": { "index": 0, "texCoord": 1 }"#
+        ),
+    );
+    let path = dir.join(format!("textured_{image}.glb"));
+    std::fs::write(&path, common::glb_of(json.as_bytes(), &bin)).unwrap();
+    path
+}
+
+/// glTF materials beyond what Blender writes (issue 73): the texture set a material names
+/// (`TEXCOORD_1`), a base colour factor times the texture, the sampler's wraps (u clamped, v
+/// mirrored: each distinguishable from the others at the sampled points), a data-URI image,
+/// PNG and JPEG; a primitive without a material is diffuse white; a mesh entry's material
+/// overrides the file's (no texture read); and the file's errors name where they are.
+#[test]
+fn gltf_textures_follow_their_texture_set_factor_and_wraps() {
+    let dir = common::tempdir("mixed_gltf_textures");
+    let camera = rara::Camera::look_at(
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.0, 2.0),
+        Vec3::NEG_Y,
+        50.0,
+        64,
+        64,
+    )
+    .unwrap();
+    let textured = r#"{ "pbrMetallicRoughness": { TEX, "baseColorFactor": [1, 0.5, 1, 1] } }"#;
+    let load = |glb: &std::path::Path, material: &str| {
+        let file = write(
+            &dir,
+            "scene.json",
+            &format!(
+                r#"{{ "meshes": [{{ "path": "{}"{material} }}], "ambient": [1, 1, 1] }}"#,
+                glb.file_name().unwrap().to_str().unwrap()
+            ),
+        );
+        MixedScene::load(&file, |f| Ok(rara::ply::load_ply(f)?.0))
+    };
+    for (image, tolerance) in [("png", 1u8), ("jpeg", 12)] {
+        let glb = texture_glb(&dir, image, textured);
+        let scene = load(&glb, "").unwrap();
+        assert_eq!(scene.textures.len(), 1);
+        assert_eq!(
+            scene.materials.len(),
+            2,
+            "the file's material and the default"
+        );
+        assert_eq!(
+            scene.materials[1],
+            rara::mixed::Material::diffuse(Vec3::ONE)
+        );
+        let (gpu, cpu) = both(&scene, &camera);
+        common::check_images(
+            &format!("glTF texture ({image}), GPU vs CPU"),
+            &gpu,
+            &cpu,
+            45.0,
+            255,
+        );
+        // Sample points at u and v of about 0.26, 0.74, 1.25 and 1.74 (pixels 6, 23, 40, 57):
+        // u clamped reads the right column past 1 (repeat: the left at 1.25), v mirrored the
+        // bottom rows at 1.25 and the top at 1.74 (repeat: top at 1.25; clamp: bottom at 1.74).
+        let (red, green, blue, white) = ([255, 0, 0], [0, 128, 0], [0, 0, 255], [255, 128, 255]);
+        let want = [
+            [red, green, green, green],
+            [blue, white, white, white],
+            [blue, white, white, white],
+            [red, green, green, green],
+        ];
+        let at = [6u32, 23, 40, 57];
+        for img in [&gpu, &cpu] {
+            for (row, &j) in at.iter().enumerate() {
+                for (col, &i) in at.iter().enumerate() {
+                    let p = img.get_pixel(i, j);
+                    let w = want[row][col];
+                    let ok = (0..3).all(|c| p[c].abs_diff(w[c]) <= tolerance);
+                    assert!(ok, "{image}: pixel ({i}, {j}) is {p:?}, not {w:?}");
+                }
+            }
+        }
+    }
+    // A mesh entry's own material: the file's materials and textures are not read.
+    let glb = texture_glb(&dir, "png", textured);
+    let scene = load(
+        &glb,
+        r#", "material": { "mirror": { "reflectance": 0.5 } }"#,
+    )
+    .unwrap();
+    assert!(scene.textures.is_empty());
+    assert_eq!(scene.materials, vec![rara::mixed::Material::mirror(0.5)]);
+    // Errors name the material and the field.
+    for (material, wanted) in [
+        (
+            r#"{ "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 },
+                 "KHR_materials_ior": { "ior": 0.5 } } }"#,
+            "materials[0].ior is 0.5",
+        ),
+        (
+            r#"{ "pbrMetallicRoughness": { "baseColorFactor": [2, 0, 0, 1] } }"#,
+            "baseColorFactor[0] is 2",
+        ),
+        (
+            r#"{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "texCoord": 2 } } }"#,
+            "TEXCOORD_2, which the primitive lacks",
+        ),
+        (
+            r#"{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 7 } } }"#,
+            "missing texture 7",
+        ),
+    ] {
+        let glb = texture_glb(&dir, "png", material);
+        let err = load(&glb, "").err().expect("refused").to_string();
+        assert!(err.contains(wanted), "'{err}' does not say '{wanted}'");
+    }
+}
