@@ -1487,7 +1487,7 @@ fn gltf_textures_follow_their_texture_set_factor_and_wraps() {
         ),
     ] {
         let glb = texture_glb(&dir, "png", material);
-        let err = load(&glb, "").err().expect("refused").to_string();
+        let err = load(&glb, "").expect_err("refused").to_string();
         assert!(err.contains(wanted), "'{err}' does not say '{wanted}'");
     }
 }
