@@ -95,6 +95,53 @@ impl Camera {
         (width as f32 * 0.75).round().max(1.0) as u32
     }
 
+    /// The camera a scene given without one is seen from (SPEC section 12): a pinhole looking
+    /// along +z (the scene's forward; -y up, the INRIA/COLMAP convention) at the centre of the
+    /// box of the Gaussians' centres `means` (the 1st to 99th percentile per axis), from the
+    /// distance at which that box's height fills 90 % of the image's height at a 50-degree
+    /// vertical field of view, 640x480. Where the SPEC leaves a case open: a box without
+    /// height is framed by its largest extent instead, and one without any extent (a single
+    /// point) from one unit away; no Gaussian is an error.
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// let means = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0)];
+    /// let cam = rara::Camera::framing(&means).unwrap();
+    /// assert_eq!((cam.width, cam.height), (640, 480));
+    /// // The box's height (2) spans 90 % of the 480 rows.
+    /// let top = cam.to_camera(Vec3::new(0.0, -1.0, 0.0));
+    /// let v = cam.fy * top.y / top.z + cam.principal_point().1;
+    /// assert!((v - (239.5 - 0.45 * 480.0)).abs() < 1e-2);
+    /// ```
+    pub fn framing(means: &[Vec3]) -> Result<Camera> {
+        let (eye, target) = Camera::framing_eye_target(means)?;
+        Camera::look_at(eye, target, Vec3::NEG_Y, FRAMING_FOV_Y_DEG, 640, 480)
+    }
+
+    /// Where [`Camera::framing`] puts the eye and what it looks at (with `-y` up and a
+    /// vertical field of view of [`FRAMING_FOV_Y_DEG`], at any image size).
+    pub fn framing_eye_target(means: &[Vec3]) -> Result<(Vec3, Vec3)> {
+        if means.is_empty() {
+            return Err(Error::InvalidInput(
+                "no Gaussians to frame a camera on: give a camera".into(),
+            ));
+        }
+        let (lo, hi) = percentile_box(means, 0.01);
+        let centre = (lo + hi) / 2.0;
+        let extent = hi - lo;
+        let height = if extent.y > 0.0 {
+            extent.y
+        } else {
+            extent.max_element()
+        };
+        let distance = if height > 0.0 {
+            height / (2.0 * 0.9 * (FRAMING_FOV_Y_DEG.to_radians() / 2.0).tan())
+        } else {
+            1.0
+        };
+        Ok((centre - Vec3::Z * distance, centre))
+    }
+
     /// A camera at `eye` looking at `target`, with `up` pointing up in the image and a vertical
     /// field of view of `fov_y_deg` degrees (square pixels).
     ///
@@ -273,6 +320,26 @@ impl Camera {
             .collect();
         serde_json::to_string_pretty(&list).expect("cameras serialise")
     }
+}
+
+/// The vertical field of view of [`Camera::framing`], degrees.
+pub const FRAMING_FOV_Y_DEG: f32 = 50.0;
+
+/// The box from the `q` to the `1 - q` quantile of `points` per axis (non-empty points; the
+/// nearest rank, as [`Camera::framing`] takes it).
+pub fn percentile_box(points: &[Vec3], q: f64) -> (Vec3, Vec3) {
+    let mut lo = Vec3::ZERO;
+    let mut hi = Vec3::ZERO;
+    let mut axis: Vec<f32> = Vec::with_capacity(points.len());
+    for k in 0..3 {
+        axis.clear();
+        axis.extend(points.iter().map(|p| p[k]));
+        let rank = |q: f64| ((axis.len() - 1) as f64 * q).round() as usize;
+        let (r_lo, r_hi) = (rank(q), rank(1.0 - q));
+        lo[k] = *axis.select_nth_unstable_by(r_lo, f32::total_cmp).1;
+        hi[k] = *axis.select_nth_unstable_by(r_hi, f32::total_cmp).1;
+    }
+    (lo, hi)
 }
 
 /// Tiles across and down for an image of `width` x `height` pixels.

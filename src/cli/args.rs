@@ -4,12 +4,13 @@ use std::path::PathBuf;
 
 use clap::Args;
 use glam::Vec3;
-use rara::{Camera, Error, Result};
+use rara::{Camera, Result};
 
 /// Where the camera comes from and the image size.
 #[derive(Args, Clone)]
 pub struct CameraArgs {
-    /// INRIA cameras.json file.
+    /// INRIA cameras.json file (without it or --eye, the scene is framed: SPEC 12, and the
+    /// camera is printed as flags).
     #[arg(long, conflicts_with_all = ["eye", "target"])]
     cameras: Option<PathBuf>,
     /// Index of the camera in --cameras.
@@ -85,21 +86,71 @@ pub fn parse_color(s: &str) -> std::result::Result<Vec3, String> {
     Ok(c)
 }
 
-/// The camera `args` describe: a view of a cameras.json file (resized when told), or a
-/// look-at camera; an error naming both ways when neither is given.
-pub fn resolve_camera(args: &CameraArgs) -> Result<Camera> {
+/// A command's camera: given (`--cameras`, `--eye`, a scene file's entry), or none, in which
+/// case SPEC 12's framing of the scene is made once the scene is loaded.
+#[derive(Clone, Debug)]
+pub enum CameraChoice {
+    /// Given.
+    Given(Camera),
+    /// None given: [`Camera::framing`], at the `--width` and `--height` given, if any.
+    Framing {
+        /// `--width`.
+        width: Option<u32>,
+        /// `--height`.
+        height: Option<u32>,
+    },
+}
+
+impl CameraChoice {
+    /// The camera given, if one was.
+    pub fn given(&self) -> Option<&Camera> {
+        match self {
+            CameraChoice::Given(c) => Some(c),
+            CameraChoice::Framing { .. } => None,
+        }
+    }
+
+    /// The camera: the one given, else the framing of the world-space Gaussian centres
+    /// `means` (made only then), printed as the flags that give it again.
+    pub fn or_framing(&self, means: impl FnOnce() -> Vec<Vec3>) -> Result<Camera> {
+        let (width, height) = match self {
+            CameraChoice::Given(c) => return Ok(*c),
+            CameraChoice::Framing { width, height } => (*width, *height),
+        };
+        // As `--eye` and `--target` make it, so that the printed flags give it to the bit.
+        let (eye, target) = Camera::framing_eye_target(&means())?;
+        let width = width.unwrap_or(640);
+        let height = height.unwrap_or_else(|| Camera::default_height(width));
+        let fov = rara::camera::FRAMING_FOV_Y_DEG;
+        let camera = Camera::look_at(eye, target, Vec3::NEG_Y, fov, width, height)?;
+        eprintln!(
+            "no camera given: the scene framed as SPEC 12 says; to render it again from here: \
+             --eye {},{},{} --target {},{},{} --up 0,-1,0 --fov-y {fov} --width {width} \
+             --height {height}",
+            eye.x, eye.y, eye.z, target.x, target.y, target.z,
+        );
+        Ok(camera)
+    }
+}
+
+/// The camera `args` describe: a view of a cameras.json file (resized when told), a look-at
+/// camera, or, with neither, the framing of the scene once it is loaded.
+pub fn resolve_camera(args: &CameraArgs) -> Result<CameraChoice> {
     if let Some(path) = &args.cameras {
-        return sized(args, Camera::load_one(path, args.camera)?);
+        return Ok(CameraChoice::Given(sized(args, Camera::load_one(path, args.camera)?)?));
     }
     match (args.eye, args.target) {
         (Some(eye), Some(target)) => {
             let width = args.width.unwrap_or(640);
             let height = args.height.unwrap_or_else(|| Camera::default_height(width));
-            Camera::look_at(eye, target, args.up, args.fov_y, width, height)
+            Ok(CameraChoice::Given(Camera::look_at(
+                eye, target, args.up, args.fov_y, width, height,
+            )?))
         }
-        _ => Err(Error::InvalidInput(
-            "give a camera: --cameras FILE [--camera N], or --eye X,Y,Z --target X,Y,Z".into(),
-        )),
+        _ => Ok(CameraChoice::Framing {
+            width: args.width,
+            height: args.height,
+        }),
     }
 }
 
@@ -115,17 +166,13 @@ fn sized(args: &CameraArgs, cam: Camera) -> Result<Camera> {
 
 /// The camera of a scene file's frame: the command line's (`--cameras` or `--eye`) where it
 /// gives one, else the file's `camera` entry (read from `file`; `--width` and `--height`
-/// still apply), else an error naming all three.
-pub fn resolve_scene_file_camera(args: &CameraArgs, file: &std::path::Path) -> Result<Camera> {
+/// still apply), else the framing of the scene once it is loaded.
+pub fn resolve_scene_file_camera(args: &CameraArgs, file: &std::path::Path) -> Result<CameraChoice> {
     if args.cameras.is_some() || args.eye.is_some() {
         return resolve_camera(args);
     }
     match rara::mixed::file::SceneFile::read(file)?.camera(file)? {
-        Some(cam) => sized(args, cam),
-        None => Err(Error::InvalidInput(format!(
-            "give a camera: --cameras FILE [--camera N], --eye X,Y,Z --target X,Y,Z, or a \
-             \"camera\" entry in {} (docs/CLI.md, \"Scene files\")",
-            file.display()
-        ))),
+        Some(cam) => Ok(CameraChoice::Given(sized(args, cam)?)),
+        None => resolve_camera(args),
     }
 }

@@ -238,6 +238,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             path.display()
         )));
     }
+    let camera = camera.or_framing(|| scene.means.clone())?;
     let normal = Plane::new(
         args.plane_normal.unwrap_or(camera.rotation * glam::Vec3::Z),
         0.0,

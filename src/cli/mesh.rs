@@ -362,6 +362,8 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
     // The first frame is read before any output is made, so that a folder of garbage fails
     // at once; the rest are staged with it and land together when the last has rendered.
     let first = rara::ply::load_ply(&frames[0])?.0;
+    // Without a camera, every frame is seen from the first one's framing (SPEC 12).
+    let camera = camera.or_framing(|| first.means.clone())?;
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let options = RenderOptions {

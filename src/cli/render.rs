@@ -8,7 +8,9 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rara::{Camera, Context, Error, RenderOptions, Renderer, Result};
 
-use super::args::{parse_color, resolve_camera, resolve_scene_file_camera, CameraArgs, TracerArg};
+use super::args::{
+    parse_color, resolve_camera, resolve_scene_file_camera, CameraArgs, CameraChoice, TracerArg,
+};
 use super::clip_args::{describe, ClipArgs};
 use super::load::{load_scene, stream_scene, warn_oversized};
 use super::output::{Output, Outputs};
@@ -71,7 +73,7 @@ pub struct RenderArgs {
 }
 
 /// `render --object ...`: several objects in one frame.
-fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
+fn render_objects(args: &RenderArgs, camera: &CameraChoice) -> Result<()> {
     if args.depth.is_some() || args.repeat > 0 || args.sh_half || args.still_bvh {
         return Err(Error::InvalidInput(
             "--object draws without --depth, --repeat, --sh-half or --still-bvh so far (the \
@@ -87,6 +89,10 @@ fn render_objects(args: &RenderArgs, camera: &Camera) -> Result<()> {
     };
     let output = Output::prepare(&args.output, &["png"])?;
     let loaded = super::objects::load(args.scene.as_ref(), &args.objects)?;
+    let camera = &camera.or_framing(|| {
+        let list: Vec<_> = loaded.iter().map(|(s, t)| (s, *t)).collect();
+        rara::objects::merge(&list).means
+    })?;
     if options.clip.region.is_some() {
         eprintln!(
             "{} (in world space, over every object)",
@@ -209,8 +215,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .transpose()?;
     let depth_mode = rara::DepthMode::from(args.depth_mode);
     // A PLY file the GPU draws goes from the file to the device chunk by chunk: the host never
-    // holds the scene (GpuScene::load_ply).
+    // holds the scene (GpuScene::load_ply); one without a camera is framed on its centres
+    // (SPEC 12), so it is loaded.
     let streamed = !args.reference
+        && camera.given().is_some()
         && scene_path.is_file()
         && matches!(
             rara::formats::detect(scene_path),
@@ -221,6 +229,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     } else {
         Some(load_scene(scene_path)?)
     };
+    let camera = camera.or_framing(|| {
+        scene
+            .as_ref()
+            .map(|s| s.means.clone())
+            .expect("a scene without a camera is not streamed")
+    })?;
     if options.clip.region.is_some() {
         eprintln!("{}", describe(&options.clip));
     }

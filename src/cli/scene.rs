@@ -10,6 +10,7 @@ use rara::raytrace::mixed::{GpuMixedScene, MixedFrameStats, MixedTracer};
 use rara::RayTraceOptions;
 use rara::{Camera, Context, Error, Result};
 
+use super::args::CameraChoice;
 use super::load::load_scene;
 use super::{median, print_pass_medians};
 
@@ -22,6 +23,16 @@ pub fn load_mixed(path: &Path, background: Option<glam::Vec3>) -> Result<MixedSc
     }
     eprintln!("{}", describe(&scene, path));
     Ok(scene)
+}
+
+/// What a mixed scene without a camera is framed on (SPEC 12): its Gaussians' centres, or,
+/// without Gaussians, its triangles' vertices.
+pub fn framing_points(scene: &MixedScene) -> Vec<glam::Vec3> {
+    if scene.gaussians.is_empty() {
+        scene.meshes.triangles.iter().flat_map(|t| t.v).collect()
+    } else {
+        scene.gaussians.means.clone()
+    }
 }
 
 /// One line on a mixed scene.
@@ -162,7 +173,7 @@ impl MixedGpu {
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     path: &Path,
-    camera: &Camera,
+    camera: &CameraChoice,
     background: Option<glam::Vec3>,
     output: super::output::Output,
     out_path: &Path,
@@ -172,6 +183,7 @@ pub fn render(
     still_bvh: bool,
 ) -> Result<()> {
     let scene = load_mixed(path, background)?;
+    let camera = &camera.or_framing(|| framing_points(&scene))?;
     let pixels = camera.width as u64 * camera.height as u64;
     if reference {
         let start = std::time::Instant::now();
@@ -227,7 +239,7 @@ pub fn render(
 /// and the median GPU time of each pass (summed over a frame's generations).
 pub fn bench(
     path: &Path,
-    camera: &Camera,
+    camera: &CameraChoice,
     frames: u32,
     warmup: u32,
     sh_half: bool,
@@ -235,6 +247,7 @@ pub fn bench(
     still_bvh: bool,
 ) -> Result<()> {
     let scene = load_mixed(path, None)?;
+    let camera = &camera.or_framing(|| framing_points(&scene))?;
     let ctx = Context::from_env()?;
     let gpu = MixedGpu::new(&ctx, &scene, sh_half, still_bvh)?;
     let pixels = camera.width as u64 * camera.height as u64;

@@ -176,6 +176,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             scene_path.display()
         )));
     }
+    let camera = camera.or_framing(|| scene.means.clone())?;
     let normal = Plane::new(args.plane_normal, 0.0)?.normal;
     let (d0, d1) = {
         let (lo, hi) = default_range(scene, normal);
