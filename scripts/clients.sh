@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Installs the real clients the tests drive, where they are missing: Debian's Blender (with
-# python3-numpy, which its glTF importer needs), and from npm (into target/clients) the Khronos
-# glTF validator and PlayCanvas' splat-transform (the scene formats' reference tool). Sourced by scripts/test.sh after setup.sh; a client that cannot be
+# python3-numpy, which its glTF importer needs), from npm (into target/clients) the Khronos
+# glTF validator and PlayCanvas' splat-transform (the scene formats' reference tool), and from
+# PyPI (into a virtual environment, target/clients/pycolmap) COLMAP's Python bindings, which
+# write the COLMAP models tests/colmap.rs reads. Sourced by scripts/test.sh after setup.sh; a client that cannot be
 # installed is reported, and the tests that need it say TEST SKIPPED.
 
-client_packages=(blender python3-numpy)
+client_packages=(blender python3-numpy python3-venv)
 missing=()
 for p in "${client_packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
@@ -47,4 +49,13 @@ if ! grep -qs "\"version\": \"$splat_transform_version\"" \
   else
     echo "clients: npm not found; the splat-transform cross-checks will be skipped" >&2
   fi
+fi
+
+pycolmap_version=4.2.1
+if ! target/clients/pycolmap/bin/python -c "import pycolmap" >/dev/null 2>&1; then
+  echo "clients: installing pycolmap==$pycolmap_version from PyPI into target/clients/pycolmap" >&2
+  { python3 -m venv target/clients/pycolmap &&
+    target/clients/pycolmap/bin/pip install --quiet --disable-pip-version-check \
+      "pycolmap==$pycolmap_version"; } >/dev/null 2>&1 ||
+    echo "clients: could not install pycolmap; the COLMAP cross-check will be skipped" >&2
 fi

@@ -6,7 +6,8 @@ use glam::{Mat3, Vec2, Vec3};
 
 use crate::error::{Error, Result};
 
-/// A pinhole camera with its principal point at the image centre.
+/// A pinhole camera (SPEC section 2), its principal point at the image centre unless a camera
+/// file gives one (SPEC section 12).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     /// Image width in pixels.
@@ -22,6 +23,11 @@ pub struct Camera {
     pub fx: f32,
     /// Focal length in pixels, y.
     pub fy: f32,
+    /// The principal point `(cx, cy)` in rara's pixel coordinates (pixel `(i, j)` centred at
+    /// `(i, j)`), where a camera file gives one (COLMAP's, or a cameras.json entry's `cx`,
+    /// `cy`, both measured with pixel centres at `+ 0.5`, so 0.5 less here); `None`: the image
+    /// centre, `(W/2 - 0.5, H/2 - 0.5)` ([`Camera::principal_point`]).
+    pub principal: Option<Vec2>,
 }
 
 /// One camera as an INRIA `cameras.json` writes it (other fields, such as `id` and
@@ -40,6 +46,14 @@ pub struct InriaCamera {
     pub fx: f32,
     /// See `fx`.
     pub fy: f32,
+    /// The principal point, x, with pixel centres at `+ 0.5` (COLMAP's and OpenCV's
+    /// convention: `W/2` is the centre); rara's own files write it only where it is not the
+    /// centre, and an INRIA file has none.
+    #[serde(default)]
+    pub cx: Option<f32>,
+    /// See `cx`.
+    #[serde(default)]
+    pub cy: Option<f32>,
 }
 
 impl InriaCamera {
@@ -53,6 +67,15 @@ impl InriaCamera {
             rotation: Mat3::from_cols_array_2d(&self.rotation).transpose(),
             fx: self.fx,
             fy: self.fy,
+            principal: match (self.cx, self.cy) {
+                (Some(cx), Some(cy)) => Some(Vec2::new(cx - 0.5, cy - 0.5)),
+                (None, None) => None,
+                _ => {
+                    return Err(Error::InvalidInput(
+                        "cx and cy come together (the principal point), or neither".into(),
+                    ))
+                }
+            },
         };
         camera.validate()?;
         Ok(camera)
@@ -70,12 +93,15 @@ impl Camera {
         self.world_to_camera() * (p - self.position)
     }
 
-    /// Principal point `(W/2 - 0.5, H/2 - 0.5)`.
+    /// The principal point: [`Camera::principal`], else `(W/2 - 0.5, H/2 - 0.5)`.
     pub fn principal_point(&self) -> (f32, f32) {
-        (
-            self.width as f32 / 2.0 - 0.5,
-            self.height as f32 / 2.0 - 0.5,
-        )
+        match self.principal {
+            Some(p) => (p.x, p.y),
+            None => (
+                self.width as f32 / 2.0 - 0.5,
+                self.height as f32 / 2.0 - 0.5,
+            ),
+        }
     }
 
     /// The forward (viewing) direction in world coordinates.
@@ -189,32 +215,41 @@ impl Camera {
             rotation: Mat3::from_cols(right, down, forward),
             fx: fy,
             fy,
+            principal: None,
         };
         camera.validate()?;
         Ok(camera)
     }
 
     /// The same camera rendering at `width` pixels: `fx, fy` scale by `width / self.width`;
-    /// the height is `height` or else `round(self.height * width / self.width)`.
+    /// the height is `height` or else `round(self.height * width / self.width)`; a principal
+    /// point given moves with the image (`(c + 0.5)` scaled by the new size over the old, per
+    /// axis).
     pub fn resized(&self, width: u32, height: Option<u32>) -> Result<Camera> {
         let k = width as f32 / self.width as f32;
         let height = height.unwrap_or_else(|| (self.height as f32 * k).round() as u32);
         check_size(width, height)?;
+        let scale = Vec2::new(k, height as f32 / self.height as f32);
         let camera = Camera {
             width,
             height,
             fx: self.fx * k,
             fy: self.fy * k,
+            principal: self.principal.map(|p| (p + 0.5) * scale - 0.5),
             ..*self
         };
         camera.validate()?;
         Ok(camera)
     }
 
-    /// Reads every camera of an INRIA `cameras.json` file (at most
+    /// Reads every camera of an INRIA `cameras.json` file, or of a COLMAP model where `path` is
+    /// a folder ([`crate::formats::colmap::read_cameras`]; a cameras.json is at most
     /// [`MAX_CAMERAS_FILE_BYTES`], counted as it is read, so a pipe or a device is bounded too).
     pub fn load_all(path: impl AsRef<Path>) -> Result<Vec<Camera>> {
         let path = path.as_ref();
+        if path.is_dir() {
+            return crate::formats::colmap::read_cameras(path);
+        }
         let text = crate::input::read_text_limited(path, MAX_CAMERAS_FILE_BYTES, "cameras.json")?;
         Camera::parse_all(&text, path)
     }
@@ -248,10 +283,13 @@ impl Camera {
         let finite = self.position.is_finite()
             && self.rotation.is_finite()
             && self.fx.is_finite()
-            && self.fy.is_finite();
+            && self.fy.is_finite()
+            && self.principal.map_or(true, |p| p.is_finite());
         if !finite {
             return Err(Error::InvalidInput(
-                "the camera has a NaN or infinite value (position, rotation, fx or fy)".into(),
+                "the camera has a NaN or infinite value (position, rotation, fx, fy or its \
+                 principal point)"
+                    .into(),
             ));
         }
         if !(self.fx > 0.0 && self.fy > 0.0 && self.fx <= MAX_FOCAL_PX && self.fy <= MAX_FOCAL_PX) {
@@ -310,12 +348,17 @@ impl Camera {
             .enumerate()
             .map(|(id, c)| {
                 let r = c.rotation.transpose().to_cols_array_2d();
-                serde_json::json!({
+                let mut entry = serde_json::json!({
                     "id": id, "img_name": format!("view_{id:03}"),
                     "width": c.width, "height": c.height,
                     "position": c.position.to_array(), "rotation": r,
                     "fx": c.fx, "fy": c.fy,
-                })
+                });
+                if let Some(p) = c.principal {
+                    entry["cx"] = (p.x + 0.5).into();
+                    entry["cy"] = (p.y + 0.5).into();
+                }
+                entry
             })
             .collect();
         serde_json::to_string_pretty(&list).expect("cameras serialise")

@@ -9,8 +9,9 @@ use rara::{Camera, Result};
 /// Where the camera comes from and the image size.
 #[derive(Args, Clone)]
 pub struct CameraArgs {
-    /// INRIA cameras.json file (without it or --eye, the scene is framed: SPEC 12, and the
-    /// camera is printed as flags).
+    /// INRIA cameras.json file, or a COLMAP model folder (sparse/0, its cameras and images as
+    /// .txt or .bin). Without it or --eye, the scene is framed (SPEC 12) and the camera printed
+    /// as flags.
     #[arg(long, conflicts_with_all = ["eye", "target"])]
     cameras: Option<PathBuf>,
     /// Index of the camera in --cameras.

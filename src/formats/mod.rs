@@ -4,11 +4,14 @@
 //! - INRIA PLY ([`crate::ply`]), read and written;
 //! - antimatter15 `.splat` ([`splat`]), read and written;
 //! - Niantic SPZ ([`spz`]) and glTF `KHR_gaussian_splatting` ([`gltf`]), read and written;
-//! - PlayCanvas SOG ([`sog`]) and compressed PLY ([`compressed_ply`]), read.
+//! - PlayCanvas SOG ([`sog`]) and compressed PLY ([`compressed_ply`]), read;
+//! - and cameras: COLMAP's model folders ([`colmap`]; INRIA's cameras.json is
+//!   [`crate::camera`]'s).
 //!
 //! Every file is read through [`crate::input`] (opened once, its bytes counted against the
 //! format's limit).
 
+pub mod colmap;
 pub mod compressed_ply;
 pub mod gltf;
 pub mod sog;

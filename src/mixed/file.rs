@@ -303,6 +303,7 @@ impl SceneFile {
                 rotation: Mat3::from_cols(right, down, forward),
                 fx: fy,
                 fy,
+                principal: None,
             };
             camera
                 .validate()
