@@ -1544,12 +1544,28 @@ fn a_scene_without_a_camera_is_framed_and_the_printed_flags_give_it_again() {
     let d = dir();
     for (extra, name) in [(&[][..], "gpu"), (&["--reference"][..], "cpu")] {
         let framed = d.join(format!("framed_{name}.png"));
-        let o = rara(&[&["render", scene, "--width", "96", "-o", framed.to_str().unwrap()], extra].concat());
+        let o = rara(
+            &[
+                &[
+                    "render",
+                    scene,
+                    "--width",
+                    "96",
+                    "-o",
+                    framed.to_str().unwrap(),
+                ],
+                extra,
+            ]
+            .concat(),
+        );
         assert_success(&o);
         let stderr = String::from_utf8_lossy(&o.stderr);
         let flags = stderr
             .lines()
-            .find_map(|l| l.split_once("to render it again from here: ").map(|(_, f)| f))
+            .find_map(|l| {
+                l.split_once("to render it again from here: ")
+                    .map(|(_, f)| f)
+            })
             .unwrap_or_else(|| panic!("no framing line in:\n{stderr}"));
         assert!(flags.contains("--width 96 --height 72"), "{flags}");
         let again = d.join(format!("again_{name}.png"));
@@ -1566,12 +1582,27 @@ fn a_scene_without_a_camera_is_framed_and_the_printed_flags_give_it_again() {
         assert!(a == b, "{name}: the printed flags render another image");
         // The scene fills the middle of the frame: something is drawn at the centre.
         let centre = a.get_pixel(48, 36);
-        assert!(centre[0] > 0 || centre[1] > 0 || centre[2] > 0, "{name}: nothing at the centre");
+        assert!(
+            centre[0] > 0 || centre[1] > 0 || centre[2] > 0,
+            "{name}: nothing at the centre"
+        );
     }
     let file = d.join("framed_scene.json");
-    std::fs::write(&file, format!(r#"{{ "splats": [{{ "path": {scene:?} }}] }}"#)).unwrap();
+    std::fs::write(
+        &file,
+        format!(r#"{{ "splats": [{{ "path": {scene:?} }}] }}"#),
+    )
+    .unwrap();
     let out = d.join("framed_scene.png");
-    let o = rara(&["render", "--scene", file.to_str().unwrap(), "--width", "48", "-o", out.to_str().unwrap()]);
+    let o = rara(&[
+        "render",
+        "--scene",
+        file.to_str().unwrap(),
+        "--width",
+        "48",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert_success(&o);
     assert!(String::from_utf8_lossy(&o.stderr).contains("no camera given"));
 }

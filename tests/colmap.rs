@@ -39,7 +39,11 @@ fn colmap_models_pycolmap_writes_read_as_its_cameras() {
     };
     let dir = common::tempdir("colmap");
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/colmap/write_model.py");
-    let out = Command::new(&python).arg(&script).arg(&dir).output().unwrap();
+    let out = Command::new(&python)
+        .arg(&script)
+        .arg(&dir)
+        .output()
+        .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
@@ -61,9 +65,17 @@ fn colmap_models_pycolmap_writes_read_as_its_cameras() {
             assert_eq!((cam.width, cam.height), (e[0] as u32, e[1] as u32), "{at}");
             assert_eq!((cam.fx as f64, cam.fy as f64), (e[2], e[3]), "{at}");
             let (cx, cy) = cam.principal_point();
-            assert_eq!((cx as f64 + 0.5, cy as f64 + 0.5), (e[4], e[5]), "{at}: principal point");
+            assert_eq!(
+                (cx as f64 + 0.5, cy as f64 + 0.5),
+                (e[4], e[5]),
+                "{at}: principal point"
+            );
             let centre = Vec3::new(e[6] as f32, e[7] as f32, e[8] as f32);
-            assert!((cam.position - centre).length() < 1e-5, "{at}: {} vs {centre}", cam.position);
+            assert!(
+                (cam.position - centre).length() < 1e-5,
+                "{at}: {} vs {centre}",
+                cam.position
+            );
             let w2c = cam.world_to_camera();
             for r in 0..3 {
                 for c in 0..3 {
@@ -92,6 +104,13 @@ fn colmap_models_pycolmap_writes_read_as_its_cameras() {
     for cam in rara::Camera::load_all(dir.join("bin")).unwrap() {
         let options = rara::RenderOptions::default();
         let (img, _) = renderer.render(&gpu, &cam, &options).unwrap();
+        assert!(
+            img.pixels()
+                .filter(|p| p[0] > 0 || p[1] > 0 || p[2] > 0)
+                .count()
+                > 100,
+            "the shell is not in view"
+        );
         let cpu = rara::reference::render(&scene, &cam, &options);
         common::check_images("COLMAP camera, raster GPU vs CPU", &img, &cpu, 45.0, 255);
         let rt = rara::RenderOptions {

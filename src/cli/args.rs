@@ -138,7 +138,10 @@ impl CameraChoice {
 /// camera, or, with neither, the framing of the scene once it is loaded.
 pub fn resolve_camera(args: &CameraArgs) -> Result<CameraChoice> {
     if let Some(path) = &args.cameras {
-        return Ok(CameraChoice::Given(sized(args, Camera::load_one(path, args.camera)?)?));
+        return Ok(CameraChoice::Given(sized(
+            args,
+            Camera::load_one(path, args.camera)?,
+        )?));
     }
     match (args.eye, args.target) {
         (Some(eye), Some(target)) => {
@@ -168,7 +171,10 @@ fn sized(args: &CameraArgs, cam: Camera) -> Result<Camera> {
 /// The camera of a scene file's frame: the command line's (`--cameras` or `--eye`) where it
 /// gives one, else the file's `camera` entry (read from `file`; `--width` and `--height`
 /// still apply), else the framing of the scene once it is loaded.
-pub fn resolve_scene_file_camera(args: &CameraArgs, file: &std::path::Path) -> Result<CameraChoice> {
+pub fn resolve_scene_file_camera(
+    args: &CameraArgs,
+    file: &std::path::Path,
+) -> Result<CameraChoice> {
     if args.cameras.is_some() || args.eye.is_some() {
         return resolve_camera(args);
     }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use rara::{Camera, Context, Error, RenderOptions, Renderer, Result};
+use rara::{Context, Error, RenderOptions, Renderer, Result};
 
 use super::args::{
     parse_color, resolve_camera, resolve_scene_file_camera, CameraArgs, CameraChoice, TracerArg,

@@ -115,10 +115,18 @@ pub fn read_cameras(dir: &Path) -> Result<Vec<Camera>> {
             let c = cameras.get(&p.camera).ok_or_else(|| {
                 err(
                     &images,
-                    format!("image {} names camera {}, which cameras.* lacks", p.name, p.camera),
+                    format!(
+                        "image {} names camera {}, which cameras.* lacks",
+                        p.name, p.camera
+                    ),
                 )
             })?;
-            to_camera(c, p).map_err(|e| err(&images, format!("image {} (camera {}): {e}", p.name, p.camera)))
+            to_camera(c, p).map_err(|e| {
+                err(
+                    &images,
+                    format!("image {} (camera {}): {e}", p.name, p.camera),
+                )
+            })
         })
         .collect()
 }
@@ -170,14 +178,22 @@ fn to_camera(c: &Intrinsics, p: &Pose) -> std::result::Result<Camera, String> {
 }
 
 /// The model of id `id` with `params`, checked.
-fn intrinsics(model: &str, width: u64, height: u64, params: Vec<f64>) -> std::result::Result<Intrinsics, String> {
+fn intrinsics(
+    model: &str,
+    width: u64,
+    height: u64,
+    params: Vec<f64>,
+) -> std::result::Result<Intrinsics, String> {
     let (name, count) = MODELS
         .iter()
         .find(|(n, _)| *n == model)
         .copied()
         .ok_or_else(|| format!("unknown camera model {model}"))?;
     if params.len() != count {
-        return Err(format!("{name} takes {count} parameters, not {}", params.len()));
+        return Err(format!(
+            "{name} takes {count} parameters, not {}",
+            params.len()
+        ));
     }
     if !params.iter().all(|p| p.is_finite()) {
         return Err(format!("{name} has a non-finite parameter"));
@@ -201,14 +217,17 @@ fn open(path: &Path) -> Result<BufReader<std::fs::File>> {
 /// The lines of a text file that are not comments, numbered from 1.
 fn data_lines(path: &Path) -> Result<impl Iterator<Item = Result<(usize, String)>>> {
     let path_buf = path.to_path_buf();
-    Ok(open(path)?.lines().enumerate().filter_map(move |(n, line)| match line {
-        Err(source) => Some(Err(Error::Io {
-            path: path_buf.clone(),
-            source,
-        })),
-        Ok(l) if l.starts_with('#') => None,
-        Ok(l) => Some(Ok((n + 1, l))),
-    }))
+    Ok(open(path)?
+        .lines()
+        .enumerate()
+        .filter_map(move |(n, line)| match line {
+            Err(source) => Some(Err(Error::Io {
+                path: path_buf.clone(),
+                source,
+            })),
+            Ok(l) if l.starts_with('#') => None,
+            Ok(l) => Some(Ok((n + 1, l))),
+        }))
 }
 
 fn read_cameras_txt(path: &Path) -> Result<HashMap<u32, Intrinsics>> {
@@ -223,14 +242,22 @@ fn read_cameras_txt(path: &Path) -> Result<HashMap<u32, Intrinsics>> {
         if f.len() < 4 {
             return Err(bad("not CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]".into()));
         }
-        let id: u32 = f[0].parse().map_err(|_| bad(format!("camera id '{}'", f[0])))?;
+        let id: u32 = f[0]
+            .parse()
+            .map_err(|_| bad(format!("camera id '{}'", f[0])))?;
         let width: u64 = f[2].parse().map_err(|_| bad(format!("width '{}'", f[2])))?;
-        let height: u64 = f[3].parse().map_err(|_| bad(format!("height '{}'", f[3])))?;
+        let height: u64 = f[3]
+            .parse()
+            .map_err(|_| bad(format!("height '{}'", f[3])))?;
         let params = f[4..]
             .iter()
-            .map(|p| p.parse::<f64>().map_err(|_| bad(format!("parameter '{p}'"))))
+            .map(|p| {
+                p.parse::<f64>()
+                    .map_err(|_| bad(format!("parameter '{p}'")))
+            })
             .collect::<Result<Vec<_>>>()?;
-        let c = intrinsics(f[1], width, height, params).map_err(|m| bad(format!("camera {id}: {m}")))?;
+        let c = intrinsics(f[1], width, height, params)
+            .map_err(|m| bad(format!("camera {id}: {m}")))?;
         if out.len() as u64 >= MAX_COLMAP_CAMERAS {
             return Err(bad(format!("more than {MAX_COLMAP_CAMERAS} cameras")));
         }
@@ -244,10 +271,13 @@ fn read_images_txt(path: &Path) -> Result<Vec<Pose>> {
     // Two lines an image: its pose, then its 2D points (possibly blank), skipped.
     let mut expect_points = false;
     for line in open(path)?.lines().enumerate() {
-        let (n, line) = (line.0 + 1, line.1.map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?);
+        let (n, line) = (
+            line.0 + 1,
+            line.1.map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?,
+        );
         if line.starts_with('#') {
             continue;
         }
@@ -262,14 +292,16 @@ fn read_images_txt(path: &Path) -> Result<Vec<Pose>> {
         let bad = |m: String| err(path, format!("line {n}: {m}"));
         if f.len() < 10 {
             return Err(bad(
-                "not IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME".into(),
+                "not IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME".into()
             ));
         }
         let num = |k: usize| -> Result<f64> {
             f[k].parse::<f64>()
                 .map_err(|_| bad(format!("'{}' is not a number", f[k])))
         };
-        let camera: u32 = f[8].parse().map_err(|_| bad(format!("camera id '{}'", f[8])))?;
+        let camera: u32 = f[8]
+            .parse()
+            .map_err(|_| bad(format!("camera id '{}'", f[8])))?;
         if out.len() as u64 >= MAX_COLMAP_IMAGES {
             return Err(bad(format!("more than {MAX_COLMAP_IMAGES} images")));
         }
@@ -310,11 +342,12 @@ impl Bin<'_> {
     }
     /// Skips `n` bytes.
     fn skip(&mut self, n: u64) -> Result<()> {
-        let copied = std::io::copy(&mut (&mut self.input).take(n), &mut std::io::sink())
-            .map_err(|source| Error::Io {
+        let copied = std::io::copy(&mut (&mut self.input).take(n), &mut std::io::sink()).map_err(
+            |source| Error::Io {
                 path: self.path.to_path_buf(),
                 source,
-            })?;
+            },
+        )?;
         if copied != n {
             return Err(err(self.path, "ends before its counts say (truncated)"));
         }
@@ -329,7 +362,10 @@ fn read_cameras_bin(path: &Path) -> Result<HashMap<u32, Intrinsics>> {
     };
     let count = b.u64()?;
     if count > MAX_COLMAP_CAMERAS {
-        return Err(err(path, format!("{count} cameras, more than {MAX_COLMAP_CAMERAS}")));
+        return Err(err(
+            path,
+            format!("{count} cameras, more than {MAX_COLMAP_CAMERAS}"),
+        ));
     }
     let mut out = HashMap::new();
     for _ in 0..count {
@@ -357,7 +393,10 @@ fn read_images_bin(path: &Path) -> Result<Vec<Pose>> {
     };
     let count = b.u64()?;
     if count > MAX_COLMAP_IMAGES {
-        return Err(err(path, format!("{count} images, more than {MAX_COLMAP_IMAGES}")));
+        return Err(err(
+            path,
+            format!("{count} images, more than {MAX_COLMAP_IMAGES}"),
+        ));
     }
     let mut out = Vec::new();
     for _ in 0..count {
@@ -428,10 +467,19 @@ mod tests {
         assert_eq!(b.position, glam::Vec3::new(0.0, 0.0, -2.0));
         // Distortion, a fisheye model and a missing camera are errors naming the camera.
         for (cameras, wanted) in [
-            ("1 PINHOLE 64 48 50 52 30 25\n2 SIMPLE_RADIAL 80 60 70 40 30 0.1\n", "distortion"),
-            ("1 PINHOLE 64 48 50 52 30 25\n2 OPENCV_FISHEYE 80 60 70 70 40 30 0 0 0 0\n", "OPENCV_FISHEYE"),
+            (
+                "1 PINHOLE 64 48 50 52 30 25\n2 SIMPLE_RADIAL 80 60 70 40 30 0.1\n",
+                "distortion",
+            ),
+            (
+                "1 PINHOLE 64 48 50 52 30 25\n2 OPENCV_FISHEYE 80 60 70 70 40 30 0 0 0 0\n",
+                "OPENCV_FISHEYE",
+            ),
             ("1 PINHOLE 64 48 50 52 30 25\n", "names camera 2"),
-            ("1 PINHOLE 64 48 50 52 30\n", "PINHOLE takes 4 parameters, not 3"),
+            (
+                "1 PINHOLE 64 48 50 52 30\n",
+                "PINHOLE takes 4 parameters, not 3",
+            ),
         ] {
             std::fs::write(d.join("cameras.txt"), cameras).unwrap();
             let e = read_cameras(&d).unwrap_err().to_string();
