@@ -111,6 +111,9 @@ struct Layout {
     /// The GaMeS / REdiSplats layout: `scale_0, scale_1` only, the normal along local x
     /// (SPEC section 6); slot 9 of `wanted` then repeats slot 8 and is not read.
     two_scales: bool,
+    /// Mip-Splatting's `filter_3D` property (its index in the row), where the file has one:
+    /// SPEC section 12's 3D filter, applied at load ([`apply_filter_3d`]).
+    filter_3d: Option<usize>,
 }
 
 const BASE_NAMES: [&str; 14] = [
@@ -429,6 +432,14 @@ fn read_ply_into<R: BufRead>(
         encoding: encoding_name,
         ..Default::default()
     };
+    if layout.filter_3d.is_some() && !layout.two_scales {
+        report.notes.push(
+            "the file's filter_3D property (Mip-Splatting's 3D filter) is applied at load: each \
+             covariance widened by filter_3D^2 and its opacity scaled to keep the Gaussian's \
+             integral (SPEC section 12)"
+                .into(),
+        );
+    }
     let payload = len.map(|l| l.saturating_sub(header_bytes.len() as u64));
     // With the size known, the counts were checked against it before anything is reserved; a
     // stream trusts no count, reserves nothing and grows as vertices arrive.
@@ -760,12 +771,35 @@ fn vertex_layout(
             ));
         }
     }
+    let filter_3d = index_of("filter_3D");
+    if let Some(i) = filter_3d {
+        if matches!(stored[i], Stored::List { .. }) {
+            return Err(ply_err(
+                path,
+                "element 'vertex': property 'filter_3D' is a list; the 3D filter is one number",
+            ));
+        }
+    }
     Ok(Layout {
         wanted,
         sh_degree,
         f_rest,
         two_scales,
+        filter_3d,
     })
+}
+
+/// Mip-Splatting's 3D filter of size `f` on a Gaussian of scales `s` and opacity `o` (SPEC
+/// section 12): `Sigma' = Sigma + f^2 I`, which keeps the rotation and takes each scale to
+/// `sqrt(s^2 + f^2)`, and `o' = o sqrt(det Sigma / det Sigma')`, the product of `s / s'` over
+/// the axes.
+pub fn apply_filter_3d(s: Vec3, o: f32, f: f32) -> (Vec3, f32) {
+    if f == 0.0 {
+        return (s, o);
+    }
+    let filtered = (s * s + Vec3::splat(f * f)).powf(0.5);
+    let ratio = s / filtered;
+    (filtered, o * ratio.x * ratio.y * ratio.z)
 }
 
 /// Turns one decoded property row into a Gaussian of `scene`, or counts it as dropped.
@@ -784,12 +818,21 @@ fn push_gaussian(
         report.dropped_non_finite += 1;
         return;
     };
+    let mut opacity = 1.0 / (1.0 + (-v(6)).exp());
     let scale = if layout.two_scales {
         Vec3::new(0.0, v(7).exp(), v(8).exp())
     } else {
-        flat_if_degenerate(Vec3::new(v(7).exp(), v(8).exp(), v(9).exp()))
+        let mut s = Vec3::new(v(7).exp(), v(8).exp(), v(9).exp());
+        if let Some(i) = layout.filter_3d {
+            let f = row[i];
+            if !(f.is_finite() && f >= 0.0) {
+                report.dropped_non_finite += 1;
+                return;
+            }
+            (s, opacity) = apply_filter_3d(s, opacity, f);
+        }
+        flat_if_degenerate(s)
     };
-    let opacity = 1.0 / (1.0 + (-v(6)).exp());
     if !scale.is_finite() {
         report.dropped_non_finite += 1;
         return;
@@ -1186,4 +1229,56 @@ pub fn write_ply_to(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod filter_3d_tests {
+    use super::*;
+
+    /// A PLY with Mip-Splatting's `filter_3D` loads with SPEC 12's 3D filter applied (scales
+    /// widened, opacity scaled by sqrt(det / det')); the same rows without it load as they are.
+    #[test]
+    fn the_3d_filter_is_applied_at_load() {
+        let header = |extra: &str| {
+            format!(
+                "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                 property float z\nproperty float f_dc_0\nproperty float f_dc_1\n\
+                 property float f_dc_2\nproperty float opacity\nproperty float scale_0\n\
+                 property float scale_1\nproperty float scale_2\nproperty float rot_0\n\
+                 property float rot_1\nproperty float rot_2\nproperty float rot_3\n{extra}\
+                 end_header\n"
+            )
+        };
+        let row = format!(
+            "0 0 1 0.1 0.2 0.3 0 {} {} {} 1 0 0 0",
+            0.5f32.ln(),
+            0.25f32.ln(),
+            0.1f32.ln()
+        );
+        let plain = format!("{}{row}\n", header(""));
+        let filtered = format!("{}{row} 0.2\n", header("property float filter_3D\n"));
+        let (a, _) =
+            read_ply_stream(std::io::Cursor::new(plain.into_bytes()), Path::new("a.ply")).unwrap();
+        let (b, report) = read_ply_stream(
+            std::io::Cursor::new(filtered.into_bytes()),
+            Path::new("b.ply"),
+        )
+        .unwrap();
+        assert!((a.opacities[0] - 0.5).abs() < 1e-6);
+        let want = Vec3::new(0.29f32.sqrt(), 0.1025f32.sqrt(), 0.05f32.sqrt());
+        assert!(
+            (b.scales[0] - want).abs().max_element() < 1e-6,
+            "{}",
+            b.scales[0]
+        );
+        let ratio = Vec3::new(0.5, 0.25, 0.1) / want;
+        assert!((b.opacities[0] - 0.5 * ratio.x * ratio.y * ratio.z).abs() < 1e-6);
+        assert!(
+            (a.scales[0] - Vec3::new(0.5, 0.25, 0.1))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert!(report.notes.iter().any(|n| n.contains("filter_3D")));
+    }
 }
