@@ -1484,6 +1484,8 @@ fn gltf_textures_follow_their_texture_set_factor_and_wraps() {
             r#"{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 7 } } }"#,
             "missing texture 7",
         ),
+        // No material at all, where the quad names material 0.
+        ("", "names material 0, and the file has 0"),
     ] {
         let glb = texture_glb(&dir, "png", material);
         let err = load(&glb, "").expect_err("refused").to_string();

@@ -583,6 +583,15 @@ pub fn mesh_triangles(
     };
     // Each face's index into `materials`.
     let base = materials.len() as u32;
+    if let (Some(own), Some(m)) = (&own, mesh.face_materials.iter().flatten().max()) {
+        if *m as usize >= own.materials.len() {
+            return Err(Error::InvalidInput(format!(
+                "{}: a primitive names material {m}, and the file has {}",
+                file.display(),
+                own.materials.len()
+            )));
+        }
+    }
     let face_material: Box<dyn Fn(usize) -> u32> = match own {
         Some(own) if !own.materials.is_empty() => {
             let first_texture = textures.len() as u32;
