@@ -430,3 +430,129 @@ pub fn check_size(width: u32, height: u32) -> Result<()> {
     }
     Ok(())
 }
+
+/// A camera path through keyframes (issue 74: `sweep --camera-path`, `render-sequence
+/// --camera-path`): the keyframes evenly spaced over `s` in [0, 1], positions by a uniform
+/// Catmull-Rom spline (its end keyframes repeated, so it passes through every keyframe and
+/// starts and ends there), rotations by slerp between neighbouring keyframes, focal lengths and
+/// principal points linearly. Every keyframe has the same image size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraPath {
+    keys: Vec<Camera>,
+}
+
+impl CameraPath {
+    /// The path through `keys` (at least one, all of one image size).
+    pub fn new(keys: Vec<Camera>) -> Result<CameraPath> {
+        let Some(first) = keys.first() else {
+            return Err(Error::InvalidInput("a camera path needs a keyframe".into()));
+        };
+        if let Some((k, c)) = keys
+            .iter()
+            .enumerate()
+            .find(|(_, c)| (c.width, c.height) != (first.width, first.height))
+        {
+            return Err(Error::InvalidInput(format!(
+                "camera path: keyframe {k} is {}x{}, keyframe 0 {}x{}: a path keeps one image size",
+                c.width, c.height, first.width, first.height
+            )));
+        }
+        Ok(CameraPath { keys })
+    }
+
+    /// The keyframes.
+    pub fn keys(&self) -> &[Camera] {
+        &self.keys
+    }
+
+    /// The camera at `s` in [0, 1] (clamped).
+    pub fn at(&self, s: f32) -> Camera {
+        let n = self.keys.len();
+        if n == 1 {
+            return self.keys[0];
+        }
+        let x = s.clamp(0.0, 1.0) * (n - 1) as f32;
+        let k = (x.floor() as usize).min(n - 2);
+        let u = x - k as f32;
+        let key = |i: isize| &self.keys[i.clamp(0, n as isize - 1) as usize];
+        let (p0, p1, p2, p3) = (
+            key(k as isize - 1).position,
+            key(k as isize).position,
+            key(k as isize + 1).position,
+            key(k as isize + 2).position,
+        );
+        // Uniform Catmull-Rom: p1 at u = 0, p2 at u = 1.
+        let (u2, u3) = (u * u, u * u * u);
+        let position = 0.5
+            * (2.0 * p1
+                + (p2 - p0) * u
+                + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * u2
+                + (3.0 * p1 - p0 - 3.0 * p2 + p3) * u3);
+        let (a, b) = (key(k as isize), key(k as isize + 1));
+        let qa = glam::Quat::from_mat3(&a.rotation);
+        let qb = glam::Quat::from_mat3(&b.rotation);
+        let principal = match (a.principal, b.principal) {
+            (Some(pa), Some(pb)) => Some(pa.lerp(pb, u)),
+            _ => None,
+        };
+        Camera {
+            width: a.width,
+            height: a.height,
+            position,
+            rotation: Mat3::from_quat(qa.slerp(qb, u).normalize()),
+            fx: a.fx + (b.fx - a.fx) * u,
+            fy: a.fy + (b.fy - a.fy) * u,
+            principal,
+        }
+    }
+}
+
+#[cfg(test)]
+mod path_tests {
+    use super::*;
+
+    #[test]
+    fn a_path_passes_through_its_keyframes_and_turns_between_them() {
+        let key = |x: f32, yaw: f32, f: f32| {
+            let mut c = Camera::look_at(
+                Vec3::new(x, 0.0, -3.0),
+                Vec3::new(x + yaw.sin(), 0.0, -3.0 + yaw.cos()),
+                Vec3::NEG_Y,
+                50.0,
+                64,
+                48,
+            )
+            .unwrap();
+            c.fx = f;
+            c.fy = f;
+            c
+        };
+        let keys = vec![
+            key(0.0, 0.0, 50.0),
+            key(1.0, 0.4, 60.0),
+            key(3.0, 0.8, 70.0),
+        ];
+        let path = CameraPath::new(keys.clone()).unwrap();
+        for (s, k) in [(0.0, 0), (0.5, 1), (1.0, 2)] {
+            let c = path.at(s);
+            assert!((c.position - keys[k].position).length() < 1e-5, "s {s}");
+            assert!(
+                (c.rotation.col(2) - keys[k].rotation.col(2)).length() < 1e-5,
+                "s {s}"
+            );
+            assert!((c.fx - keys[k].fx).abs() < 1e-4);
+        }
+        // Halfway between keyframes 0 and 1: the rotation halfway (yaw 0.2), the focal length
+        // halfway, the position on the spline (x between them, pulled by its neighbours).
+        let mid = path.at(0.25);
+        let forward = mid.rotation.col(2);
+        assert!((forward.x.atan2(forward.z) - 0.2).abs() < 1e-4);
+        assert!((mid.fx - 55.0).abs() < 1e-4);
+        assert!(mid.position.x > 0.0 && mid.position.x < 1.0);
+        assert!(mid.validate().is_ok());
+        // Keyframes of two sizes are refused.
+        let mut other = keys[1];
+        other.width = 32;
+        assert!(CameraPath::new(vec![keys[0], other]).is_err());
+    }
+}

@@ -1606,3 +1606,69 @@ fn a_scene_without_a_camera_is_framed_and_the_printed_flags_give_it_again() {
     assert_success(&o);
     assert!(String::from_utf8_lossy(&o.stderr).contains("no camera given"));
 }
+
+/// `sweep --camera-path` (issue 74): the keyframes of a cameras.json flown through over the
+/// frames: the first frame is keyframe 0's view, the last keyframe 1's (up to the rounding of
+/// the rotation through a quaternion), the middle one neither.
+#[test]
+fn a_sweep_flies_its_camera_path() {
+    let (scene, cams) = good_scene();
+    let out_dir = dir().join("sweep_path");
+    let out = rara(&[
+        "sweep",
+        scene.to_str().unwrap(),
+        "--camera-path",
+        cams.to_str().unwrap(),
+        "--plane-normal",
+        "1,0,0",
+        "--from",
+        "100",
+        "--to",
+        "100",
+        "--frames",
+        "3",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("2 keyframes over 3 frames"));
+    let frame = |k: u32| {
+        image::open(out_dir.join(format!("frame_{k:04}.png")))
+            .unwrap()
+            .to_rgba8()
+    };
+    let view = |camera: &str| {
+        let png = dir().join(format!("path_view_{camera}.png"));
+        let o = rara(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--cameras",
+            cams.to_str().unwrap(),
+            "--camera",
+            camera,
+            "-o",
+            png.to_str().unwrap(),
+        ]);
+        assert_success(&o);
+        image::open(png).unwrap().to_rgba8()
+    };
+    let (first, last) = (view("0"), view("1"));
+    common::check_images(
+        "camera path, frame 0 vs keyframe 0",
+        &frame(0),
+        &first,
+        40.0,
+        255,
+    );
+    common::check_images(
+        "camera path, frame 2 vs keyframe 1",
+        &frame(2),
+        &last,
+        40.0,
+        255,
+    );
+    assert!(
+        frame(1) != first && frame(1) != last,
+        "the middle frame is a keyframe's"
+    );
+}

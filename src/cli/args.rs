@@ -183,3 +183,18 @@ pub fn resolve_scene_file_camera(
         None => resolve_camera(args),
     }
 }
+
+/// The camera of each of `frames` frames along the camera path whose keyframes are the cameras
+/// of `file` (a cameras.json or a COLMAP folder, in order; [`rara::camera::CameraPath`]), at
+/// the `--width` and `--height` of `args` where given.
+pub fn path_cameras(file: &std::path::Path, frames: u32, args: &CameraArgs) -> Result<Vec<Camera>> {
+    let path = rara::camera::CameraPath::new(Camera::load_all(file)?)?;
+    eprintln!(
+        "camera path {}: {} keyframes over {frames} frames",
+        file.display(),
+        path.keys().len()
+    );
+    (0..frames)
+        .map(|k| sized(args, path.at(k as f32 / (frames.max(2) - 1) as f32)))
+        .collect()
+}

@@ -101,7 +101,7 @@ pub fn run(dir: &Path) -> Result<()> {
     let mut gif_file = Output::prepare(&sweep, &["gif"])?.begin()?;
     let mut gif = GifWriter::new(&mut gif_file, &sweep, 120)?;
     let plan = Sweep {
-        camera: &camera,
+        cameras: std::slice::from_ref(&camera),
         configs: &configs,
         normal,
         range: (d0, d1),

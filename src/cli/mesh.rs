@@ -102,6 +102,10 @@ pub struct RenderSequenceArgs {
     frames: PathBuf,
     #[command(flatten)]
     camera: super::args::CameraArgs,
+    /// A camera path: its keyframes are the cameras of a cameras.json (or a COLMAP folder), in
+    /// order, flown through over the frames (positions by Catmull-Rom, rotations by slerp).
+    #[arg(long, value_name = "CAMERAS", conflicts_with_all = ["cameras", "eye"])]
+    camera_path: Option<PathBuf>,
     /// Background colour R,G,B in [0, 1].
     #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_color, default_value = "0,0,0")]
     background: Vec3,
@@ -364,6 +368,10 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
     let first = rara::ply::load_ply(&frames[0])?.0;
     // Without a camera, every frame is seen from the first one's framing (SPEC 12).
     let camera = camera.or_framing(|| first.means.clone())?;
+    let cameras = match &args.camera_path {
+        Some(file) => super::args::path_cameras(file, frames.len() as u32, &args.camera)?,
+        None => vec![camera],
+    };
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let options = RenderOptions {
@@ -377,7 +385,8 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
     let mut gif = GifWriter::new(&mut gif_file, &gif_path, args.delay_ms)?;
     let progress = bar(frames.len() as u64, "render frames");
     let mut first = Some(first);
-    for frame in &frames {
+    for (k, frame) in frames.iter().enumerate() {
+        let camera = cameras[k.min(cameras.len() - 1)];
         let scene = match first.take() {
             Some(scene) => scene,
             None => rara::ply::load_ply(frame)?.0,

@@ -33,6 +33,10 @@ pub struct SweepArgs {
     scene_file: Option<PathBuf>,
     #[command(flatten)]
     camera: CameraArgs,
+    /// A camera path: its keyframes are the cameras of a cameras.json (or a COLMAP folder), in
+    /// order, flown through over the frames (positions by Catmull-Rom, rotations by slerp).
+    #[arg(long, value_name = "CAMERAS", conflicts_with_all = ["cameras", "eye"])]
+    camera_path: Option<PathBuf>,
     /// Normal NX,NY,NZ of the moving plane; visible where n.x + d >= 0.
     #[arg(long, allow_hyphen_values = true, value_parser = super::args::parse_vec3)]
     plane_normal: Vec3,
@@ -177,6 +181,11 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         )));
     }
     let camera = camera.or_framing(|| scene.means.clone())?;
+    let cameras = match &args.camera_path {
+        Some(file) => super::args::path_cameras(file, args.frames, &args.camera)?,
+        None => vec![camera],
+    };
+    let camera = cameras[0];
     let normal = Plane::new(args.plane_normal, 0.0)?.normal;
     let (d0, d1) = {
         let (lo, hi) = default_range(scene, normal);
@@ -245,7 +254,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         labels.join(" | ")
     );
     let plan = Sweep {
-        camera: &camera,
+        cameras: &cameras,
         configs: &configs,
         normal,
         range: (d0, d1),
@@ -315,8 +324,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
 
 /// A plane moving across a scene, each frame rendered under every configuration.
 pub struct Sweep<'a> {
-    /// The fixed camera.
-    pub camera: &'a rara::Camera,
+    /// The camera of each frame, or one for every frame.
+    pub cameras: &'a [rara::Camera],
     /// The clip configurations, side by side; the last half-space of each is the moving plane.
     pub configs: &'a [Clip],
     /// The moving plane's unit normal.
@@ -377,6 +386,7 @@ impl Sweep<'_> {
             .with_message("sweep");
         let (d0, d1) = self.range;
         for k in 0..self.frames {
+            let camera = &self.cameras[(k as usize).min(self.cameras.len() - 1)];
             let d = d0 + (d1 - d0) * k as f32 / (self.frames - 1) as f32;
             let moving = Plane::new(self.normal, d)?;
             let mut panels = Vec::new();
@@ -390,7 +400,7 @@ impl Sweep<'_> {
                             tracer: self.tracer,
                             ..RenderOptions::default()
                         };
-                        let (img, frame) = renderer.render(scene, self.camera, &options)?;
+                        let (img, frame) = renderer.render(scene, camera, &options)?;
                         stats.add(&img, frame.cutoff, frame.gpu_ms);
                         img
                     }
@@ -401,15 +411,14 @@ impl Sweep<'_> {
                             tracer: self.tracer,
                             ..RenderOptions::default()
                         };
-                        let (img, frame) =
-                            renderer.render_objects(objects, self.camera, &options)?;
+                        let (img, frame) = renderer.render_objects(objects, camera, &options)?;
                         stats.add(&img, frame.cutoff, frame.gpu_ms);
                         img
                     }
                     SweepTarget::Mixed(gpu) => {
                         let objects = gpu.objects();
                         gpu.scene.set_clips(&vec![clip; objects])?;
-                        let (img, frame, wall) = gpu.render(self.camera)?;
+                        let (img, frame, wall) = gpu.render(camera)?;
                         let gpu_ms = frame.passes.iter().map(|p| p.1).sum::<f64>();
                         stats.add(&img, 0, if gpu_ms > 0.0 { gpu_ms } else { wall });
                         img
