@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Installs the real clients the tests drive, where they are missing: Debian's Blender (with
-# python3-numpy, which its glTF importer needs), from npm (into target/clients) the Khronos
+# python3-numpy, which its glTF importer needs) and ffmpeg (the MP4s of sweep and
+# render-sequence), from npm (into target/clients) the Khronos
 # glTF validator and PlayCanvas' splat-transform (the scene formats' reference tool), and from
 # PyPI (into a virtual environment, target/clients/pycolmap) COLMAP's Python bindings, which
 # write the COLMAP models tests/colmap.rs reads. Sourced by scripts/test.sh after setup.sh; a client that cannot be
 # installed is reported, and the tests that need it say TEST SKIPPED.
 
-client_packages=(blender python3-numpy python3-venv)
+client_packages=(blender python3-numpy python3-venv ffmpeg)
 missing=()
 for p in "${client_packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

@@ -1671,4 +1671,32 @@ fn a_sweep_flies_its_camera_path() {
         frame(1) != first && frame(1) != last,
         "the middle frame is a keyframe's"
     );
+    // The MP4 through Debian's ffmpeg, where it is installed: its 3 frames at 64x48.
+    let mp4 = out_dir.join("sweep.mp4");
+    let ffmpeg = Command::new("ffmpeg").arg("-version").output().is_ok();
+    if ffmpeg {
+        let probe = Command::new("ffprobe")
+            .args([
+                "-v",
+                "error",
+                "-count_frames",
+                "-select_streams",
+                "v:0",
+                "-show_entries",
+            ])
+            .args([
+                "stream=codec_name,width,height,nb_read_frames",
+                "-of",
+                "csv=p=0",
+            ])
+            .arg(&mp4)
+            .output()
+            .unwrap();
+        let fields = String::from_utf8_lossy(&probe.stdout).trim().to_string();
+        assert_eq!(fields, "h264,64,48,3", "ffprobe of {}", mp4.display());
+        assert!(!out_dir.join("sweep.mp4.part").exists());
+    } else {
+        assert!(String::from_utf8_lossy(&out.stderr).contains("no MP4: ffmpeg is not installed"));
+        common::test_skipped("ffmpeg is not installed: the sweep's MP4 is not checked");
+    }
 }

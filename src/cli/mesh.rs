@@ -367,11 +367,11 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
     // at once; the rest are staged with it and land together when the last has rendered.
     let first = rara::ply::load_ply(&frames[0])?.0;
     // Without a camera, every frame is seen from the first one's framing (SPEC 12).
-    let camera = camera.or_framing(|| first.means.clone())?;
     let cameras = match &args.camera_path {
         Some(file) => super::args::path_cameras(file, frames.len() as u32, &args.camera)?,
-        None => vec![camera],
+        None => vec![camera.or_framing(|| first.means.clone())?],
     };
+    let camera = cameras[0];
     let ctx = Context::from_env()?;
     let mut renderer = Renderer::new(&ctx)?;
     let options = RenderOptions {
@@ -383,6 +383,12 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
     let gif_path = args.output.join("sequence.gif");
     let mut gif_file = Output::prepare(&gif_path, &["gif"])?.begin()?;
     let mut gif = GifWriter::new(&mut gif_file, &gif_path, args.delay_ms)?;
+    let mut mp4 = super::video::Mp4Writer::start(
+        &args.output.join("sequence.mp4"),
+        camera.width,
+        camera.height,
+        args.delay_ms,
+    )?;
     let progress = bar(frames.len() as u64, "render frames");
     let mut first = Some(first);
     for (k, frame) in frames.iter().enumerate() {
@@ -398,6 +404,9 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
             Output::prepare(&args.output.join(format!("{stem}.png")), &["png"])?,
             &img,
         )?;
+        if let Some(mp4) = &mut mp4 {
+            mp4.add(&img)?;
+        }
         gif.add(img)?;
         progress.inc(1);
     }
@@ -405,6 +414,9 @@ pub fn run_render_sequence(args: &RenderSequenceArgs) -> Result<()> {
     drop(gif);
     set.add_written(gif_file)?;
     set.commit()?;
+    if let Some(mp4) = mp4 {
+        println!("wrote {}", mp4.finish()?.display());
+    }
     println!(
         "rendered {} frames ({}x{}) to {} and {}",
         frames.len(),

@@ -20,6 +20,7 @@ pub mod render;
 pub mod scene;
 pub mod sweep;
 pub mod synth;
+pub mod video;
 
 use rara::{FrameMemory, GpuScene};
 

@@ -180,10 +180,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             scene_path.display()
         )));
     }
-    let camera = camera.or_framing(|| scene.means.clone())?;
     let cameras = match &args.camera_path {
         Some(file) => super::args::path_cameras(file, args.frames, &args.camera)?,
-        None => vec![camera],
+        None => vec![camera.or_framing(|| scene.means.clone())?],
     };
     let camera = cameras[0];
     let normal = Plane::new(args.plane_normal, 0.0)?.normal;
@@ -262,9 +261,18 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         background: args.background,
         tracer: args.tracer.into(),
     };
+    let mut mp4 = super::video::Mp4Writer::start(
+        &args.output.join("sweep.mp4"),
+        camera.width * configs.len() as u32,
+        camera.height,
+        args.delay_ms,
+    )?;
     let mut series = plan.run(target, |k, frame_img| {
         let frame = Output::prepare(&args.output.join(format!("frame_{k:04}.png")), &["png"])?;
         set.add_png(frame, &frame_img)?;
+        if let Some(mp4) = &mut mp4 {
+            mp4.add(&frame_img)?;
+        }
         gif.add(frame_img)
     })?;
     drop(gif);
@@ -306,6 +314,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     });
     set.add_json(json_output, &json)?;
     set.commit()?;
+    if let Some(mp4) = mp4 {
+        println!("wrote {}", mp4.finish()?.display());
+    }
     println!(
         "wrote {} frames and {} ({}x{} per panel, {} on {})",
         args.frames,
