@@ -120,8 +120,7 @@ impl CameraChoice {
         };
         // As `--eye` and `--target` make it, so that the printed flags give it to the bit.
         let (eye, target) = Camera::framing_eye_target(&means())?;
-        let width = width.unwrap_or(640);
-        let height = height.unwrap_or_else(|| Camera::default_height(width));
+        let (width, height) = look_at_size(width, height);
         let fov = rara::camera::FRAMING_FOV_Y_DEG;
         let camera = Camera::look_at(eye, target, Vec3::NEG_Y, fov, width, height)?;
         eprintln!(
@@ -145,8 +144,7 @@ pub fn resolve_camera(args: &CameraArgs) -> Result<CameraChoice> {
     }
     match (args.eye, args.target) {
         (Some(eye), Some(target)) => {
-            let width = args.width.unwrap_or(640);
-            let height = args.height.unwrap_or_else(|| Camera::default_height(width));
+            let (width, height) = look_at_size(args.width, args.height);
             Ok(CameraChoice::Given(Camera::look_at(
                 eye, target, args.up, args.fov_y, width, height,
             )?))
@@ -156,6 +154,17 @@ pub fn resolve_camera(args: &CameraArgs) -> Result<CameraChoice> {
             height: args.height,
         }),
     }
+}
+
+/// The image size of a look-at camera (`--eye`, and the framing camera, which prints itself as
+/// `--eye` flags and must come out the same): the width given or 640, the height given or three
+/// quarters of the width.
+fn look_at_size(width: Option<u32>, height: Option<u32>) -> (u32, u32) {
+    let width = width.unwrap_or(640);
+    (
+        width,
+        height.unwrap_or_else(|| Camera::default_height(width)),
+    )
 }
 
 /// `cam` at the width and height `args` give, if they give any (the aspect ratio kept when

@@ -270,17 +270,8 @@ fn read_images_txt(path: &Path) -> Result<Vec<Pose>> {
     let mut out = Vec::new();
     // Two lines an image: its pose, then its 2D points (possibly blank), skipped.
     let mut expect_points = false;
-    for line in open(path)?.lines().enumerate() {
-        let (n, line) = (
-            line.0 + 1,
-            line.1.map_err(|source| Error::Io {
-                path: path.to_path_buf(),
-                source,
-            })?,
-        );
-        if line.starts_with('#') {
-            continue;
-        }
+    for line in data_lines(path)? {
+        let (n, line) = line?;
         if expect_points {
             expect_points = false;
             continue;
